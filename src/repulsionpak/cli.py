@@ -1,0 +1,364 @@
+"""Command line: ``repulsionpak pack | evaluate | demo | params``.
+
+The CLI only wires the library together: read inputs, call :func:`repulsionpak.pack.pack`,
+write outputs. Errors of our own classes become one line on stderr and an exit code
+(see :data:`EXIT_CODES`); ``--debug`` shows the traceback instead.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import json
+import os
+import secrets
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from .errors import OutputError, ParameterError, RepulsionPakError
+
+EXIT_CODES = {
+    0: "success",
+    1: "other error of repulsionpak",
+    2: "bad input file (missing, malformed, no usable geometry)",
+    3: "bad parameter or config file",
+    4: "the simulation failed (diverged)",
+    5: "an output cannot be written",
+    130: "interrupted (a partial result was written if an output was requested)",
+}
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="Fill a container shape with deformable copies of vector elements "
+                       "(RepulsionPak). SVG in, SVG out.")
+
+_DEBUG = False
+
+
+def _fail(exc: BaseException) -> None:
+    if _DEBUG:
+        raise exc
+    typer.echo(f"repulsionpak: error: {exc}", err=True)
+    raise typer.Exit(getattr(exc, "exit_code", 1))
+
+
+@contextlib.contextmanager
+def _errors():
+    try:
+        yield
+    except RepulsionPakError as exc:
+        _fail(exc)
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve()
+    except OSError:
+        return False
+
+
+def _check_outputs(outputs: list[Path | None], inputs: list[Path]) -> None:
+    """Refuse outputs that would overwrite an input or sit in a missing directory."""
+    for out in outputs:
+        if out is None:
+            continue
+        for inp in inputs:
+            if _same_file(out, inp) or (inp.is_dir() and _same_file(out.parent, inp) and out.suffix in (".svg", ".path")):
+                raise OutputError(f"{out}: refusing to overwrite the input {inp}; choose another output path")
+        if not out.parent.exists():
+            raise OutputError(f"{out}: the directory {out.parent} does not exist")
+        if out.is_dir():
+            raise OutputError(f"{out}: is a directory, expected a file name")
+
+
+class _Progress:
+    """Live progress on a terminal (rich), silent when stderr is not a TTY."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled and sys.stderr.isatty()
+        self._live = None
+        self._task = None
+
+    def __enter__(self):
+        if self.enabled:
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self._live = Progress(TextColumn("[bold]{task.fields[phase]}"), BarColumn(),
+                                  TextColumn("it {task.fields[it]:>6}  area {task.fields[area]:.3f}  "
+                                             "elements {task.fields[n]}"),
+                                  TimeElapsedColumn(), transient=True,
+                                  console=__import__("rich.console").console.Console(stderr=True))
+            self._live.__enter__()
+            self._task = self._live.add_task("pack", total=None, phase="start", it=0, area=0.0, n=0)
+        return self
+
+    def __call__(self, snap) -> None:
+        if self._live is not None:
+            self._live.update(self._task, phase=snap.phase, it=snap.iteration,
+                              area=snap.area_fraction, n=snap.n_elements)
+
+    def __exit__(self, *exc):
+        if self._live is not None:
+            self._live.__exit__(*exc)
+
+
+class _StopFlag:
+    """SIGTERM handler that asks the simulation to stop at the next iteration."""
+
+    def __init__(self):
+        self.stop = False
+        self._old = None
+
+    def __enter__(self):
+        def handler(signum, frame):
+            self.stop = True
+
+        with contextlib.suppress(ValueError):  # not in the main thread
+            self._old = signal.signal(signal.SIGTERM, handler)
+        return self
+
+    def __call__(self) -> bool:
+        return self.stop
+
+    def __exit__(self, *exc):
+        if self._old is not None:
+            signal.signal(signal.SIGTERM, self._old)
+
+
+def run_pack(container: Path, elements: list[Path], output: Path, secondary: list[Path] | None = None,
+             gap: float | None = None, seed: int | None = None, config: Path | None = None,
+             report: Path | None = None, png: Path | None = None, count: int | None = None,
+             max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False) -> dict:
+    """Everything ``repulsionpak pack`` does; returns the report dict."""
+    from .evaluate import evaluate
+    from .io import load_container, load_elements, render_png, write_packing_svg
+    from .pack import pack
+    from .params import Params, load_config
+
+    t_start = time.perf_counter()
+    inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
+    _check_outputs([output, report, png], inputs)
+    params = load_config(config) if config else Params()
+    if gap is not None:
+        if not gap > 0:
+            raise ParameterError(f"--gap must be a positive number, got {gap:g}")
+        params = dataclasses.replace(params, gap=gap)
+    if seed is not None:
+        params = dataclasses.replace(params, seed=seed)
+    if params.seed is None:
+        params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
+    if count is not None:
+        params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
+    if max_iterations is not None:
+        params = dataclasses.replace(params, sim=dataclasses.replace(params.sim, max_iterations=max_iterations))
+    params.validate()
+    from .pack import default_gap
+
+    cont = load_container(container)
+    g = params.gap if params.gap is not None else default_gap(cont)
+    params = dataclasses.replace(params, gap=g)
+    tol = params.preprocess.flatten_tolerance * g
+    cont = load_container(container, tolerance=tol)
+    elems = load_elements(elements)
+    secs = load_elements(secondary) if secondary else []
+    with _Progress(progress) as prog, _StopFlag() as stop:
+        packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop)
+    t_eval = time.perf_counter()
+    metrics = evaluate(cont, packing.placed, g)
+    checks = invariants(packing, metrics)
+    attrs = {"seed": str(params.seed), "iterations": str(sum(packing.iterations.values())),
+             "area-fraction": f"{metrics['area_fraction']:.4f}"}
+    meta = {"generator": "repulsionpak", "seed": params.seed, "partial": packing.partial,
+            "stopped_by": packing.stopped_by, "invariants": checks}
+    debug = {"skins": packing.skins()} if debug_layers else None
+    write_packing_svg(output, cont, packing.placed, g, attrs=attrs, debug_layers=debug,
+                      partial=packing.partial, metadata=meta)
+    if png is not None:
+        render_png(png, cont, packing.placed)
+    seconds = dict(packing.seconds)
+    seconds["render"] = seconds.get("render", 0.0) + (time.perf_counter() - t_eval)
+    seconds["total"] = time.perf_counter() - t_start
+    rep = {
+        "n_primary": packing.n_primary, "n_secondary": packing.n_secondary,
+        "n_vertices": int(packing.model.n_vertices),
+        "iterations": dict(packing.iterations), "seconds": seconds,
+        "area_fraction": metrics["area_fraction"], "overlap_area": metrics["overlap_area"],
+        "gap": g, "gap_stats": metrics["gap"], "seed": params.seed,
+        "partial": packing.partial, "stopped_by": packing.stopped_by, "invariants": checks,
+        "inputs": {"container": str(container), "elements": [str(e) for e in elements],
+                   "secondary": [str(s) for s in secondary or []]},
+        "params": params.to_dict(),
+    }
+    if report is not None:
+        _write_json_atomic(report, rep)
+    return rep
+
+
+def invariants(packing, metrics: dict) -> dict:
+    """End-of-run checks of sec. 5's goals, reported (never silently ignored)."""
+    import numpy as np
+    import shapely
+
+    skins = [shapely.Polygon(s) for s in packing.skins()]
+    skins = [s if s.is_valid else shapely.make_valid(s) for s in skins]
+    tree = shapely.STRtree(skins)
+    a, b = tree.query(skins, predicate="intersects")
+    pairs = [(i, j) for i, j in zip(a, b) if i < j]
+    tol = 0.25 * packing.gap
+    worst = 0.0
+    for i, j in pairs:
+        inter = shapely.intersection(skins[i], skins[j])
+        if not inter.is_empty:
+            minx, miny, maxx, maxy = inter.bounds
+            worst = max(worst, min(maxx - minx, maxy - miny))
+    x = packing.state.x * packing.frame.unit
+    region = packing.container.region
+    outside = ~shapely.contains_xy(shapely.buffer(region, tol), x[:, 0], x[:, 1])
+    return {
+        "skins_overlap_depth": float(worst),
+        "skins_overlap_ok": bool(worst <= tol),
+        "vertices_outside": int(np.count_nonzero(outside)),
+        "vertices_inside_ok": bool(not outside.any()),
+        "art_overlap_area": float(metrics["overlap_area"]),
+        "art_overlap_ok": bool(metrics["overlap_area"] <= 1e-6 * packing.container.area),
+        "elements_outside": int(metrics.get("n_outside", 0)),
+        "tolerance": tol,
+    }
+
+
+def _write_json_atomic(path: Path, data: dict) -> None:
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            json.dump(data, fh, indent=2, sort_keys=False)
+            fh.write("\n")
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
+
+
+def _summary(rep: dict, output: Path) -> str:
+    inv = rep["invariants"]
+    ok = inv["art_overlap_ok"] and inv["vertices_inside_ok"]
+    return (f"{output}: {rep['n_primary']} primary + {rep['n_secondary']} secondary elements, "
+            f"area fraction {rep['area_fraction']:.3f}, median gap {rep['gap_stats']['median']:.3g} "
+            f"(asked {rep['gap']:.3g}), {sum(rep['iterations'].values())} iterations in "
+            f"{rep['seconds']['total']:.1f} s, seed {rep['seed']}"
+            + ("" if ok else "  [invariants violated: see the report]")
+            + ("  [PARTIAL: interrupted]" if rep["partial"] else ""))
+
+
+DebugOpt = Annotated[bool, typer.Option("--debug", help="Show Python tracebacks on errors.")]
+
+
+@app.command()
+def pack(
+    container: Annotated[Path, typer.Argument(help="Container: SVG or .path file; every closed path is a region.")],
+    elements: Annotated[list[Path], typer.Argument(help="Element files (SVG or .path) or directories of them.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG.")],
+    secondary: Annotated[Optional[list[Path]], typer.Option("--secondary", help="Secondary element files or directories.")] = None,
+    gap: Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")] = None,
+    seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
+    config: Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")] = None,
+    report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
+    png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
+    count: Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")] = None,
+    max_iterations: Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")] = None,
+    debug_layers: Annotated[bool, typer.Option("--debug-layers", help="Add hidden skin layers to the SVG.")] = False,
+    quiet: Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")] = False,
+    debug: DebugOpt = False,
+) -> None:
+    """Pack CONTAINER with deformed copies of ELEMENTS and write OUTPUT (SVG)."""
+    global _DEBUG
+    _DEBUG = debug
+    with _errors():
+        rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
+                       count, max_iterations, progress=not quiet, debug_layers=debug_layers)
+        if not quiet:
+            typer.echo(_summary(rep, output), err=True)
+        if rep["partial"]:
+            raise typer.Exit(130)
+
+
+@app.command()
+def evaluate(
+    packings: Annotated[list[Path], typer.Argument(help="Packing SVG(s) written by `repulsionpak pack`.")],
+    json_out: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
+    plot: Annotated[Optional[Path], typer.Option(help="Plot Q_s(r) of all given packings to this PNG.")] = None,
+    gap: Annotated[Optional[float], typer.Option(help="Gap to evaluate against (default: the file's data-gap).")] = None,
+    grid: Annotated[int, typer.Option(help="Pixels along the longer side of the SCP raster.")] = 1000,
+    debug: DebugOpt = False,
+) -> None:
+    """Measure packings: area fraction, overlaps, gaps, deformation, SCP Q_s(r) (sec. 11)."""
+    global _DEBUG
+    _DEBUG = debug
+    from .evaluate import evaluate_file, format_table, plot_scp
+
+    with _errors():
+        if gap is not None and not gap > 0:
+            raise ParameterError(f"--gap must be a positive number, got {gap:g}")
+        if plot is not None:
+            _check_outputs([plot], packings)
+        results = [(p, evaluate_file(p, gap=gap, grid=grid)) for p in packings]
+        if json_out:
+            data = results[0][1] if len(results) == 1 else {str(p): r for p, r in results}
+            typer.echo(json.dumps(data, indent=2))
+        else:
+            for p, r in results:
+                typer.echo(f"== {p}")
+                typer.echo(format_table(r))
+        if plot is not None:
+            plot_scp([(p.stem, r) for p, r in results], plot, gap=results[0][1]["gap"]["requested"])
+
+
+@app.command()
+def demo(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG (a PNG is written beside it).")] = Path("repulsionpak-demo.svg"),
+    container: Annotated[str, typer.Option(help="Name of a shipped example container.")] = "",
+    seed: Annotated[int, typer.Option(help="Random seed.")] = 1,
+    quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
+    debug: DebugOpt = False,
+) -> None:
+    """Pack the example library shipped with repulsionpak (SVG + PNG, about half a minute)."""
+    global _DEBUG
+    _DEBUG = debug
+    from . import examples
+
+    with _errors():
+        cfile = examples.container_file(container or examples.DEFAULT_CONTAINER)
+        png = output.with_suffix(".png")
+        rep = run_pack(cfile, examples.element_files(), output, secondary=examples.secondary_files(),
+                       gap=examples.DEFAULT_GAP, seed=seed, png=png, progress=not quiet)
+        if not quiet:
+            typer.echo(_summary(rep, output), err=True)
+            typer.echo(f"picture: {png}", err=True)
+
+
+@app.command("params")
+def params_cmd() -> None:
+    """List every parameter with its default, unit and meaning (for --config TOML files)."""
+    from .params import describe
+
+    for key, default, unit, doc in describe():
+        typer.echo(f"{key:34s} {default!s:>10s}  [{unit}]  {doc}")
+
+
+def main() -> None:
+    try:
+        app()
+    except KeyboardInterrupt:
+        typer.echo("repulsionpak: interrupted", err=True)
+        sys.exit(130)
+
+
+if __name__ == "__main__":
+    main()

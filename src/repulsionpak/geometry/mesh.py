@@ -1,0 +1,138 @@
+"""Triangle meshes of skins: triangulation, springs, barycentric binding (sec. 4–5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import triangle as tr
+
+
+def triangulate_polygon(boundary: np.ndarray, max_area: float | None = None,
+                        min_angle: float = 20.0, interior: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Constrained quality triangulation of a simple polygon.
+
+    Parameters
+    ----------
+    boundary : (K, 2) polygon vertices (no repeated closing vertex).
+    max_area : largest triangle area allowed (None: no limit).
+    min_angle : minimum angle in degrees for the quality refinement.
+    interior : allow Steiner points inside the polygon (never on its boundary).
+
+    Returns
+    -------
+    verts : (N, 2), the first K rows are ``boundary`` unchanged and in order.
+    tris : (T, 3) int32 vertex indices, counter-clockwise (y up), every triangle inside
+        the polygon (the triangulation is constrained to the boundary, so it never
+        crosses a concavity).
+    """
+    boundary = np.asarray(boundary, dtype=float)
+    k = len(boundary)
+    segs = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
+    opts = "pQY"  # PSLG, quiet, no Steiner points on the boundary
+    if interior:
+        opts += f"q{min_angle:g}"
+        if max_area is not None:
+            opts += f"a{max_area:.10g}"
+    out = tr.triangulate({"vertices": boundary, "segments": segs}, opts)
+    verts = np.asarray(out["vertices"], dtype=float)
+    tris = np.asarray(out["triangles"], dtype=np.int32)
+    if not np.allclose(verts[:k], boundary):
+        raise RuntimeError("triangulation reordered the boundary vertices")
+    # keep only triangles with positive area; orient counter-clockwise
+    a = verts[tris]
+    cross = (a[:, 1, 0] - a[:, 0, 0]) * (a[:, 2, 1] - a[:, 0, 1]) - (a[:, 1, 1] - a[:, 0, 1]) * (a[:, 2, 0] - a[:, 0, 0])
+    tris = tris[np.abs(cross) > 1e-12 * max(1.0, float(np.ptp(boundary)) ** 2)]
+    cross = cross[np.abs(cross) > 1e-12 * max(1.0, float(np.ptp(boundary)) ** 2)]
+    flip = cross < 0
+    tris[flip] = tris[flip][:, [0, 2, 1]]
+    # drop vertices no triangle uses (keeps boundary vertices first)
+    used = np.zeros(len(verts), bool)
+    used[tris.ravel()] = True
+    used[:k] = True
+    remap = np.cumsum(used) - 1
+    return np.ascontiguousarray(verts[used]), np.ascontiguousarray(remap[tris].astype(np.int32))
+
+
+def mesh_springs(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Edge springs and auxiliary springs of a triangle mesh.
+
+    Returns
+    -------
+    edges : (E, 2) int32 unique mesh edges (i < j).
+    aux : (A, 2) int32, for every interior edge the two vertices opposite it (sec. 5, Fig. 6b).
+    """
+    tris = np.asarray(tris, dtype=np.int64)
+    half = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
+    opp = np.concatenate([tris[:, 2], tris[:, 0], tris[:, 1]])
+    key = np.sort(half, axis=1)
+    order = np.lexsort((key[:, 1], key[:, 0]))
+    key, opp = key[order], opp[order]
+    same = np.all(key[1:] == key[:-1], axis=1)
+    edges = np.unique(key, axis=0)
+    aux = np.column_stack([opp[:-1][same], opp[1:][same]])
+    aux = np.sort(aux, axis=1)
+    aux = aux[aux[:, 0] != aux[:, 1]]
+    aux = np.unique(aux, axis=0) if len(aux) else aux.reshape(0, 2)
+    return edges.astype(np.int32), aux.astype(np.int32)
+
+
+def _point_segment_dist2(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    ab = b - a
+    t = np.einsum("...i,...i->...", p - a, ab) / np.maximum(np.einsum("...i,...i->...", ab, ab), 1e-300)
+    t = np.clip(t, 0.0, 1.0)
+    q = a + t[..., None] * ab
+    return np.einsum("...i,...i->...", p - q, p - q)
+
+
+def barycentric(points: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Barycentric coordinates of ``points`` (…, 2) w.r.t. triangles (a, b, c) (…, 2) → (…, 3)."""
+    v0, v1, v2 = b - a, c - a, points - a
+    d00 = np.einsum("...i,...i->...", v0, v0)
+    d01 = np.einsum("...i,...i->...", v0, v1)
+    d11 = np.einsum("...i,...i->...", v1, v1)
+    d20 = np.einsum("...i,...i->...", v2, v0)
+    d21 = np.einsum("...i,...i->...", v2, v1)
+    den = d00 * d11 - d01 * d01
+    den = np.where(np.abs(den) < 1e-300, 1e-300, den)
+    v = (d11 * d20 - d01 * d21) / den
+    w = (d00 * d21 - d01 * d20) / den
+    return np.stack([1.0 - v - w, v, w], axis=-1)
+
+
+def bind_points(points: np.ndarray, verts: np.ndarray, tris: np.ndarray,
+                chunk: int = 2048) -> tuple[np.ndarray, np.ndarray]:
+    """Express points in barycentric coordinates of their enclosing or nearest triangle.
+
+    Parameters
+    ----------
+    points : (P, 2); verts : (N, 2); tris : (T, 3).
+
+    Returns
+    -------
+    tri_index : (P,) int32 triangle of each point.
+    bary : (P, 3) coordinates; sum to 1; all >= 0 (up to rounding) for points inside
+        the mesh, extrapolated for points just beyond a border edge.
+    """
+    points = np.asarray(points, dtype=float)
+    a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
+    out_t = np.empty(len(points), np.int32)
+    out_b = np.empty((len(points), 3))
+    for s in range(0, len(points), chunk):
+        p = points[s:s + chunk, None, :]
+        bc = barycentric(p, a[None], b[None], c[None])  # (p, T, 3)
+        inside = bc.min(axis=2) >= -1e-9
+        d2 = np.minimum(np.minimum(_point_segment_dist2(p, a[None], b[None]),
+                                   _point_segment_dist2(p, b[None], c[None])),
+                        _point_segment_dist2(p, c[None], a[None]))
+        d2 = np.where(inside, -1.0 + bc.min(axis=2) * 0, d2)  # inside → -1 beats any distance
+        # among containing triangles prefer the one with the largest min coordinate
+        score = np.where(inside, -1.0 - bc.min(axis=2), d2)
+        t = np.argmin(score, axis=1)
+        out_t[s:s + chunk] = t
+        out_b[s:s + chunk] = bc[np.arange(len(t)), t]
+    return out_t, out_b
+
+
+def apply_binding(verts: np.ndarray, tris: np.ndarray, tri_index: np.ndarray, bary: np.ndarray) -> np.ndarray:
+    """Positions of bound points in a (deformed) mesh: Σ_k bary_k · verts[tris[t, k]] → (P, 2)."""
+    corners = verts[tris[tri_index]]  # (P, 3, 2)
+    return np.einsum("pk,pkd->pd", bary, corners)

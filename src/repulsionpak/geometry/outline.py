@@ -1,0 +1,327 @@
+"""Areas covered by art, and the skin around it (sec. 4)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import shapely
+from shapely.geometry import LinearRing, LineString, MultiPolygon, Point, Polygon, box  # noqa: F401
+
+from ..types import ArtPath
+
+_CAP = {"butt": "flat", "round": "round", "square": "square"}
+_JOIN = {"miter": "mitre", "miter-clip": "mitre", "arcs": "round", "round": "round", "bevel": "bevel"}
+_SVG_MITER_LIMIT = 4.0  # SVG's default stroke-miterlimit (Style does not carry one)
+
+
+def _polygonal(geom) -> shapely.Geometry:
+    """The polygonal part of ``geom`` (valid), as a Polygon/MultiPolygon (maybe empty)."""
+    if geom is None or geom.is_empty:
+        return Polygon()
+    if not geom.is_valid:
+        geom = shapely.make_valid(geom)
+    if geom.geom_type in ("Polygon", "MultiPolygon"):
+        return geom
+    parts = [p for p in shapely.get_parts(geom) if p.geom_type in ("Polygon", "MultiPolygon") and not p.is_empty]
+    if not parts:
+        return Polygon()
+    out = shapely.union_all(parts)
+    return out if out.is_valid else shapely.make_valid(out)
+
+
+def _signed_area(pts: np.ndarray) -> float:
+    x, y = pts[:, 0], pts[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _subpath_polygon(pts: np.ndarray, method: str) -> shapely.Geometry:
+    """The (implicitly closed) subpath as a valid polygonal geometry (maybe empty)."""
+    pts = np.asarray(pts, dtype=float)
+    pts = pts[np.all(np.isfinite(pts), axis=1)]
+    if len(pts) >= 2 and np.array_equal(pts[0], pts[-1]):
+        pts = pts[:-1]
+    if len(pts) < 3:
+        return Polygon()
+    poly = Polygon(pts)
+    if not poly.is_valid:
+        try:
+            if method == "structure":
+                poly = shapely.make_valid(poly, method="structure", keep_collapsed=False)
+            else:
+                poly = shapely.make_valid(poly)
+        except TypeError:  # pragma: no cover - old shapely without the method argument
+            poly = shapely.make_valid(poly)
+    return _polygonal(poly)
+
+
+def _fill_geometry(path: ArtPath) -> shapely.Geometry:
+    """Area painted by the fill of ``path`` following its fill rule."""
+    evenodd = path.style.fill_rule == "evenodd"
+    polys, signs, pts_list = [], [], []
+    for pts in path.subpaths:
+        # A self-intersecting subpath is split like its own fill rule would: evenodd ->
+        # "linework" (alternating), nonzero -> "structure" (union of the loops).
+        poly = _subpath_polygon(pts, "linework" if evenodd else "structure")
+        if poly.is_empty or poly.area <= 0:
+            continue
+        polys.append(poly)
+        signs.append(1 if _signed_area(np.asarray(pts, dtype=float)) >= 0 else -1)
+        pts_list.append(pts)
+    if not polys:
+        return Polygon()
+    if evenodd:
+        out = polys[0]
+        for p in polys[1:]:
+            out = shapely.symmetric_difference(out, p)
+        return _polygonal(out)
+    if len(polys) == 1:
+        return polys[0]
+    # nonzero, approximated: the winding number of each subpath's region is the sum of
+    # the orientations of every subpath containing a representative point of it; regions
+    # are composed from the largest to the smallest (outer before inner), filled when
+    # their winding is non-zero and cut out (holes) otherwise.
+    areas = np.array([p.area for p in polys])
+    order = np.argsort(-areas, kind="stable")
+    reps = [p.representative_point() for p in polys]
+    rx = np.array([q.x for q in reps])
+    ry = np.array([q.y for q in reps])
+    for p in polys:
+        shapely.prepare(p)
+    winding = np.array(signs, dtype=int)
+    for j, pj in enumerate(polys):
+        inside = shapely.contains_xy(pj, rx, ry)
+        inside[j] = False
+        # only a larger subpath can contain a smaller one's region
+        inside &= areas < areas[j]
+        winding[inside] += signs[j]
+    out = Polygon()
+    for i in order:
+        if winding[i] != 0:
+            out = shapely.union(out, polys[i])
+        else:
+            out = shapely.difference(out, polys[i])
+    return _polygonal(out)
+
+
+def _stroke_geometry(path: ArtPath, width: float) -> shapely.Geometry:
+    """Area painted by the stroke of ``path`` with total stroke width ``width``."""
+    half = 0.5 * width
+    cap = _CAP.get(path.style.stroke_linecap, "flat")
+    join = _JOIN.get(path.style.stroke_linejoin, "mitre")
+    parts = []
+    for pts, closed in zip(path.subpaths, path.closed):
+        pts = np.asarray(pts, dtype=float)
+        pts = pts[np.all(np.isfinite(pts), axis=1)]
+        if len(pts) == 0:
+            continue
+        # drop consecutive duplicates (zero-length segments upset joins)
+        keep = np.ones(len(pts), dtype=bool)
+        keep[1:] = np.any(np.diff(pts, axis=0) != 0, axis=1)
+        pts = pts[keep]
+        if closed and len(pts) >= 2 and np.array_equal(pts[0], pts[-1]):
+            pts = pts[:-1]
+        if len(pts) == 1:
+            # zero-length subpath: SVG paints a dot for round / square caps only
+            if cap == "round":
+                parts.append(Point(pts[0]).buffer(half, quad_segs=16))
+            elif cap == "square":
+                x, y = pts[0]
+                parts.append(box(x - half, y - half, x + half, y + half))
+            continue
+        if closed and len(pts) >= 3:
+            line = LinearRing(pts)
+            g = shapely.buffer(line, half, quad_segs=16, join_style=join, mitre_limit=_SVG_MITER_LIMIT)
+        else:
+            line = LineString(pts)
+            g = shapely.buffer(
+                line, half, quad_segs=16, cap_style=cap, join_style=join, mitre_limit=_SVG_MITER_LIMIT
+            )
+        parts.append(_polygonal(g))
+    parts = [p for p in parts if not p.is_empty]
+    if not parts:
+        return Polygon()
+    return _polygonal(shapely.union_all(parts))
+
+
+def art_area(paths: Sequence[ArtPath], stroke_scale: float = 1.0) -> shapely.Geometry:
+    """The area covered by ``paths`` (valid, polygonal, maybe empty).
+
+    Union over the visible paths of
+
+    * the fill (fill not ``None``, non-zero opacity): every subpath implicitly closed,
+      combined with the fill rule — ``evenodd``: symmetric difference of the subpaths;
+      ``nonzero``: approximated by nesting (a subpath inside a larger one is a hole
+      when the summed orientations of the subpaths containing it, its own included,
+      cancel out, e.g. an opposite-orientation inner ring);
+    * the stroke (stroke not ``None``, width > 0): each subpath buffered by
+      ``stroke_width * stroke_scale / 2`` with the style's line cap / join
+      (miter limit 4, SVG's default); closed subpaths have no caps.
+    """
+    parts = []
+    for path in paths:
+        st = path.style
+        if st.opacity <= 0:
+            continue
+        if st.fill is not None and st.fill_opacity > 0:
+            g = _fill_geometry(path)
+            if not g.is_empty:
+                parts.append(g)
+        width = float(st.stroke_width) * float(stroke_scale)
+        if st.stroke is not None and st.stroke_opacity > 0 and width > 0:
+            g = _stroke_geometry(path, width)
+            if not g.is_empty:
+                parts.append(g)
+    if not parts:
+        return Polygon()
+    out = shapely.union_all(parts)
+    if not out.is_valid:
+        out = shapely.make_valid(out)
+    out = _polygonal(out)
+    if not out.is_valid:  # pragma: no cover - belt and braces
+        out = _polygonal(out.buffer(0))
+    return out
+
+
+def polygons_of(geom) -> list[Polygon]:
+    """The polygons of any geometry (collections flattened, lower dimensions dropped)."""
+    if geom is None or geom.is_empty:
+        return []
+    if isinstance(geom, Polygon):
+        return [geom]
+    out = []
+    for g in getattr(geom, "geoms", []):
+        out.extend(polygons_of(g))
+    return out
+
+
+def connect_parts(geom, width: float):
+    """Join disjoint polygons into one connected polygon by adding bridges.
+
+    Bridges of ``width`` follow the shortest line between a component and the rest
+    (Kruskal-like: repeatedly connect the nearest pair of components).
+    """
+    polys = polygons_of(geom)
+    if not polys:
+        return Polygon()
+    while len(polys) > 1:
+        best = None
+        for i in range(len(polys)):
+            for j in range(i + 1, len(polys)):
+                d = polys[i].distance(polys[j])
+                if best is None or d < best[0]:
+                    best = (d, i, j)
+        _, i, j = best
+        line = shapely.shortest_line(polys[i], polys[j])
+        bridge = shapely.buffer(line, width / 2, cap_style="round")
+        merged = polygons_of(shapely.union_all([polys[i], polys[j], bridge]))
+        merged = max(merged, key=lambda g: g.area)
+        polys = [p for k, p in enumerate(polys) if k not in (i, j)] + [merged]
+    return polys[0]
+
+
+def skin_polygon(outline, offset: float) -> Polygon:
+    """The skin: ``outline`` offset outward by ``offset`` (round joins), one simple polygon.
+
+    Parts that stay disjoint after the offset are bridged; holes are filled.
+    """
+    if offset <= 0:
+        raise ValueError("offset must be > 0")
+    grown = shapely.buffer(outline, offset, join_style="round", quad_segs=8)
+    grown = connect_parts(grown, width=offset)
+    return Polygon(grown.exterior.coords)
+
+
+def resample_closed(ring: np.ndarray, spacing: float, min_points: int = 8) -> np.ndarray:
+    """Uniformly resample a closed polyline by arc length.
+
+    Parameters
+    ----------
+    ring : (K, 2) vertices, without repeated closing point.
+    spacing : desired distance between consecutive samples (> 0).
+
+    Returns
+    -------
+    (M, 2) samples, M = max(min_points, round(perimeter / spacing)), equally spaced along
+    the perimeter starting at ``ring[0]``.
+    """
+    ring = np.asarray(ring, dtype=float)
+    if ring.ndim != 2 or ring.shape[1] != 2 or len(ring) < 3:
+        raise ValueError("ring must be a (K>=3, 2) array")
+    if not spacing > 0:
+        raise ValueError("spacing must be > 0")
+    closed = np.vstack([ring, ring[:1]])
+    seg = np.hypot(*np.diff(closed, axis=0).T)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    perimeter = cum[-1]
+    m = max(min_points, int(round(perimeter / spacing)))
+    t = np.linspace(0.0, perimeter, m, endpoint=False)
+    x = np.interp(t, cum, closed[:, 0])
+    y = np.interp(t, cum, closed[:, 1])
+    return np.column_stack([x, y])
+
+
+def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_points: int = 8) -> np.ndarray:
+    """Resample a closed polyline with samples at most ``spacing`` apart (by arc length)
+    whose chords stay within ``tolerance`` of the original curve.
+
+    Straight stretches get samples ``spacing`` apart; tight bends (the rounded tips of
+    a skin around ears, paws, whiskers) get more, so the resampled skin keeps its offset.
+    The first sample is ``ring[0]``. Returns (M, 2), M >= min_points.
+    """
+    ring = np.asarray(ring, dtype=float)
+    if ring.ndim != 2 or ring.shape[1] != 2 or len(ring) < 3:
+        raise ValueError("ring must be a (K>=3, 2) array")
+    if not (spacing > 0 and tolerance > 0):
+        raise ValueError("spacing and tolerance must be > 0")
+    closed = np.vstack([ring, ring[:1]])
+    seg = np.hypot(*np.diff(closed, axis=0).T)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    perimeter = cum[-1]
+    step = min(spacing / 4, tolerance)
+    m = max(int(np.ceil(perimeter / step)), 4 * min_points)
+    t = np.linspace(0.0, perimeter, m, endpoint=False)
+    dense = np.column_stack([np.interp(t, cum, closed[:, 0]), np.interp(t, cum, closed[:, 1])])
+    # keep original corners exactly (interp already hits them only by chance)
+    n = len(dense)
+    dense2 = np.vstack([dense, dense[:1]])
+    t2 = np.concatenate([t, [perimeter]])
+    keep = [0]
+    i = 0
+    while True:
+        j = i + 1
+        best = j
+        while j <= n and t2[j] - t2[i] <= spacing * (1 + 1e-9):
+            a, b = dense2[i], dense2[j]
+            ab = b - a
+            L = np.hypot(*ab)
+            mid = dense2[i + 1:j]
+            if len(mid) and L > 0:
+                dev = np.abs((mid[:, 0] - a[0]) * ab[1] - (mid[:, 1] - a[1]) * ab[0]) / L
+                if dev.max() > tolerance:
+                    break
+            best = j
+            j += 1
+        if best >= n:
+            break
+        keep.append(best)
+        i = best
+    out = dense[keep]
+    if len(out) < min_points:
+        return resample_closed(ring, perimeter / min_points, min_points)
+    return out
+
+
+def ring_coords(poly: Polygon) -> np.ndarray:
+    """Exterior of ``poly`` as (K, 2) without the repeated closing vertex, counter-clockwise
+    in a y-up frame (i.e. positive shoelace area)."""
+    ring = np.asarray(poly.exterior.coords)[:-1]
+    if signed_area(ring) < 0:
+        ring = ring[::-1]
+    return np.ascontiguousarray(ring)
+
+
+def signed_area(ring: np.ndarray) -> float:
+    """Shoelace area of a closed polyline (positive when counter-clockwise, y up)."""
+    x, y = ring[:, 0], ring[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))

@@ -1,0 +1,19 @@
+"""Input/output: SVG and ``.path`` readers, packing SVG writer/reader, PNG preview."""
+
+from .pathfile import container_from_pathfile, element_from_pathfile, parse_pathfile
+from .png import render_png
+from .svg_read import load_container, load_element, load_elements, rings_to_region
+from .svg_write import read_packing_svg, write_packing_svg
+
+__all__ = [
+    "load_element",
+    "load_elements",
+    "load_container",
+    "write_packing_svg",
+    "read_packing_svg",
+    "render_png",
+    "parse_pathfile",
+    "element_from_pathfile",
+    "container_from_pathfile",
+    "rings_to_region",
+]

@@ -1,0 +1,932 @@
+"""Read elements and containers from SVG files (and dispatch ``.path`` files).
+
+Public API
+----------
+``load_element(path, tolerance=None) -> Element``
+``load_elements(paths, tolerance=None) -> list[Element]``
+``load_container(path, tolerance=None) -> Container``
+
+Coordinates are the file's *user units*: every nested ``transform`` is applied, the
+root's viewBox -> viewport scaling is not (svgelements applies it while parsing; we
+multiply every shape's matrix by the inverse of the root viewport matrix).
+
+Hardening: the bytes are parsed first with ``defusedxml`` (no entity declarations, no
+external references, plain ``<!DOCTYPE svg PUBLIC ...>`` allowed), the element tree is
+checked for depth, ``<use>`` expansion size and path-data size, then handed (re-
+serialised, without DTD) to svgelements. Every failure leaves the readers as an
+:class:`~repulsionpak.errors.InputError` naming the file.
+
+The helpers :func:`rings_to_region`, :func:`read_input_bytes`, :func:`parse_svg_shapes`
+and :func:`flatten_shape` are shared with ``pathfile``, ``svg_write`` and ``png``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gzip
+import io
+import math
+import re
+import warnings
+import xml.etree.ElementTree as ET
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import shapely
+
+from ..errors import InputError, ParameterError, RepulsionPakError
+from ..types import ArtPath, Container, Element, Style
+
+__all__ = [
+    "load_element",
+    "load_elements",
+    "load_container",
+    "rings_to_region",
+    "MAX_POINTS",
+    "MAX_FILE_BYTES",
+]
+
+#: Largest input file accepted (bytes, after gzip decompression for ``.svgz``).
+MAX_FILE_BYTES = 128 * 1024 * 1024
+#: Largest number of vertices a file may produce after flattening its curves.
+MAX_POINTS = 2_000_000
+#: Largest element nesting depth of an SVG document.
+MAX_DEPTH = 200
+#: Largest number of SVG nodes after inlining every ``<use>``.
+MAX_EXPANDED_NODES = 500_000
+#: Largest total length of path data (``d`` / ``points``) after inlining ``<use>``.
+MAX_PATH_DATA_CHARS = 64_000_000
+
+SVG_NS = "http://www.w3.org/2000/svg"
+XLINK_NS = "http://www.w3.org/1999/xlink"
+_SVG_SUFFIXES = {".svg", ".svgz", ".xml"}
+_ELEMENT_SUFFIXES = {".svg", ".svgz", ".path"}
+
+# --------------------------------------------------------------------------- common helpers
+
+
+def warn(path: str | Path, message: str) -> None:
+    """``warnings.warn`` (UserWarning) with the file name in front."""
+    warnings.warn(f"{Path(str(path)).name}: {message}", UserWarning, stacklevel=3)
+
+
+@contextlib.contextmanager
+def guard(path: str | Path, what: str = "file"):
+    """Turn any unexpected exception raised in the block into an InputError naming ``path``."""
+    try:
+        yield
+    except RepulsionPakError:
+        raise
+    except RecursionError:
+        raise InputError(path, f"the {what} is nested too deeply to be read; simplify its structure") from None
+    except MemoryError:
+        raise InputError(path, f"the {what} is too large to be read into memory; simplify it") from None
+    except Exception as exc:  # noqa: BLE001 - deliberately broad: readers never leak raw errors
+        text = str(exc).strip()
+        detail = f"{type(exc).__name__}: {text.splitlines()[0][:200]}" if text else type(exc).__name__
+        raise InputError(path, f"the {what} could not be read ({detail}); check that it is valid") from exc
+
+
+def check_tolerance(tolerance: float | None) -> float | None:
+    """Validate a user-given flattening tolerance (None = automatic)."""
+    if tolerance is None:
+        return None
+    try:
+        tol = float(tolerance)
+    except (TypeError, ValueError):
+        raise ParameterError(f"tolerance must be a positive number, got {tolerance!r}") from None
+    if not math.isfinite(tol) or tol <= 0:
+        raise ParameterError(f"tolerance must be a positive finite number, got {tolerance!r}")
+    return tol
+
+
+def read_input_bytes(path: str | Path, what: str = "file") -> bytes:
+    """Read a whole input file with the checks every reader needs.
+
+    Missing file, directory, unreadable or empty file, or a file larger than
+    :data:`MAX_FILE_BYTES` -> InputError. gzip data (``.svgz``) is decompressed under
+    the same size bound.
+    """
+    p = Path(path)
+    try:
+        exists, is_dir = p.exists(), p.is_dir()
+    except (OSError, ValueError) as exc:
+        raise InputError(p, f"cannot access the {what} ({exc}); check the path") from None
+    if not exists:
+        raise InputError(p, f"{what} not found; check the path")
+    if is_dir:
+        raise InputError(p, "is a directory, not a file; give a file")
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise InputError(p, f"the {what} cannot be read ({exc.strerror or exc}); check its permissions") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise InputError(p, f"the {what} is larger than {MAX_FILE_BYTES} bytes; simplify it")
+    if data[:2] == b"\x1f\x8b":
+        try:
+            with gzip.GzipFile(fileobj=io.BytesIO(data)) as gz:
+                data = gz.read(MAX_FILE_BYTES + 1)
+        except (OSError, EOFError, zlib.error) as exc:
+            raise InputError(p, f"looks gzip-compressed but cannot be decompressed ({exc})") from None
+        if len(data) > MAX_FILE_BYTES:
+            raise InputError(p, f"decompresses to more than {MAX_FILE_BYTES} bytes; simplify it")
+    if not data.strip():
+        raise InputError(p, f"the {what} is empty; give an SVG or .path file with geometry")
+    return data
+
+
+def sniff_kind(path: Path, data: bytes) -> str:
+    """``"path"`` or ``"svg"``, from the suffix, else from the content."""
+    suffix = path.suffix.lower()
+    if suffix == ".path":
+        return "path"
+    if suffix in _SVG_SUFFIXES:
+        return "svg"
+    head = data[:4096].lstrip(b"\xef\xbb\xbf \t\r\n")
+    if head.startswith(b"<"):
+        return "svg"
+    first = head.split(b"\n", 1)[0].strip()
+    if re.fullmatch(rb"[0-9]+", first):
+        return "path"
+    raise InputError(path, "is neither an SVG nor a RepulsionPak .path file; give an .svg or .path file")
+
+
+# --------------------------------------------------------------------------- regions
+
+
+def _winding_numbers(points: np.ndarray, rings: list[np.ndarray]) -> np.ndarray:
+    """Winding number of each point (F, 2) with respect to all closed rings (K_i, 2)."""
+    a = np.concatenate(rings, axis=0)
+    b = np.concatenate([np.roll(r, -1, axis=0) for r in rings], axis=0)
+    w = np.zeros(len(points), dtype=np.int64)
+    chunk = max(1, 4_000_000 // max(1, len(a)))
+    ax, ay, bx, by = a[None, :, 0], a[None, :, 1], b[None, :, 0], b[None, :, 1]
+    for s in range(0, len(points), chunk):
+        px = points[s : s + chunk, 0][:, None]
+        py = points[s : s + chunk, 1][:, None]
+        is_left = (bx - ax) * (py - ay) - (px - ax) * (by - ay)
+        up = (ay <= py) & (by > py) & (is_left > 0)
+        down = (ay > py) & (by <= py) & (is_left < 0)
+        w[s : s + chunk] = up.sum(axis=1) - down.sum(axis=1)
+    return w
+
+
+def polygon_parts(geom) -> shapely.Geometry:
+    """The polygonal part of ``geom`` as a Polygon or MultiPolygon (maybe empty)."""
+    if geom is None or geom.is_empty:
+        return shapely.Polygon()
+    if isinstance(geom, (shapely.Polygon, shapely.MultiPolygon)):
+        return geom
+    parts = [g for g in shapely.get_parts(geom) if isinstance(g, (shapely.Polygon, shapely.MultiPolygon)) and not g.is_empty]
+    return shapely.union_all(parts) if parts else shapely.Polygon()
+
+
+def rings_to_region(rings: list[np.ndarray], fill_rule: str = "nonzero") -> shapely.Geometry:
+    """The area an SVG renderer fills for the closed subpaths ``rings`` under ``fill_rule``.
+
+    ``rings``: list of (K_i, 2) arrays, each implicitly closed (no repeated closing
+    point); rings with fewer than 3 points are ignored. Exact for nested, overlapping
+    and self-intersecting rings: the linework is noded and every face of the
+    arrangement is classified by the winding number of an interior point
+    (``"nonzero"``: w != 0, ``"evenodd"``: w odd). Returns a valid Polygon or
+    MultiPolygon (empty if nothing is filled).
+    """
+    rings = [np.asarray(r, dtype=float) for r in rings if len(r) >= 3]
+    if not rings:
+        return shapely.Polygon()
+    if len(rings) == 1:
+        poly = shapely.Polygon(rings[0])
+        if poly.is_valid:
+            return poly if poly.area > 0 else shapely.Polygon()
+    lines = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings]
+    noded = shapely.union_all(lines)
+    faces = [f for f in shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if f.area > 0]
+    if not faces:
+        return shapely.Polygon()
+    faces_arr = np.empty(len(faces), dtype=object)
+    faces_arr[:] = faces
+    reps = shapely.get_coordinates(shapely.point_on_surface(faces_arr))
+    w = _winding_numbers(reps, rings)
+    keep = (w != 0) if fill_rule != "evenodd" else (np.abs(w) % 2 == 1)
+    if not keep.any():
+        return shapely.Polygon()
+    region = shapely.union_all(faces_arr[keep])
+    if not region.is_valid:
+        region = shapely.make_valid(region)
+    return polygon_parts(region)
+
+
+def clean_points(pts: np.ndarray, closed: bool, eps: float) -> np.ndarray:
+    """Remove consecutive duplicate points (and, if ``closed``, a repeated closing point)."""
+    if len(pts) > 1:
+        d = np.abs(np.diff(pts, axis=0)).max(axis=1)
+        keep = np.concatenate([[True], d > eps])
+        pts = pts[keep]
+    if closed and len(pts) > 1 and np.abs(pts[-1] - pts[0]).max() <= eps:
+        pts = pts[:-1]
+    return pts
+
+
+def finalize_region(path, region, what: str = "container") -> shapely.Geometry:
+    """Validate a container region: polygonal, valid (make_valid + warning), area > 0."""
+    region = polygon_parts(region)
+    if not region.is_valid:
+        warn(path, f"the {what} outline is not a valid polygon (self-intersections?); repaired with make_valid")
+        region = polygon_parts(shapely.make_valid(region))
+    if region.is_empty or not region.area > 0:
+        raise InputError(path, f"the {what} has zero area; it needs at least one closed shape enclosing an area")
+    if not np.all(np.isfinite(region.bounds)):
+        raise InputError(path, f"the {what} has non-finite coordinates (NaN or infinity)")
+    return region
+
+
+# --------------------------------------------------------------------------- XML hardening
+
+
+def _local(tag) -> str:
+    if not isinstance(tag, str):
+        return ""
+    return tag.rsplit("}", 1)[-1] if tag.startswith("{") else tag
+
+
+def parse_xml_hardened(path: str | Path, data: bytes) -> ET.Element:
+    """Parse ``data`` with defusedxml; any problem -> InputError naming ``path``."""
+    import defusedxml.ElementTree as DET
+    from defusedxml import DTDForbidden, EntitiesForbidden, ExternalReferenceForbidden
+
+    try:
+        root = DET.fromstring(data, forbid_dtd=False, forbid_entities=True, forbid_external=True)
+    except EntitiesForbidden:
+        raise InputError(path, "declares XML entities, which are not allowed (possible entity-expansion attack); remove the <!ENTITY> declarations") from None
+    except (ExternalReferenceForbidden, DTDForbidden):
+        raise InputError(path, "references external XML resources, which are not allowed; remove them") from None
+    except ET.ParseError as exc:
+        pos = getattr(exc, "position", None)
+        where = f" at line {pos[0]}, column {pos[1]}" if pos else ""
+        reason = re.sub(r":\s*line \d+, column \d+\s*$", "", str(exc))
+        raise InputError(path, f"is not well-formed XML{where} ({reason}); the file may be truncated or not an SVG") from None
+    except (ValueError, UnicodeError, TypeError) as exc:
+        raise InputError(path, f"is not readable XML ({exc}); check the file") from None
+    if _local(root.tag) != "svg":
+        raise InputError(path, f"root element is <{_local(root.tag) or root.tag}>, not <svg>; give an SVG file")
+    if root.tag.startswith("{") and not root.tag.startswith("{" + SVG_NS + "}"):
+        ns = root.tag[1:].split("}", 1)[0]
+        raise InputError(path, f"root <svg> is in namespace {ns!r}, not the SVG namespace {SVG_NS!r}; give an SVG file")
+    return root
+
+
+def _href(el: ET.Element) -> str | None:
+    return el.get("{%s}href" % XLINK_NS) or el.get("href")
+
+
+def _check_tree(path, root: ET.Element) -> None:
+    """Bound depth, ``<use>`` expansion and path-data size (use-bombs, huge files)."""
+    ids: dict[str, ET.Element] = {}
+    stack = [(root, 1)]
+    while stack:
+        el, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise InputError(path, f"elements are nested more than {MAX_DEPTH} levels deep; flatten the groups")
+        i = el.get("id")
+        if i is not None and i not in ids:
+            ids[i] = el
+        stack.extend((c, depth + 1) for c in el)
+
+    memo: dict[int, tuple[int, int]] = {}
+    visiting: set[int] = set()
+
+    def cost(el: ET.Element, level: int) -> tuple[int, int]:
+        key = id(el)
+        if key in memo:
+            return memo[key]
+        if key in visiting:
+            raise InputError(path, "a <use> element references itself (directly or through its ancestors); remove the cycle")
+        if level > 4 * MAX_DEPTH:
+            raise InputError(path, "<use> references are chained too deeply; simplify the file")
+        visiting.add(key)
+        nodes = 1
+        chars = len(el.get("d") or "") + len(el.get("points") or "")
+        for c in el:
+            n, ch = cost(c, level + 1)
+            nodes += n
+            chars += ch
+        if _local(el.tag) == "use":
+            ref = _href(el)
+            if ref and ref.startswith("#") and ref[1:] in ids:
+                n, ch = cost(ids[ref[1:]], level + 1)
+                nodes += n
+                chars += ch
+        visiting.discard(key)
+        if nodes > MAX_EXPANDED_NODES:
+            raise InputError(path, f"expands to more than {MAX_EXPANDED_NODES} elements once <use> references are inlined; simplify it")
+        if chars > MAX_PATH_DATA_CHARS:
+            raise InputError(path, f"has more than {MAX_PATH_DATA_CHARS} characters of path data; simplify it")
+        memo[key] = (nodes, chars)
+        return nodes, chars
+
+    cost(root, 0)
+
+
+_NON_RENDERED = {"symbol", "mask", "marker"}
+_CONTAINERS_OK = {"defs", "clipPath", "pattern"}
+
+
+def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
+    """Make the tree safe for svgelements: move non-rendered containers into ``<defs>``
+    (svgelements would otherwise draw their children), drop ``foreignObject``."""
+    parent = {c: p for p in root.iter() for c in p}
+    to_move, to_drop = [], []
+
+    def inside_defs(el):
+        p = parent.get(el)
+        while p is not None:
+            if _local(p.tag) in _CONTAINERS_OK:
+                return True
+            p = parent.get(p)
+        return False
+
+    for el in root.iter():
+        name = _local(el.tag)
+        if name in _NON_RENDERED and not inside_defs(el):
+            to_move.append(el)
+        elif name == "foreignObject":
+            to_drop.append(el)
+    for el in to_drop:
+        p = parent.get(el)
+        if p is not None:
+            p.remove(el)
+            notes.add("foreignObject")
+    _nested_svgs_to_groups(root)
+    if to_move:
+        defs = ET.SubElement(root, "{%s}defs" % SVG_NS)
+        for el in to_move:
+            p = parent.get(el)
+            # a moved element may live inside another moved element: only move the outermost
+            anc, nested = p, False
+            while anc is not None:
+                if anc in to_move:
+                    nested = True
+                    break
+                anc = parent.get(anc)
+            if p is not None and not nested:
+                p.remove(el)
+                defs.append(el)
+
+
+def _length(value, relative: float) -> float:
+    import svgelements as se
+
+    v = se.Length(value).value(relative_length=relative, ppi=96.0)
+    return float(v) if isinstance(v, (int, float)) else float("nan")
+
+
+def _nested_svgs_to_groups(root: ET.Element) -> None:
+    """Turn nested ``<svg>`` elements into ``<g transform=...>``.
+
+    svgelements leaks a nested svg's ``x``/``y`` attributes into its children (a rect
+    without ``x`` would be moved twice), so the viewport is resolved here instead.
+    """
+    import svgelements as se
+
+    rvb = (root.get("viewBox") or "").replace(",", " ").split()
+    try:
+        ref_w, ref_h = (float(rvb[2]), float(rvb[3])) if len(rvb) == 4 else (_length(root.get("width", "100"), 100), _length(root.get("height", "100"), 100))
+    except ValueError:
+        ref_w = ref_h = 100.0
+    for el in [e for e in root.iter() if e is not root and _local(e.tag) == "svg"]:
+        x = _length(el.get("x", "0"), ref_w)
+        y = _length(el.get("y", "0"), ref_h)
+        w = _length(el.get("width", "100%"), ref_w)
+        h = _length(el.get("height", "100%"), ref_h)
+        vb = (el.get("viewBox") or "").replace(",", " ").split()
+        tf = f"translate({x!r}, {y!r})"
+        if len(vb) == 4 and all(math.isfinite(v) for v in (x, y, w, h)):
+            try:
+                vbx, vby, vbw, vbh = (float(v) for v in vb)
+                if vbw > 0 and vbh > 0 and w > 0 and h > 0:
+                    tf = se.Viewbox.viewbox_transform(x, y, w, h, vbx, vby, vbw, vbh, el.get("preserveAspectRatio"))
+            except ValueError:
+                pass
+        for k in ("x", "y", "width", "height", "viewBox", "preserveAspectRatio"):
+            el.attrib.pop(k, None)
+        own_tf = el.get("transform")
+        el.set("transform", f"{own_tf} {tf}" if own_tf else tf)
+        el.tag = "{%s}g" % SVG_NS if el.tag.startswith("{") else "g"
+
+
+def _gradient_colours(root: ET.Element) -> dict[str, str]:
+    """id -> colour of the first stop of each gradient (following href templates)."""
+    grads = {el.get("id"): el for el in root.iter() if _local(el.tag) in ("linearGradient", "radialGradient") and el.get("id")}
+    out: dict[str, str] = {}
+    for gid in grads:
+        el, seen = grads[gid], set()
+        while el is not None and id(el) not in seen:
+            seen.add(id(el))
+            stops = [s for s in el if _local(s.tag) == "stop"]
+            if stops:
+                s = stops[0]
+                colour = s.get("stop-color")
+                m = re.search(r"stop-color\s*:\s*([^;]+)", s.get("style") or "")
+                if m:
+                    colour = m.group(1).strip()
+                out[gid] = colour or "black"
+                break
+            ref = _href(el)
+            el = grads.get(ref[1:]) if ref and ref.startswith("#") else None
+    return out
+
+
+# --------------------------------------------------------------------------- svgelements layer
+
+
+@dataclass
+class SvgShape:
+    """One drawable shape of an SVG file, before flattening.
+
+    ``segments``: svgelements path segments in the shape's local coordinates;
+    ``matrix``: (3, 3) affine matrix local -> file user units (column-vector form).
+    ``attrs``: the shape's own attributes; ``groups``: own attributes of its ancestor
+    groups, outermost first.
+    """
+
+    segments: list
+    matrix: np.ndarray
+    style: Style
+    hole: bool
+    attrs: dict
+    groups: tuple = ()
+
+
+@dataclass
+class SvgDocument:
+    shapes: list[SvgShape]
+    svg_root: dict
+    root_attrs: dict = field(default_factory=dict)
+    metadata_text: str | None = None
+
+
+def _matrix_to_np(m) -> np.ndarray:
+    return np.array([[m.a, m.c, m.e], [m.b, m.d, m.f], [0.0, 0.0, 1.0]], dtype=float)
+
+
+def _float_attr(value, default: float) -> float:
+    if value is None:
+        return default
+    s = str(value).strip()
+    try:
+        v = float(s[:-1]) / 100.0 if s.endswith("%") else float(s)
+    except ValueError:
+        return default
+    return v if math.isfinite(v) else default
+
+
+def _clamp01(v: float) -> float:
+    return min(1.0, max(0.0, v))
+
+
+def _is_hole(attrs: dict) -> bool:
+    cls = str(attrs.get("class") or "").lower()
+    if re.search(r"(^|[\s_-])holes?($|[\s_-])", cls):
+        return True
+    if str(attrs.get("id") or "").lower().startswith("hole"):
+        return True
+    return str(attrs.get("data-path-type") or "").strip() == "7"
+
+
+def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None, float]:
+    """SVG paint string -> ('#rrggbb' | None, alpha)."""
+    from svgelements import Color
+
+    if raw is None:
+        return None, 1.0
+    s = str(raw).strip()
+    if not s or s.lower() == "none":
+        return None, 1.0
+    if s.lower().startswith("url("):
+        m = re.match(r"url\(\s*['\"]?#([^)'\"]+)['\"]?\s*\)\s*(.*)$", s, re.I)
+        fallback = m.group(2).strip() if m else ""
+        if m and m.group(1) in gradients:
+            notes.add("gradient (drawn with its first stop colour)")
+            s = gradients[m.group(1)]
+        elif fallback:
+            s = fallback
+        else:
+            notes.add("pattern or unresolved paint server (not painted)")
+            return None, 1.0
+        if s.lower() == "none":
+            return None, 1.0
+    c = Color(s)
+    if c.value is None:
+        return None, 1.0
+    return c.hexrgb.lower(), c.alpha / 255.0
+
+
+def _style_of(shape, opacity: float, det_scale: float, vp_scale: float, gradients, notes) -> Style:
+    values = shape.values
+    fill, fill_alpha = _paint(values.get("fill", "black"), gradients, notes)
+    stroke, stroke_alpha = _paint(values.get("stroke", "none"), gradients, notes)
+    sw = shape.stroke_width if shape.stroke_width is not None else 1.0
+    try:
+        sw = float(sw)
+    except (TypeError, ValueError):
+        sw = 1.0
+    if not math.isfinite(sw) or sw < 0:
+        sw = 0.0
+    if "non-scaling-stroke" in str(values.get("vector-effect", "")):
+        sw = sw / vp_scale if vp_scale > 0 else sw
+    else:
+        sw = sw * det_scale
+    cap = str(values.get("stroke-linecap", "butt")).strip().lower()
+    join = str(values.get("stroke-linejoin", "miter")).strip().lower()
+    rule = str(values.get("fill-rule", "nonzero")).strip().lower()
+    vis = str(values.get("visibility", "visible")).strip().lower()
+    if vis in ("hidden", "collapse"):
+        opacity = 0.0
+    return Style(
+        fill=fill,
+        stroke=stroke,
+        stroke_width=sw,
+        opacity=_clamp01(opacity),
+        fill_opacity=_clamp01(_float_attr(values.get("fill-opacity"), 1.0) * fill_alpha),
+        stroke_opacity=_clamp01(_float_attr(values.get("stroke-opacity"), 1.0) * stroke_alpha),
+        fill_rule="evenodd" if rule == "evenodd" else "nonzero",
+        stroke_linecap=cap if cap in ("butt", "round", "square") else "butt",
+        stroke_linejoin=join if join in ("miter", "round", "bevel") else "miter",
+    )
+
+
+def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
+    """Parse SVG bytes into shapes with user-unit matrices and styles (not flattened).
+
+    Invisible shapes are kept (check ``shape.style.visible``); text, images, filters,
+    clip paths and masks are reported with one warning naming the file.
+    """
+    import svgelements as se
+
+    root_xml = parse_xml_hardened(path, data)
+    _check_tree(path, root_xml)
+    notes: set[str] = set()
+    _sanitize(path, root_xml, notes)
+    gradients = _gradient_colours(root_xml)
+    svg_root = {k: root_xml.get(k) for k in ("width", "height", "viewBox") if root_xml.get(k) is not None}
+    root_attrs = {k: v for k, v in root_xml.attrib.items()}
+    meta_el = next((c for c in root_xml if _local(c.tag) == "metadata"), None)
+    metadata_text = meta_el.text if meta_el is not None else None
+    for k in ("width", "height"):
+        v = root_xml.get(k)
+        if v is not None and re.fullmatch(r"\s*[-+]?(0+(\.0*)?|\.0+)\s*[a-z%]*\s*", v, re.I):
+            raise InputError(path, f"the root <svg> has {k}=\"{v}\", so nothing is rendered; give it a positive size")
+    clean = ET.tostring(root_xml, encoding="utf-8")
+
+    doc = se.SVG.parse(io.BytesIO(clean), reify=False, on_error="ignore")
+    if not isinstance(doc, se.SVG):
+        raise InputError(path, "does not contain an <svg> document")
+    root_tf = doc.values.get("transform") or ""
+    vb = doc.viewbox_transform if doc.viewbox is not None else ""
+    viewport = se.Matrix(f"{root_tf} {vb}".strip())
+    if abs(viewport.determinant) == 0 or not all(math.isfinite(v) for v in (viewport.a, viewport.b, viewport.c, viewport.d, viewport.e, viewport.f)):
+        raise InputError(path, "the root viewBox/size is degenerate (zero or non-finite); fix width, height and viewBox")
+    inv_viewport = ~viewport
+    vp_scale = math.sqrt(abs(viewport.determinant))
+
+    shapes: list[SvgShape] = []
+
+    def own(node) -> dict:
+        vals = getattr(node, "values", None) or {}
+        attrs = vals.get("attributes") or {}
+        return dict(attrs)
+
+    def walk(node, opacity: float, hole: bool, groups: tuple):
+        for child in node:
+            if isinstance(child, se.Shape):
+                attrs = own(child)
+                if "filter" in attrs:
+                    notes.add("filter")
+                if "clip-path" in attrs or "mask" in attrs:
+                    notes.add("clip-path/mask (ignored, shape drawn unclipped)")
+                m = child.transform * inv_viewport
+                mat = _matrix_to_np(m)
+                det_scale = math.sqrt(abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0]))
+                op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
+                style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
+                segs = list(child.segments(transformed=False))
+                shapes.append(SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups))
+            elif isinstance(child, (se.Group, se.Use)):
+                attrs = own(child)
+                if "filter" in attrs:
+                    notes.add("filter")
+                if "clip-path" in attrs or "mask" in attrs:
+                    notes.add("clip-path/mask (ignored, shape drawn unclipped)")
+                op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
+                walk(child, op, hole or _is_hole(attrs), groups + (attrs,))
+            elif isinstance(child, se.Text):
+                notes.add("text")
+            elif isinstance(child, se.Image):
+                notes.add("image")
+
+    walk(doc, 1.0, False, ())
+    if notes:
+        warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
+    return SvgDocument(shapes, svg_root, root_attrs, metadata_text)
+
+
+# --------------------------------------------------------------------------- flattening
+
+
+class PointBudget:
+    """Counts flattened vertices of one file; InputError past ``limit``."""
+
+    def __init__(self, path, limit: int | None = None):
+        self.path, self.used = path, 0
+        self.limit = MAX_POINTS if limit is None else limit
+
+    def take(self, n: float) -> int:
+        if not math.isfinite(n):
+            raise InputError(self.path, "has non-finite coordinates (NaN or infinity)")
+        self.used += n
+        if self.used > self.limit:
+            raise InputError(
+                self.path,
+                f"produces more than {self.limit} points after flattening curves; simplify the file or use a larger tolerance",
+            )
+        return int(n)
+
+
+def _pt(p) -> tuple[float, float]:
+    return (float(p[0]), float(p[1]))
+
+
+def _control_points(seg) -> list:
+    import svgelements as se
+
+    if isinstance(seg, se.Arc):
+        c, u, v = np.array(_pt(seg.center)), np.array(_pt(seg.prx)) - np.array(_pt(seg.center)), np.array(_pt(seg.pry)) - np.array(_pt(seg.center))
+        return [_pt(seg.start), _pt(seg.end), *(c + su * u + sv * v for su in (-1, 1) for sv in (-1, 1))]
+    pts = []
+    for name in ("start", "control", "control1", "control2", "end"):
+        p = getattr(seg, name, None)
+        if p is not None:
+            pts.append(_pt(p))
+    return pts
+
+
+def shape_bounds(shapes: list[SvgShape]) -> np.ndarray | None:
+    """Cheap bounding box (x0, y0, x1, y1) of shapes from their control points (user units)."""
+    boxes = []
+    for sh in shapes:
+        pts = [p for seg in sh.segments for p in _control_points(seg)]
+        if not pts:
+            continue
+        a = np.asarray(pts, dtype=float) @ sh.matrix[:2, :2].T + sh.matrix[:2, 2]
+        boxes.append(np.concatenate([a.min(axis=0), a.max(axis=0)]))
+    if not boxes:
+        return None
+    b = np.array(boxes)
+    return np.concatenate([b[:, :2].min(axis=0), b[:, 2:].max(axis=0)])
+
+
+def default_tolerance(bounds) -> float:
+    """1e-3 x the bounding-box diagonal (a tiny positive number for a degenerate box)."""
+    if bounds is None:
+        return 1e-9
+    diag = float(np.hypot(bounds[2] - bounds[0], bounds[3] - bounds[1]))
+    return 1e-3 * diag if diag > 0 and math.isfinite(diag) else 1e-9
+
+
+def flatten_shape(path, sh: SvgShape, tol: float, budget: PointBudget) -> list[tuple[np.ndarray, bool]]:
+    """Flatten one shape into (K, 2) polylines in user units with chord error <= ``tol``.
+
+    Béziers are sampled uniformly in t with n = ceil(sqrt(max|B''| / (8 tol))) pieces
+    (the interpolation error bound h^2/8 max|B''|), elliptical arcs with
+    n = ceil(|sweep| sqrt(K / (8 tol))) with K bounding |B''| of the (transformed) arc.
+    Returns [(points, closed)] with consecutive duplicates and repeated closing points
+    removed; subpaths with fewer than 2 distinct points are dropped.
+    """
+    import svgelements as se
+
+    L = sh.matrix[:2, :2]
+    t = sh.matrix[:2, 2]
+    out: list[tuple[np.ndarray, bool]] = []
+    cur: list[np.ndarray] | None = None
+    eps = tol * 1e-6
+
+    def flush(closed: bool):
+        nonlocal cur
+        if cur is None:
+            return
+        local = np.concatenate(cur, axis=0)
+        cur = None
+        pts = local @ L.T + t
+        if not np.all(np.isfinite(pts)):
+            raise InputError(path, "has non-finite coordinates (NaN or infinity); check the path data and transforms")
+        pts = clean_points(pts, closed, eps)
+        if len(pts) >= 2:
+            out.append((pts, closed))
+
+    for seg in sh.segments:
+        if isinstance(seg, se.Move):
+            flush(False)
+            if seg.end is None:
+                continue
+            cur = [np.array([_pt(seg.end)])]
+            budget.take(1)
+            continue
+        if isinstance(seg, se.Close):
+            flush(True)
+            continue
+        if seg.start is None or seg.end is None:
+            continue
+        if cur is None:
+            cur = [np.array([_pt(seg.start)])]
+            budget.take(1)
+        if isinstance(seg, se.Linear):
+            cur.append(np.array([_pt(seg.end)]))
+            budget.take(1)
+        elif isinstance(seg, (se.QuadraticBezier, se.CubicBezier)):
+            if isinstance(seg, se.QuadraticBezier):
+                P = np.array([_pt(seg.start), _pt(seg.control), _pt(seg.end)])
+                d = (P[0] - 2 * P[1] + P[2]) @ L.T
+                bound = 2.0 * float(np.hypot(*d))
+            else:
+                P = np.array([_pt(seg.start), _pt(seg.control1), _pt(seg.control2), _pt(seg.end)])
+                d1 = (P[0] - 2 * P[1] + P[2]) @ L.T
+                d2 = (P[1] - 2 * P[2] + P[3]) @ L.T
+                bound = 6.0 * max(float(np.hypot(*d1)), float(np.hypot(*d2)))
+            if not np.all(np.isfinite(P)) or not math.isfinite(bound):
+                raise InputError(path, "has non-finite coordinates (NaN or infinity); check the path data")
+            n = max(1, math.ceil(math.sqrt(bound / (8.0 * tol)))) if bound > 0 else 1
+            n = budget.take(n)
+            s = np.linspace(0.0, 1.0, n + 1)[1:, None]
+            r = 1.0 - s
+            if len(P) == 3:
+                pts = r * r * P[0] + 2 * r * s * P[1] + s * s * P[2]
+            else:
+                pts = r**3 * P[0] + 3 * r * r * s * P[1] + 3 * r * s * s * P[2] + s**3 * P[3]
+            pts[-1] = P[-1]
+            cur.append(pts)
+        elif isinstance(seg, se.Arc):
+            end = np.array([_pt(seg.end)])
+            if seg.center is None or seg.prx is None or seg.pry is None or not seg.sweep:
+                cur.append(end)
+                budget.take(1)
+                continue
+            c = np.array(_pt(seg.center))
+            u = (np.array(_pt(seg.prx)) - c) @ L.T
+            v = (np.array(_pt(seg.pry)) - c) @ L.T
+            K = math.sqrt(float(u @ u + v @ v))
+            sweep = abs(float(seg.sweep))
+            if not (math.isfinite(K) and math.isfinite(sweep)):
+                raise InputError(path, "has non-finite coordinates (NaN or infinity); check the path data")
+            if K == 0 or seg.rx == 0 or seg.ry == 0:
+                cur.append(end)
+                budget.take(1)
+                continue
+            n = max(1, math.ceil(sweep * math.sqrt(K / (8.0 * tol))))
+            n = budget.take(n)
+            pts = np.asarray(seg.npoint(np.linspace(0.0, 1.0, n + 1)[1:]), dtype=float).reshape(-1, 2)
+            pts[-1] = end[0]
+            cur.append(pts)
+        else:  # unknown segment type: keep its end point
+            cur.append(np.array([_pt(seg.end)]))
+            budget.take(1)
+    flush(False)
+    return out
+
+
+# --------------------------------------------------------------------------- public API
+
+
+def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
+    doc = parse_svg_shapes(path, data)
+    shapes = [s for s in doc.shapes if s.style.visible]
+    tol = tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
+    budget = PointBudget(path)
+    arts = []
+    for sh in shapes:
+        subs = flatten_shape(path, sh, tol, budget)
+        if subs:
+            arts.append(ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style))
+    if not arts:
+        raise InputError(path, "has no visible geometry (no filled or stroked shape); an element needs at least one visible path")
+    return Element(name=path.stem, source=path.name, paths=tuple(arts))
+
+
+def container_from_shapes(path, shapes: list[SvgShape], tol: float, budget: PointBudget, svg_root: dict) -> Container:
+    """Build a Container from visible SVG shapes (closed subpaths only; holes subtracted)."""
+    outer, holes, arts = [], [], []
+    n_open = 0
+    for sh in shapes:
+        rings = []
+        for pts, closed in flatten_shape(path, sh, tol, budget):
+            if not closed:
+                if len(pts) >= 3 and float(np.hypot(*(pts[-1] - pts[0]))) <= tol:
+                    pts = pts[:-1]
+                else:
+                    n_open += 1
+                    continue
+            if len(pts) >= 3:
+                rings.append(pts)
+        if not rings:
+            continue
+        geom = rings_to_region(rings, sh.style.fill_rule)
+        (holes if sh.hole else outer).append(geom)
+        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), sh.style))
+    if n_open:
+        warn(path, f"ignored {n_open} open subpath(s) of the container (first point != last point); close them with Z to use them")
+    if not arts:
+        raise InputError(path, "has no closed path; a container needs at least one closed outline")
+    region = shapely.union_all(outer) if outer else shapely.Polygon()
+    if holes:
+        hole_region = shapely.union_all(holes)
+        if region.is_empty:
+            raise InputError(path, "has only hole shapes and no outer outline; mark at least one shape as the container")
+        if not hole_region.difference(region).area <= 1e-9 * max(hole_region.area, 1e-300):
+            warn(path, "a hole shape is not entirely inside the container outline; only its overlap is removed")
+        region = region.difference(hole_region)
+    region = finalize_region(path, region)
+    return Container(source=Path(str(path)).name, region=region, paths=tuple(arts), svg_root=dict(svg_root))
+
+
+def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Container:
+    doc = parse_svg_shapes(path, data)
+    shapes = [s for s in doc.shapes if s.style.visible]
+    tol = tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
+    return container_from_shapes(path, shapes, tol, PointBudget(path), doc.svg_root)
+
+
+def load_element(path: str | Path, tolerance: float | None = None) -> Element:
+    """Load one element (SVG, or RepulsionPak ``.path`` by suffix / content).
+
+    ``tolerance``: largest chord error when flattening curves, in the file's user
+    units; None -> 1e-3 x the element's bounding-box diagonal. The element's paths are
+    in paint order (first = back). Raises InputError for any unusable file.
+    """
+    tol = check_tolerance(tolerance)
+    p = Path(path)
+    with guard(p, "element file"):
+        data = read_input_bytes(p, "element file")
+        if sniff_kind(p, data) == "path":
+            from .pathfile import element_from_pathfile
+
+            return element_from_pathfile(p, data)
+        return _svg_element(p, data, tol)
+
+
+def load_container(path: str | Path, tolerance: float | None = None) -> Container:
+    """Load the container region (SVG or ``.path``).
+
+    Every closed path counts (an open one whose ends meet within tolerance too); each
+    shape's fill-rule decides its holes; shapes are united, except shapes marked as
+    holes (class ``hole``, id ``hole...``, ``data-path-type="7"``, ``.path`` type 7),
+    which are subtracted. Returns a valid (Multi)Polygon in the file's user units.
+    """
+    tol = check_tolerance(tolerance)
+    p = Path(path)
+    with guard(p, "container file"):
+        data = read_input_bytes(p, "container file")
+        if sniff_kind(p, data) == "path":
+            from .pathfile import container_from_pathfile
+
+            return container_from_pathfile(p, data, tol)
+        return _svg_container(p, data, tol)
+
+
+def load_elements(paths, tolerance: float | None = None) -> list[Element]:
+    """Load every element file given; directories expand to their ``*.svg``/``*.path``
+    files (sorted by name, not recursive). Duplicates are loaded once."""
+    check_tolerance(tolerance)
+    if isinstance(paths, (str, Path)):
+        paths = [paths]
+    files: list[Path] = []
+    for item in paths:
+        p = Path(item)
+        if p.is_dir():
+            try:
+                found = sorted(
+                    (c for c in p.iterdir() if c.is_file() and c.suffix.lower() in _ELEMENT_SUFFIXES),
+                    key=lambda c: c.name,
+                )
+            except OSError as exc:
+                raise InputError(p, f"cannot list the directory ({exc.strerror or exc}); check its permissions") from None
+            if not found:
+                raise InputError(p, "directory contains no .svg or .path element file; put element files in it or name the files directly")
+            files.extend(found)
+        else:
+            files.append(p)
+    if not files:
+        raise InputError(None, "no element file given; give at least one .svg or .path file or a directory of them")
+    seen: set[str] = set()
+    out = []
+    for f in files:
+        try:
+            key = str(f.resolve())
+        except (OSError, RuntimeError):
+            key = str(f.absolute())
+        if key in seen:
+            continue
+        seen.add(key)
+        out.append(load_element(f, tolerance))
+    return out

@@ -1,0 +1,126 @@
+"""The whole method as one call: preprocess → place → simulate → (secondary) → render."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import shapely
+
+from .errors import ParameterError
+from .params import Params
+from .placement import Placement, assign_elements, estimate_count, final_scale, place
+from .preprocess import Outline, Template, build_template, outline_of
+from .render import placed_art, skin_polygons
+from .sim.model import Model, SimFrame, State, build_model
+from .sim.runner import RunResult, Simulator, Snapshot
+from .types import Container, Element, PlacedArt
+
+
+@dataclass(eq=False)
+class Packing:
+    """Result of :func:`pack`: the placed art plus everything needed to inspect or resume."""
+
+    container: Container
+    gap: float
+    placed: list[PlacedArt]
+    templates: list[Template]
+    model: Model
+    state: State
+    frame: SimFrame
+    params: Params
+    iterations: dict[str, int] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)
+    stopped_by: dict[str, str] = field(default_factory=dict)
+    area_fraction_meshes: float = 0.0
+
+    @property
+    def partial(self) -> bool:
+        return any(v == "interrupted" for v in self.stopped_by.values())
+
+    @property
+    def n_primary(self) -> int:
+        return sum(1 for k in self.model.kind if k == "primary")
+
+    @property
+    def n_secondary(self) -> int:
+        return sum(1 for k in self.model.kind if k == "secondary")
+
+    def skins(self) -> list[np.ndarray]:
+        return skin_polygons(self.model, self.state, self.frame)
+
+
+def default_gap(container: Container) -> float:
+    minx, miny, maxx, maxy = container.bounds
+    return 0.01 * max(maxx - minx, maxy - miny)
+
+
+def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float:
+    """Typical final element diameter (container units): 2·sqrt(mean skin area / π)."""
+    return float(2 * np.sqrt(np.mean([templates[i].skin_area for i in assignment]) / np.pi))
+
+
+def prepare(container: Container, elements: Sequence[Element], params: Params,
+            rng: np.random.Generator) -> tuple[list[Template], Placement, float]:
+    """Preprocess the library and place the primary elements (sec. 4).
+
+    Returns the templates (one per library element), the placement and the gap.
+    """
+    if not elements:
+        raise ParameterError("no elements given")
+    gap = params.gap if params.gap is not None else default_gap(container)
+    minx, miny, maxx, maxy = container.bounds
+    if gap * 4 >= min(maxx - minx, maxy - miny):
+        raise ParameterError(f"the gap ({gap:g}) is absurdly large for a container of "
+                             f"{maxx - minx:g}×{maxy - miny:g} units; use a gap of about 1% of its size")
+    outlines: list[Outline] = [outline_of(e) for e in elements]
+    count = estimate_count(container.area, gap, params.placement)
+    assignment = assign_elements(len(elements), count, rng)
+    scale = final_scale(outlines, assignment, container.area, params.preprocess.skin_offset * gap,
+                        params.placement.target_fraction)
+    templates = [build_template(o, scale, gap, params.preprocess) for o in outlines]
+    placement = place(templates, assignment, container.region, params.placement, rng)
+    return templates, placement, gap
+
+
+def pack(container: Container, elements: Sequence[Element], params: Params = Params(),
+         secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
+         should_stop: Callable[[], bool] | None = None) -> Packing:
+    """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
+
+    ``params.seed`` fixes every random choice. ``on_snapshot`` receives progress
+    snapshots; ``should_stop()`` (or Ctrl-C) ends the current phase early and the result
+    is marked partial.
+    """
+    params = params.validate()
+    rng = np.random.default_rng(params.seed)
+    t0 = time.perf_counter()
+    templates, placement, gap = prepare(container, elements, params, rng)
+    frame = SimFrame.for_region(container.region)
+    region_sim = shapely.affinity.scale(container.region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    size = typical_size(templates, placement.template_index) / frame.unit
+    cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
+    model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
+                               field_h=gap / frame.unit / 3.0)
+    t1 = time.perf_counter()
+    sim = Simulator(model, state, params.sim, phase="primary")
+    res: RunResult = sim.run(on_snapshot, should_stop=should_stop)
+    t2 = time.perf_counter()
+    packing = Packing(container, gap, [], templates, model, state, frame, params,
+                      iterations={"primary": res.iterations, "secondary": 0},
+                      seconds={"preprocess": t1 - t0, "primary": t2 - t1, "secondary": 0.0},
+                      stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction)
+    if secondary and res.stopped_by != "interrupted":
+        from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
+
+        add_secondary(packing, secondary, rng, on_snapshot=on_snapshot, should_stop=should_stop)
+    t3 = time.perf_counter()
+    packing.placed = placed_art(packing.templates, packing.model, packing.state, frame)
+    packing.seconds["render"] = time.perf_counter() - t3
+    packing.seconds["total"] = time.perf_counter() - t0
+    return packing
+
+
+__all__ = ["Packing", "pack", "prepare", "default_gap", "replace"]

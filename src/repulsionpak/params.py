@@ -1,0 +1,253 @@
+"""Every tunable parameter, as frozen dataclasses (one per stage).
+
+Units: lengths marked *container units* are in the user units of the container file;
+force constants are the paper's (sec. 5), valid for a container whose larger bounding-box
+side is 1000 units. The simulation runs in such normalised units (see
+``sim.model.SimFrame``), which is how the defaults "work for any container size".
+
+Parameters are data: load them from TOML with :func:`load_config`, change them with
+``dataclasses.replace``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import tomllib
+import typing
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
+from .errors import ConfigError, ParameterError
+
+
+def _doc(default, unit: str, text: str, **kw):
+    """A dataclass field carrying its unit and documentation in ``metadata``."""
+    return field(default=default, metadata={"unit": unit, "doc": text, **kw})
+
+
+@dataclass(frozen=True)
+class PreprocessParams:
+    """Sec. 4: skins, meshes and barycentric binding."""
+
+    mesh_spacing: float = _doc(
+        1.0, "× gap", "Spacing of the skin's boundary samples, as a multiple of the gap (paper: 1).")
+    skin_offset: float = _doc(
+        0.6, "× gap", "Skin width around the art. The paper uses gap/2; repulsion compresses the "
+        "skin where meshes touch (measured ~15% on the heart scene), so the default is a bit wider "
+        "to make the final gap between arts match the requested gap.")
+    skin_tolerance: float = _doc(
+        0.05, "× gap", "Largest distance between the resampled skin and the exact offset curve: "
+        "tight bends get extra samples so the gap holds at tips (paper: uniform samples only).")
+    interior_points: bool = _doc(
+        True, "-", "Allow Steiner points inside the skin for a quality triangulation.")
+    min_angle: float = _doc(
+        20.0, "degrees", "Minimum triangle angle of the quality triangulation (Triangle's q switch).")
+    flatten_tolerance: float = _doc(
+        0.25, "× gap", "Maximum chord error when flattening curves (at most gap/4).")
+    min_boundary_vertices: int = _doc(
+        12, "-", "A skin gets at least this many boundary samples, however small it is.")
+
+
+@dataclass(frozen=True)
+class PlacementParams:
+    """Sec. 4: initial placement."""
+
+    count: int | None = _doc(
+        None, "elements", "Number of primary elements; None estimates it from the container area.")
+    element_size: float = _doc(
+        12.0, "× gap", "Typical final element diameter used to estimate the count (when count is None).")
+    initial_fraction: float = _doc(
+        0.075, "-", "Share of the container area the skins occupy at the start (paper: 5–10%).")
+    target_fraction: float = _doc(
+        0.86, "-", "Share of the container area the skins are expected to fill at the end; "
+        "fixes the scale at which skins are built so the final art gap matches the requested gap.")
+    rotate: bool = _doc(True, "-", "Give every element a random initial orientation.")
+    candidates_per_point: int = _doc(30, "-", "Candidates per point for farthest-point blue noise.")
+
+
+@dataclass(frozen=True)
+class SimParams:
+    """Sec. 5–8: forces, integration, growth, self-intersection, stopping."""
+
+    k_repulsion: float = _doc(80.0, "paper units", "k_r, strength of the repulsion force (Eq. 2).")
+    k_edge: float = _doc(40.0, "paper units", "k_e, strength of the quadratic edge springs (Eq. 3).")
+    k_overlap: float = _doc(80.0, "paper units", "k_o, strength of the overlap force (Eq. 4).")
+    k_boundary: float = _doc(80.0, "paper units", "k_b, strength of the boundary force (Eq. 5).")
+    soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")
+    dt: float = _doc(0.1, "-", "Δt, explicit Euler time step (paper: 0.1).")
+    velocity_cap: float = _doc(5.0, "× Δt", "Velocities are capped at velocity_cap·Δt (paper: 5).")
+    k_growth: float = _doc(0.01, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6).")
+    cell_size: float = _doc(
+        0.65, "× element size", "Neighbour-grid cell width relative to the typical final element "
+        "diameter (paper: 6–10% of a container holding ~25 elements).")
+    relax_passes: int = _doc(2, "-", "Self-intersection relaxation cycles per step (sec. 7: 2–3).")
+    relax_fraction: float = _doc(0.5, "× mean edge", "Minimum distance of non-neighbouring vertices.")
+    stop_window: int = _doc(100, "iterations", "w, sliding window of the stopping rule (sec. 8).")
+    stop_epsilon: float = _doc(
+        2e-5, "area fraction / iteration", "ε: stop when the RMS of the per-iteration change of the "
+        "area fraction over the window falls below this (the paper samples once per second with "
+        "ε = 0.01; we sample every iteration).")
+    min_iterations: int = _doc(300, "iterations", "Never stop before this many iterations.")
+    max_iterations: int = _doc(20000, "iterations", "Hard bound on the number of iterations.")
+    settle_iterations: int = _doc(
+        300, "iterations", "Extra iterations without growth after stopping, to resolve the last overlaps.")
+
+
+@dataclass(frozen=True)
+class SecondaryParams:
+    """Sec. 9: secondary elements."""
+
+    d_min: float = _doc(
+        0.75, "× gap", "Seeds need at least this distance to the nearest mesh or boundary "
+        "(paper: 5–10 px on a 1000 px grid).")
+    d_sep: float = _doc(1.0, "× d_min-scaled", "Seeds are at least d_sep × (2·d_min) apart.")
+    grid: int = _doc(1000, "pixels", "Longer side of the distance-transform grid.")
+    max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")
+    initial_fraction: float = _doc(
+        0.5, "-", "Initial secondary size relative to its pocket (its skin's radius = fraction × distance).")
+
+
+@dataclass(frozen=True)
+class Params:
+    """All parameters of a packing run."""
+
+    gap: float = _doc(None, "container units", "d_gap, the desired distance between neighbouring "
+                      "elements' art in the final packing. None: 1% of the container's larger side.")
+    seed: int | None = _doc(None, "-", "Random seed; the same seed gives the same packing.")
+    preprocess: PreprocessParams = field(default_factory=PreprocessParams)
+    placement: PlacementParams = field(default_factory=PlacementParams)
+    sim: SimParams = field(default_factory=SimParams)
+    secondary: SecondaryParams = field(default_factory=SecondaryParams)
+
+    def validate(self) -> "Params":
+        """Raise :class:`ParameterError` on values that cannot work; return self."""
+        if self.gap is not None and not (math.isfinite(self.gap) and self.gap > 0):
+            raise ParameterError(f"gap must be a positive number, got {self.gap!r}")
+        p, s, pl = self.preprocess, self.sim, self.placement
+        checks = [
+            (p.mesh_spacing > 0, "preprocess.mesh_spacing must be > 0"),
+            (p.skin_tolerance > 0, "preprocess.skin_tolerance must be > 0"),
+            (0 < p.skin_offset <= 2, "preprocess.skin_offset must be in (0, 2] (× gap)"),
+            (0 < p.min_angle <= 34, "preprocess.min_angle must be in (0, 34] degrees"),
+            (0 < p.flatten_tolerance <= 0.25, "preprocess.flatten_tolerance must be in (0, 0.25]"),
+            (pl.count is None or pl.count >= 1, "placement.count must be >= 1"),
+            (pl.element_size > 0, "placement.element_size must be > 0"),
+            (0 < pl.initial_fraction < pl.target_fraction <= 1,
+             "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),
+            (s.dt > 0 and s.dt <= 0.5, "sim.dt must be in (0, 0.5]"),
+            (s.velocity_cap > 0, "sim.velocity_cap must be > 0"),
+            (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary) >= 0, "force constants must be >= 0"),
+            (s.k_growth >= 0, "sim.k_growth must be >= 0"),
+            (s.soft > 0, "sim.soft must be > 0"),
+            (s.cell_size > 0, "sim.cell_size must be > 0"),
+            (s.stop_window >= 2, "sim.stop_window must be >= 2"),
+            (s.max_iterations >= 1, "sim.max_iterations must be >= 1"),
+            (self.secondary.d_min > 0 and self.secondary.d_sep > 0, "secondary.d_min and d_sep must be > 0"),
+            (self.secondary.grid >= 64, "secondary.grid must be >= 64"),
+        ]
+        for ok, msg in checks:
+            if not ok:
+                raise ParameterError(msg)
+        return self
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+_SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
+             "sim": SimParams, "secondary": SecondaryParams}
+
+
+def _check_type(value, tp, where: str, source: str):
+    """Coerce ``value`` to the annotated type ``tp`` or raise ConfigError."""
+    args = typing.get_args(tp)
+    optional = type(None) in args
+    base = next((a for a in args if a is not type(None)), tp) if args else tp
+    if value is None:
+        if optional:
+            return None
+        raise ConfigError(f"{source}: {where} must not be empty")
+    if base is bool:
+        if isinstance(value, bool):
+            return value
+    elif base is int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+    elif base is float:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+    name = getattr(base, "__name__", str(base))
+    raise ConfigError(f"{source}: {where} must be a {name}, got {value!r} ({type(value).__name__})")
+
+
+def _unknown(key: str, valid: list[str], where: str, source: str) -> ConfigError:
+    close = difflib.get_close_matches(key, valid, n=1, cutoff=0.5)
+    hint = f"; did you mean '{close[0]}'?" if close else f"; valid keys: {', '.join(sorted(valid))}"
+    return ConfigError(f"{source}: unknown key '{where}{key}'{hint}")
+
+
+def params_from_dict(data: dict, source: str = "config", base: Params | None = None) -> Params:
+    """Build :class:`Params` from a nested dict (as read from TOML), strictly."""
+    base = base or Params()
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: expected a table of parameters")
+    top_hints = typing.get_type_hints(Params)
+    top_valid = [f.name for f in fields(Params)]
+    changes: dict = {}
+    for key, value in data.items():
+        if key in _SECTIONS:
+            cls = _SECTIONS[key]
+            if not isinstance(value, dict):
+                raise ConfigError(f"{source}: [{key}] must be a table")
+            hints = typing.get_type_hints(cls)
+            valid = [f.name for f in fields(cls)]
+            sub = {}
+            for k2, v2 in value.items():
+                if k2 not in valid:
+                    raise _unknown(k2, valid, f"{key}.", source)
+                sub[k2] = _check_type(v2, hints[k2], f"{key}.{k2}", source)
+            changes[key] = dataclasses.replace(getattr(base, key), **sub)
+        elif key in top_valid:
+            changes[key] = _check_type(value, top_hints[key], key, source)
+        else:
+            all_keys = top_valid + [f"{s}.{f.name}" for s, c in _SECTIONS.items() for f in fields(c)]
+            raise _unknown(key, all_keys, "", source)
+    try:
+        return dataclasses.replace(base, **changes).validate()
+    except ParameterError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+
+
+def load_config(path: str | Path, base: Params | None = None) -> Params:
+    """Read a TOML file of parameters (sections ``[sim]``, ``[placement]`` ...)."""
+    path = Path(path)
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such config file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a directory, expected a TOML file") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a text file (TOML must be UTF-8)") from None
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: invalid TOML: {exc}") from None
+    return params_from_dict(data, source=str(path), base=base)
+
+
+def describe() -> list[tuple[str, object, str, str]]:
+    """(key, default, unit, doc) for every parameter, for docs and ``--help``."""
+    rows = []
+    for f in fields(Params):
+        if f.name in _SECTIONS:
+            for g in fields(_SECTIONS[f.name]):
+                d = g.default if g.default is not dataclasses.MISSING else None
+                rows.append((f"{f.name}.{g.name}", d, g.metadata.get("unit", ""), g.metadata.get("doc", "")))
+        else:
+            rows.append((f.name, f.default, f.metadata.get("unit", ""), f.metadata.get("doc", "")))
+    return rows

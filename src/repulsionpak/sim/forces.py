@@ -1,0 +1,242 @@
+"""The four forces of sec. 5, one numba kernel each, plus the contact query they share.
+
+Every force kernel has the same shape: ``f(<model arrays>, x, ..., k, F)`` and *adds* its
+force into ``F`` (N, 2) for the vertices of non-frozen elements, so each can be switched
+off or tested alone. :func:`contact_query` finds, for every skin vertex, whether it lies
+inside another element's mesh and the closest point on the skin of every neighbouring
+mesh in the 3×3 cell window (sec. 5, "Simulation details").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .grid import cell_of
+
+
+@njit(cache=True, inline="always")
+def _inside_triangle(px, py, ax, ay, bx, by, cx, cy):
+    d1 = (px - bx) * (ay - by) - (ax - bx) * (py - by)
+    d2 = (px - cx) * (by - cy) - (bx - cx) * (py - cy)
+    d3 = (px - ax) * (cy - ay) - (cx - ax) * (py - ay)
+    neg = (d1 < 0) or (d2 < 0) or (d3 < 0)
+    pos = (d1 > 0) or (d2 > 0) or (d3 > 0)
+    return not (neg and pos)
+
+
+@njit(cache=True, parallel=True)
+def contact_query(x, active, vert_elem,
+                  seg_xy, seg_elem, seg_start, sox, soy, sinv, sgx, sgy,
+                  tri_xy, tri_elem, tri_start, tox, toy, tinv, tgx, tgy,
+                  inside, nb_count, nb_elem, nb_d2, nb_q):
+    """For each vertex in ``active`` (skin vertices of moving elements):
+
+    * ``inside[i]``: the vertex lies in a triangle of another element (3×3 window of the
+      triangle cells);
+    * otherwise ``nb_q[i, :nb_count[i]]``: the closest point on the skin of each other
+      element having a skin segment in the 3×3 window of the segment cells (``nb_elem``,
+      ``nb_d2`` alongside). At most ``nb_q.shape[1]`` neighbours are kept (closest win).
+    """
+    K = nb_q.shape[1]
+    for k in prange(active.shape[0]):
+        i = active[k]
+        e = vert_elem[i]
+        px = x[i, 0]
+        py = x[i, 1]
+        cx, cy = cell_of(px, py, tox, toy, tinv, tgx, tgy)
+        hit = False
+        for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
+            if hit:
+                break
+            for xx in range(max(cx - 1, 0), min(cx + 2, tgx)):
+                if hit:
+                    break
+                c = yy * tgx + xx
+                for m in range(tri_start[c], tri_start[c + 1]):
+                    if tri_elem[m] == e:
+                        continue
+                    if _inside_triangle(px, py, tri_xy[m, 0], tri_xy[m, 1], tri_xy[m, 2],
+                                        tri_xy[m, 3], tri_xy[m, 4], tri_xy[m, 5]):
+                        hit = True
+                        break
+        inside[i] = hit
+        cnt = 0
+        if not hit:
+            cx, cy = cell_of(px, py, sox, soy, sinv, sgx, sgy)
+            for yy in range(max(cy - 1, 0), min(cy + 2, sgy)):
+                for xx in range(max(cx - 1, 0), min(cx + 2, sgx)):
+                    c = yy * sgx + xx
+                    last = -1
+                    slot = -1
+                    for m in range(seg_start[c], seg_start[c + 1]):
+                        f = seg_elem[m]
+                        if f == e:
+                            continue
+                        ax = seg_xy[m, 0]
+                        ay = seg_xy[m, 1]
+                        abx = seg_xy[m, 2] - ax
+                        aby = seg_xy[m, 3] - ay
+                        l2 = abx * abx + aby * aby
+                        t = 0.0
+                        if l2 > 0.0:
+                            t = ((px - ax) * abx + (py - ay) * aby) / l2
+                            if t < 0.0:
+                                t = 0.0
+                            elif t > 1.0:
+                                t = 1.0
+                        qx = ax + t * abx
+                        qy = ay + t * aby
+                        d2 = (px - qx) * (px - qx) + (py - qy) * (py - qy)
+                        if f != last:  # items of one element are contiguous in a cell
+                            last = f
+                            slot = -1
+                            for j in range(cnt):
+                                if nb_elem[i, j] == f:
+                                    slot = j
+                                    break
+                            if slot < 0:
+                                if cnt < K:
+                                    slot = cnt
+                                    cnt += 1
+                                else:  # full: reuse the farthest slot
+                                    slot = 0
+                                    for j in range(1, K):
+                                        if nb_d2[i, j] > nb_d2[i, slot]:
+                                            slot = j
+                                    if d2 >= nb_d2[i, slot]:
+                                        slot = -2  # ignore this element in this cell
+                                        continue
+                                nb_elem[i, slot] = f
+                                nb_d2[i, slot] = np.inf
+                        if slot == -2:
+                            continue
+                        if d2 < nb_d2[i, slot]:
+                            nb_d2[i, slot] = d2
+                            nb_q[i, slot, 0] = qx
+                            nb_q[i, slot, 1] = qy
+        nb_count[i] = cnt
+
+
+@njit(cache=True, parallel=True)
+def repulsion_force(x, active, inside, nb_count, nb_q, k_r, soft, F):
+    """Eq. 2: F_r = k_r Σ_i u/|u| · 1/(ς + |u|²), u = x − x_i, over neighbouring meshes;
+    zero for a vertex inside another mesh."""
+    for k in prange(active.shape[0]):
+        i = active[k]
+        if inside[i]:
+            continue
+        fx = 0.0
+        fy = 0.0
+        for j in range(nb_count[i]):
+            ux = x[i, 0] - nb_q[i, j, 0]
+            uy = x[i, 1] - nb_q[i, j, 1]
+            d2 = ux * ux + uy * uy
+            d = np.sqrt(d2)
+            if d > 1e-12:
+                w = 1.0 / (d * (soft + d2))
+                fx += ux * w
+                fy += uy * w
+        F[i, 0] += k_r * fx
+        F[i, 1] += k_r * fy
+
+
+@njit(cache=True, parallel=True)
+def overlap_force(x, active, inside, tris, vtri_ptr, vtri, k_o, F):
+    """Eq. 4: F_o = k_o Σ (p_i − x) over the centroids p_i of the triangles incident to x,
+    for vertices inside another mesh."""
+    for k in prange(active.shape[0]):
+        i = active[k]
+        if not inside[i]:
+            continue
+        fx = 0.0
+        fy = 0.0
+        for m in range(vtri_ptr[i], vtri_ptr[i + 1]):
+            t = vtri[m]
+            a = tris[t, 0]
+            b = tris[t, 1]
+            c = tris[t, 2]
+            fx += (x[a, 0] + x[b, 0] + x[c, 0]) / 3.0 - x[i, 0]
+            fy += (x[a, 1] + x[b, 1] + x[c, 1]) / 3.0 - x[i, 1]
+        F[i, 0] += k_o * fx
+        F[i, 1] += k_o * fy
+
+
+@njit(cache=True)
+def edge_force(x, springs, rest0, spring_elem, growth, moving, k_e, F):
+    """Eq. 3: F_e = k_e · u/|u| · s(|u| − ℓ)², u = x_b − x_a, applied +F to x_a and −F
+    to x_b; ℓ = rest0 · growth[element] (sec. 6)."""
+    for s in range(springs.shape[0]):
+        e = spring_elem[s]
+        if not moving[e]:
+            continue
+        a = springs[s, 0]
+        b = springs[s, 1]
+        ux = x[b, 0] - x[a, 0]
+        uy = x[b, 1] - x[a, 1]
+        d = np.sqrt(ux * ux + uy * uy)
+        if d < 1e-12:
+            continue
+        diff = d - rest0[s] * growth[e]
+        mag = k_e * diff * abs(diff) / d
+        F[a, 0] += mag * ux
+        F[a, 1] += mag * uy
+        F[b, 0] -= mag * ux
+        F[b, 1] -= mag * uy
+
+
+@njit(cache=True, inline="always")
+def _field_sample(values, ox, oy, inv_h, px, py):
+    """Bilinear value and gradient of a grid field at (px, py) (clamped to the grid;
+    beyond it the value grows with the distance to the grid)."""
+    ny, nx = values.shape
+    fx = (px - ox) * inv_h
+    fy = (py - oy) * inv_h
+    extra = 0.0
+    cfx = min(max(fx, 0.0), nx - 1.000001)
+    cfy = min(max(fy, 0.0), ny - 1.000001)
+    if cfx != fx or cfy != fy:
+        extra = np.sqrt((fx - cfx) ** 2 + (fy - cfy) ** 2) / inv_h
+    i = int(cfx)
+    j = int(cfy)
+    tx = cfx - i
+    ty = cfy - j
+    v00 = values[j, i]
+    v10 = values[j, i + 1]
+    v01 = values[j + 1, i]
+    v11 = values[j + 1, i + 1]
+    val = (v00 * (1 - tx) + v10 * tx) * (1 - ty) + (v01 * (1 - tx) + v11 * tx) * ty
+    gx = ((v10 - v00) * (1 - ty) + (v11 - v01) * ty) * inv_h
+    gy = ((v01 - v00) * (1 - tx) + (v11 - v10) * tx) * inv_h
+    if extra > 0.0:  # outside the sampled grid: point back towards it
+        gx = (cfx - fx) * -1.0
+        gy = (cfy - fy) * -1.0
+        n = np.sqrt(gx * gx + gy * gy)
+        gx /= n
+        gy /= n
+        val += extra
+    return val, gx, gy
+
+
+@njit(cache=True, parallel=True)
+def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F):
+    """Eq. 5: F_b = k_b (p_b − x) for a vertex outside the container, p_b the closest
+    boundary point, from the signed distance field: p_b − x = −sdf · ∇sdf/|∇sdf|."""
+    for k in prange(active_all.shape[0]):
+        i = active_all[k]
+        d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
+        if d <= 0.0:
+            continue
+        n = np.sqrt(gx * gx + gy * gy)
+        if n < 1e-12:
+            continue
+        F[i, 0] -= k_b * d * gx / n
+        F[i, 1] -= k_b * d * gy / n
+
+
+@njit(cache=True)
+def outside_distance(x, values, ox, oy, inv_h, out):
+    """Signed distance of every vertex to the container boundary (positive outside)."""
+    for i in range(x.shape[0]):
+        d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
+        out[i] = d

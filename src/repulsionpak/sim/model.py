@@ -1,0 +1,218 @@
+"""Static simulation model and time-varying state, as flat arrays (structure of arrays).
+
+Everything here is in *simulation units*: container units divided by ``SimFrame.unit``,
+chosen so that the container's larger bounding-box side is 1000 — the scale the paper's
+force constants are tuned for (sec. 5).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from ..placement import Placement, placed_vertices
+from ..preprocess import Template
+
+
+@dataclass(frozen=True)
+class SimFrame:
+    """Map between container units and simulation units: ``sim = container / unit``."""
+
+    unit: float
+
+    @staticmethod
+    def for_region(region) -> "SimFrame":
+        minx, miny, maxx, maxy = region.bounds
+        return SimFrame(max(maxx - minx, maxy - miny) / 1000.0)
+
+
+@dataclass(frozen=True, eq=False)
+class Field:
+    """Signed distance to the container boundary on a regular grid (positive outside).
+
+    ``values[j, i]`` is the distance at (ox + i·h, oy + j·h).
+    """
+
+    values: np.ndarray
+    ox: float
+    oy: float
+    h: float
+
+
+def container_field(region, h: float, margin: float, max_cells: int = 2_000_000) -> Field:
+    """Sample the signed distance of ``region`` (sim units) on a grid of spacing ~h."""
+    minx, miny, maxx, maxy = region.bounds
+    minx, miny, maxx, maxy = minx - margin, miny - margin, maxx + margin, maxy + margin
+    nx = int(np.ceil((maxx - minx) / h)) + 1
+    ny = int(np.ceil((maxy - miny) / h)) + 1
+    if nx * ny > max_cells:
+        f = np.sqrt(nx * ny / max_cells)
+        h *= f
+        nx = int(np.ceil((maxx - minx) / h)) + 1
+        ny = int(np.ceil((maxy - miny) / h)) + 1
+    xs = minx + h * np.arange(nx)
+    ys = miny + h * np.arange(ny)
+    gx, gy = np.meshgrid(xs, ys)
+    px, py = gx.ravel(), gy.ravel()
+    boundary = region.boundary
+    shapely.prepare(boundary)
+    d = shapely.distance(boundary, shapely.points(px, py))
+    inside = shapely.contains_xy(region, px, py)
+    sd = np.where(inside, -d, d).reshape(ny, nx)
+    return Field(np.ascontiguousarray(sd), float(minx), float(miny), float(h))
+
+
+@dataclass(eq=False)
+class Model:
+    """Static arrays of all meshes concatenated (shapes in brackets; N vertices, S springs,
+    T triangles, M elements)."""
+
+    vert_elem: np.ndarray  # (N,) int32 owning element
+    elem_vstart: np.ndarray  # (M+1,) int32 first vertex of each element
+    elem_nskin: np.ndarray  # (M,) int32 number of skin vertices (first in each block)
+    is_skin: np.ndarray  # (N,) bool
+    springs: np.ndarray  # (S, 2) int32 global vertex indices
+    rest0: np.ndarray  # (S,) float64 rest lengths at placement (before growth)
+    spring_elem: np.ndarray  # (S,) int32
+    spring_is_edge: np.ndarray  # (S,) bool: mesh edge (True) or auxiliary spring
+    tris: np.ndarray  # (T, 3) int32 global vertex indices
+    tri_elem: np.ndarray  # (T,) int32
+    vtri_ptr: np.ndarray  # (N+1,) CSR: triangles incident to each vertex
+    vtri: np.ndarray  # (K,)
+    vnbr_ptr: np.ndarray  # (N+1,) CSR: vertices joined to each vertex by a spring
+    vnbr: np.ndarray  # (K2,)
+    frozen: np.ndarray  # (M,) bool: vertices of frozen elements never move
+    template_index: np.ndarray  # (M,) int32 into the template list
+    kind: list[str]  # (M,) "primary" | "secondary"
+    field: Field  # container signed distance
+    container_area: float
+    cell_size: float  # segment grid cell width (repulsion range)
+    tri_cell_size: float  # triangle grid cell width (>= the longest mesh edge)
+    grid_origin: tuple[float, float]
+    grid_extent: tuple[float, float]
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vert_elem)
+
+    @property
+    def n_elements(self) -> int:
+        return len(self.elem_nskin)
+
+
+@dataclass(eq=False)
+class State:
+    """Time-varying arrays."""
+
+    x: np.ndarray  # (N, 2) positions
+    v: np.ndarray  # (N, 2) velocities
+    n_grow: np.ndarray  # (M,) int64 growth counters n_M (sec. 6)
+    iteration: int = 0
+    area_history: list[float] = field(default_factory=list)
+
+    def copy(self) -> "State":
+        return State(self.x.copy(), self.v.copy(), self.n_grow.copy(), self.iteration,
+                     list(self.area_history))
+
+
+def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    order = np.argsort(rows, kind="stable")
+    counts = np.bincount(rows, minlength=n)
+    ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    return ptr, cols[order].astype(np.int32)
+
+
+def build_model(templates: Sequence[Template], placement: Placement, frame: SimFrame,
+                region_sim, cell_size: float, field_h: float, kinds: Sequence[str] | None = None,
+                frozen: Sequence[bool] | None = None, base: tuple["Model", State] | None = None
+                ) -> tuple[Model, State]:
+    """Concatenate the placed meshes into a :class:`Model` and an initial :class:`State`.
+
+    ``base`` (an existing model/state) is kept as the first elements — used by the
+    secondary phase to append new elements to frozen primaries.
+    """
+    xs, vert_elem, skin, springs, rest0, s_elem, s_edge, tris, t_elem = [], [], [], [], [], [], [], [], []
+    starts, nskin = [0], []
+    m0 = 0
+    if base is not None:
+        bm, bs = base
+        xs.append(bs.x)
+        vert_elem.append(bm.vert_elem)
+        skin.append(bm.is_skin)
+        springs.append(bm.springs)
+        rest0.append(bm.rest0)  # frozen elements never move: their springs are inert
+        s_elem.append(bm.spring_elem)
+        s_edge.append(bm.spring_is_edge)
+        tris.append(bm.tris)
+        t_elem.append(bm.tri_elem)
+        starts = list(bm.elem_vstart)
+        nskin = list(bm.elem_nskin)
+        m0 = bm.n_elements
+    n = starts[-1]
+    for k, ti in enumerate(placement.template_index):
+        t = templates[ti]
+        e = m0 + k
+        pts = placed_vertices(t, placement.position[k], placement.angle[k], placement.shrink) / frame.unit
+        xs.append(pts)
+        vert_elem.append(np.full(len(pts), e, np.int32))
+        sk = np.zeros(len(pts), bool)
+        sk[:t.n_skin] = True
+        skin.append(sk)
+        springs.append(t.springs + n)
+        lengths = np.linalg.norm(pts[t.springs[:, 0]] - pts[t.springs[:, 1]], axis=1)
+        rest0.append(lengths)
+        s_elem.append(np.full(len(t.springs), e, np.int32))
+        edge = np.zeros(len(t.springs), bool)
+        edge[:t.n_edges] = True
+        s_edge.append(edge)
+        tris.append(t.tris + n)
+        t_elem.append(np.full(len(t.tris), e, np.int32))
+        n += len(pts)
+        starts.append(n)
+        nskin.append(t.n_skin)
+    x = np.ascontiguousarray(np.concatenate(xs), dtype=np.float64)
+    N = len(x)
+    springs_a = np.ascontiguousarray(np.concatenate(springs), dtype=np.int32)
+    tris_a = np.ascontiguousarray(np.concatenate(tris), dtype=np.int32)
+    vtri_ptr, vtri = _csr(N, tris_a.ravel(), np.repeat(np.arange(len(tris_a)), 3))
+    a, b = springs_a[:, 0], springs_a[:, 1]
+    vnbr_ptr, vnbr = _csr(N, np.concatenate([a, b]), np.concatenate([b, a]))
+    M = len(nskin)
+    kinds_all = (list(base[0].kind) if base else []) + list(kinds or ["primary"] * len(placement.template_index))
+    frozen_all = np.zeros(M, bool)
+    if base is not None:
+        frozen_all[:m0] = base[0].frozen
+    if frozen is not None:
+        frozen_all[:len(frozen)] |= np.asarray(frozen, bool)
+    tindex = np.concatenate([base[0].template_index if base else np.zeros(0, np.int32),
+                             np.asarray(placement.template_index, np.int32)]).astype(np.int32)
+    minx, miny, maxx, maxy = region_sim.bounds
+    margin = 0.25 * max(maxx - minx, maxy - miny)
+    fld = container_field(region_sim, field_h, margin)
+    longest = max(float(np.max(np.linalg.norm(t.verts[t.springs[:t.n_edges, 0]] - t.verts[t.springs[:t.n_edges, 1]], axis=1)))
+                  for t in templates) / frame.unit
+    tri_cell = min(1.3 * longest, cell_size)
+    model = Model(
+        vert_elem=np.ascontiguousarray(np.concatenate(vert_elem), dtype=np.int32),
+        elem_vstart=np.asarray(starts, np.int32),
+        elem_nskin=np.asarray(nskin, np.int32),
+        is_skin=np.concatenate(skin),
+        springs=springs_a,
+        rest0=np.ascontiguousarray(np.concatenate(rest0), dtype=np.float64),
+        spring_elem=np.ascontiguousarray(np.concatenate(s_elem), dtype=np.int32),
+        spring_is_edge=np.concatenate(s_edge),
+        tris=tris_a,
+        tri_elem=np.ascontiguousarray(np.concatenate(t_elem), dtype=np.int32),
+        vtri_ptr=vtri_ptr, vtri=vtri, vnbr_ptr=vnbr_ptr, vnbr=vnbr,
+        frozen=frozen_all, template_index=tindex, kind=kinds_all, field=fld,
+        container_area=float(region_sim.area), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
+        grid_origin=(float(minx - cell_size), float(miny - cell_size)),
+        grid_extent=(float(maxx - minx + 2 * cell_size), float(maxy - miny + 2 * cell_size)),
+    )
+    n_grow = np.zeros(M, np.int64)
+    if base is not None:
+        n_grow[:m0] = base[1].n_grow
+    return model, State(x, np.zeros_like(x), n_grow)

@@ -1,0 +1,212 @@
+"""The simulation loop: forces → Euler step → growth → self-intersection fix → stopping rule.
+
+:class:`Simulator` owns the scratch buffers (allocated once) and advances a
+:class:`~repulsionpak.sim.model.State` over a :class:`~repulsionpak.sim.model.Model`.
+:meth:`Simulator.run` calls ``on_snapshot`` every few iterations; progress bars, frame
+writers and checkpoints are such consumers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DivergedError
+from ..params import SimParams
+from .forces import boundary_force, contact_query, edge_force, overlap_force, repulsion_force
+from .grid import Grid
+from .integrate import count_inside, euler_step, grow, skin_areas
+from .model import Model, State
+from .selfintersect import relax_self_intersections
+
+MAX_NEIGHBOURS = 24
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """What consumers see of a running simulation (arrays are live views: copy to keep)."""
+
+    phase: str
+    iteration: int
+    area_fraction: float
+    rms: float
+    n_elements: int
+    n_inside: int
+    state: State
+    done: bool = False
+
+
+@dataclass(frozen=True)
+class RunResult:
+    iterations: int
+    area_fraction: float
+    stopped_by: str  # "converged" | "max_iterations" | "interrupted"
+    dt: float
+
+
+class Simulator:
+    """Advance a packing. ``phase`` is a label ("primary"/"secondary") for snapshots."""
+
+    def __init__(self, model: Model, state: State, params: SimParams, phase: str = "primary"):
+        self.model, self.state, self.params, self.phase = model, state, params, phase
+        m = model
+        N, M = m.n_vertices, m.n_elements
+        moving = ~m.frozen
+        self.moving = moving.copy()
+        vmask = moving[m.vert_elem]
+        self.active_all = np.flatnonzero(vmask).astype(np.int64)
+        self.active_skin = np.flatnonzero(vmask & m.is_skin).astype(np.int64)
+        # skin segments of every element (also frozen ones: they repel)
+        seg_a, seg_b, seg_e = [], [], []
+        for e in range(M):
+            s, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
+            idx = np.arange(s, s + n)
+            seg_a.append(idx)
+            seg_b.append(np.roll(idx, -1))
+            seg_e.append(np.full(n, e))
+        self.seg_a = np.concatenate(seg_a).astype(np.int64)
+        self.seg_b = np.concatenate(seg_b).astype(np.int64)
+        self.seg_elem = np.concatenate(seg_e).astype(np.int32)
+        self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.seg_a), len(m.tris))
+        self.F = np.zeros((N, 2))
+        self.inside = np.zeros(N, np.bool_)
+        self.nb_count = np.zeros(N, np.int64)
+        self.nb_elem = np.zeros((N, MAX_NEIGHBOURS), np.int32)
+        self.nb_d2 = np.zeros((N, MAX_NEIGHBOURS))
+        self.nb_q = np.zeros((N, MAX_NEIGHBOURS, 2))
+        self.growth = np.ones(M)
+        self.areas = np.zeros(M)
+        sp_start = np.searchsorted(m.spring_elem, np.arange(M)).astype(np.int64)
+        self.sp_start = sp_start
+        self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
+        self.dt = params.dt
+        self.allow_growth = True
+        self._good: State | None = None
+        self._recoveries = 0
+
+    # -- one iteration -------------------------------------------------------------
+    def step(self) -> float:
+        """Advance one iteration; return the area fraction of the meshes."""
+        m, st, p = self.model, self.state, self.params
+        x, F = st.x, self.F
+        g = self.grid
+        g.rebuild(x, self.seg_a, self.seg_b, self.seg_elem, m.tris, m.tri_elem)
+        contact_query(x, self.active_skin, m.vert_elem,
+                      g.segs.xy, g.segs.elem, g.segs.start, *g.segs.params,
+                      g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params,
+                      self.inside, self.nb_count, self.nb_elem, self.nb_d2, self.nb_q)
+        F[:] = 0.0
+        # F = F_r + F_e + F_b + F_o  (Eq. 1)
+        repulsion_force(x, self.active_skin, self.inside, self.nb_count, self.nb_q,
+                        p.k_repulsion, p.soft, F)
+        edge_force(x, m.springs, m.rest0, m.spring_elem, self.growth, self.moving, p.k_edge, F)
+        boundary_force(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
+                       1.0 / m.field.h, p.k_boundary, F)
+        overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, p.k_overlap, F)
+        euler_step(x, st.v, F, self.active_all, self.dt, p.velocity_cap * self.dt)
+        grow(self.inside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow, self.growth,
+             p.k_growth * p.dt, self.allow_growth)
+        if p.relax_passes > 0:
+            relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_start,
+                                     self.sp_nedge, m.springs, m.vnbr_ptr, m.vnbr,
+                                     p.relax_passes, p.relax_fraction)
+        skin_areas(x, m.elem_vstart, m.elem_nskin, self.areas)
+        st.iteration += 1
+        return float(self.areas.sum() / m.container_area)
+
+    @property
+    def n_inside(self) -> int:
+        return int(count_inside(self.inside, self.active_skin))
+
+    def refresh_growth(self) -> None:
+        """Recompute growth factors from the counters (after loading a state)."""
+        self.growth[:] = 1.0 + self.state.n_grow * self.params.k_growth * self.params.dt
+
+    # -- the loop --------------------------------------------------------------------
+    def run(self, on_snapshot: Callable[[Snapshot], None] | None = None, every: int = 25,
+            should_stop: Callable[[], bool] | None = None) -> RunResult:
+        """Iterate until the stopping rule of sec. 8 holds (or ``max_iterations``), then
+        settle without growth for ``settle_iterations``.
+
+        Stopping rule: RMS of the per-iteration change of the area fraction over the last
+        ``stop_window`` iterations < ``stop_epsilon``. ``should_stop()`` returning True (or
+        KeyboardInterrupt) ends the run early with ``stopped_by="interrupted"``.
+        """
+        p, st = self.params, self.state
+        self.refresh_growth()
+        hist = st.area_history
+        w = p.stop_window
+        stopped_by = "max_iterations"
+        settle_left = None
+        a = hist[-1] if hist else 0.0
+        rms = math.inf
+        self._good = st.copy()
+        try:
+            while True:
+                a = self.step()
+                if not math.isfinite(a) or not np.isfinite(st.x[self.active_all[:1]]).all():
+                    self._recover()
+                    continue
+                hist.append(a)
+                if len(hist) > w:
+                    d = np.diff(np.asarray(hist[-(w + 1):]))
+                    rms = float(np.sqrt(np.mean(d * d)))
+                if st.iteration % 200 == 0:
+                    self._check_exploded()
+                    self._good = st.copy()
+                if on_snapshot is not None and st.iteration % every == 0:
+                    on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
+                                         self.n_inside, st))
+                if should_stop is not None and should_stop():
+                    stopped_by = "interrupted"
+                    break
+                if settle_left is None:
+                    converged = st.iteration >= p.min_iterations and len(hist) > w and rms < p.stop_epsilon
+                    if converged or st.iteration >= p.max_iterations:
+                        stopped_by = "converged" if converged else "max_iterations"
+                        settle_left = p.settle_iterations
+                        self.allow_growth = False
+                if settle_left is not None:
+                    if settle_left <= 0:
+                        break
+                    settle_left -= 1
+        except KeyboardInterrupt:
+            stopped_by = "interrupted"
+        self.allow_growth = True
+        if on_snapshot is not None:
+            on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
+                                 self.n_inside, st, done=True))
+        return RunResult(st.iteration, a, stopped_by, self.dt)
+
+    # -- divergence --------------------------------------------------------------------
+    def _check_exploded(self) -> None:
+        x = self.state.x[self.active_all]
+        if not np.isfinite(x).all():
+            self._recover()
+            return
+        f = self.model.field
+        ny, nx = f.values.shape
+        lo = np.array([f.ox, f.oy]) - 1000.0
+        hi = np.array([f.ox + nx * f.h, f.oy + ny * f.h]) + 1000.0
+        if (x < lo).any() or (x > hi).any():
+            self._recover()
+
+    def _recover(self) -> None:
+        """Restore the last good state and halve the time step; give up after 4 tries."""
+        self._recoveries += 1
+        if self._good is None or self._recoveries > 4:
+            raise DivergedError(
+                f"the simulation diverged at iteration {self.state.iteration} (NaN or exploding "
+                f"positions) even with Δt reduced to {self.dt:g}; try a smaller sim.dt or "
+                "weaker force constants")
+        good = self._good.copy()
+        self.state.x[:] = good.x
+        self.state.v[:] = 0.0
+        self.state.n_grow[:] = good.n_grow
+        self.state.iteration = good.iteration
+        del self.state.area_history[len(good.area_history):]
+        self.dt *= 0.5
+        self.refresh_growth()

@@ -1,0 +1,534 @@
+"""Tests of repulsionpak.io readers: SVG and .path elements and containers."""
+
+from __future__ import annotations
+
+import math
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from repulsionpak.errors import InputError, ParameterError
+from repulsionpak.io import load_container, load_element, load_elements, parse_pathfile, rings_to_region
+from repulsionpak.io import svg_read
+
+FIX = Path(__file__).parent / "fixtures"
+DATA = Path("/work/shared/data")
+ANIMALS = ["bear", "bird", "bunny", "cat", "dog", "fox", "mouse", "penguin", "snake"]
+
+needs_data = pytest.mark.skipif(not (DATA / "animals").is_dir(), reason="shared data set not available")
+
+
+def _svg(body: str, root: str = 'viewBox="0 0 100 100"') -> str:
+    return f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink" {root}>{body}</svg>'
+
+
+def _write(tmp_path: Path, name: str, content: str | bytes) -> Path:
+    p = tmp_path / name
+    p.write_bytes(content.encode() if isinstance(content, str) else content)
+    return p
+
+
+def _quiet(fn, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fn(*args, **kwargs)
+
+
+def _region(art) -> shapely.Geometry:
+    return rings_to_region(list(art.subpaths), art.style.fill_rule)
+
+
+def _seg_dist(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Distance of each point (N,2) to the open polyline poly (K,2)."""
+    a, b = poly[:-1], poly[1:]
+    ab = b - a
+    ap = points[:, None, :] - a[None]
+    t = np.clip((ap * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300)[None], 0, 1)
+    closest = a[None] + t[..., None] * ab[None]
+    return np.linalg.norm(points[:, None, :] - closest, axis=-1).min(axis=1)
+
+
+# --------------------------------------------------------------------------- coordinates and units
+
+
+def test_rect_transforms_and_units_give_user_units():
+    el = load_element(FIX / "rect_scaled.svg")
+    assert el.name == "rect_scaled" and el.source == "rect_scaled.svg"
+    assert len(el.paths) == 1
+    art = el.paths[0]
+    assert art.closed == (True,)
+    # rect (1,2,10,20) scaled by 2 then translated by (5,7); width="10cm" is NOT applied
+    np.testing.assert_allclose(art.subpaths[0], [[7, 11], [27, 11], [27, 51], [7, 51]], atol=1e-12)
+    assert art.style.fill == "#ff0000" and art.style.stroke == "#0000ff"
+    assert art.style.stroke_width == pytest.approx(6.0)  # 3 x scale(2)
+
+
+def test_container_area_with_scale_transform():
+    c = load_container(FIX / "rect_scaled.svg")
+    assert c.area == pytest.approx(800.0)  # 10 x 20 with scale(2)
+    assert c.svg_root == {"width": "10cm", "height": "5cm", "viewBox": "0 0 200 100"}
+    assert c.source == "rect_scaled.svg"
+    assert c.region.is_valid
+
+
+def test_viewbox_offset_and_non_uniform_viewport_not_applied():
+    el = load_element(FIX / "viewbox_offset.svg")
+    np.testing.assert_allclose(el.paths[0].subpaths[0], [[55, 22], [59, 22], [59, 24], [55, 24]], atol=1e-9)
+    assert el.paths[0].style.stroke_width == pytest.approx(0.5)
+
+
+def test_root_transform_and_nested_svg(tmp_path):
+    body = '<svg x="10" y="20" width="20" height="20" viewBox="0 0 10 10"><rect width="10" height="10"/></svg>'
+    p = _write(tmp_path, "nested.svg", _svg(body, 'width="5in" height="5in" viewBox="0 0 100 100"'))
+    el = load_element(p)
+    # nested viewport scales its content by 2 and moves it to (10, 20): part of user space
+    np.testing.assert_allclose(el.paths[0].subpaths[0], [[10, 20], [30, 20], [30, 40], [10, 40]], atol=1e-9)
+
+
+def test_no_viewbox_means_px_user_units(tmp_path):
+    p = _write(tmp_path, "px.svg", _svg('<rect x="1" y="1" width="3" height="4"/>', 'width="200" height="100"'))
+    c = load_container(p)
+    assert c.area == pytest.approx(12.0)
+    assert c.svg_root == {"width": "200", "height": "100"}
+
+
+def test_doctype_public_is_allowed():
+    el = load_element(FIX / "doctype.svg")
+    np.testing.assert_allclose(el.paths[0].subpaths[0], [[0, 0], [4, 0], [4, 3], [0, 3]])
+
+
+# --------------------------------------------------------------------------- fill rules, holes
+
+
+def test_fill_rules_make_holes():
+    el = load_element(FIX / "holes.svg")
+    assert [a.style.fill_rule for a in el.paths] == ["nonzero", "evenodd", "nonzero"]
+    areas = [_region(a).area for a in el.paths]
+    assert areas[0] == pytest.approx(1600.0)  # same orientation + nonzero: inner square filled
+    assert areas[1] == pytest.approx(1200.0)  # evenodd: hole
+    assert areas[2] == pytest.approx(1200.0)  # opposite orientation: hole under nonzero too
+    c = load_container(FIX / "holes.svg")
+    assert c.area == pytest.approx(1600 + 1200 + 1200)
+
+
+def test_rings_to_region_self_intersecting():
+    bowtie = np.array([[0, 0], [2, 2], [2, 0], [0, 2]], float)
+    assert rings_to_region([bowtie], "nonzero").area == pytest.approx(2.0)
+    # a pentagram: the centre has winding 2 -> filled by nonzero, empty by evenodd
+    ang = np.pi / 2 + np.arange(5) * 4 * np.pi / 5
+    star = np.c_[np.cos(ang), np.sin(ang)]
+    nz, eo = rings_to_region([star], "nonzero"), rings_to_region([star], "evenodd")
+    assert nz.area > eo.area > 0
+    assert nz.contains(shapely.Point(0, 0)) and not eo.contains(shapely.Point(0, 0))
+
+
+def test_container_holes_multipolygon_and_open_path_warning():
+    with pytest.warns(UserWarning, match="container_holes.svg.*open subpath"):
+        c = load_container(FIX / "container_holes.svg")
+    # 100x50 - evenodd hole 10x10 - class="hole" rect 20x20, plus a disjoint 30x30 square
+    assert c.area == pytest.approx(5000 - 100 - 400 + 900)
+    assert c.region.geom_type == "MultiPolygon" and len(c.region.geoms) == 2
+    assert c.region.is_valid
+    assert not c.region.contains(shapely.Point(50, 20))  # inside the hole shape
+    assert not c.region.contains(shapely.Point(15, 15))  # inside the evenodd hole
+    assert c.region.contains(shapely.Point(135, 15))
+    assert len(c.paths) == 3 and all(all(a.closed) for a in c.paths)
+    assert c.svg_root["viewBox"] == "-10 -10 200 100"
+
+
+def test_hole_by_id_and_nearly_closed_path(tmp_path):
+    body = (
+        '<path d="M0 0 L100 0 L100 100 L0 100 L0 0.00001"/>'  # open but ends meet within tolerance
+        '<rect id="hole-1" x="10" y="10" width="10" height="10"/>'
+    )
+    c = load_container(_write(tmp_path, "c.svg", _svg(body)))
+    assert c.area == pytest.approx(10000 - 100, rel=1e-6)
+
+
+def test_container_errors(tmp_path):
+    line = _write(tmp_path, "line.svg", _svg('<path d="M0 0 L10 10" stroke="black"/>'))
+    with pytest.raises(InputError, match="line.svg.*no closed path"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        load_container(line)
+    flat = _write(tmp_path, "flat.svg", _svg('<path d="M0 0 L10 0 L20 0 Z"/>'))
+    with pytest.raises(InputError, match="flat.svg"):
+        _quiet(load_container, flat)
+
+
+# --------------------------------------------------------------------------- styles
+
+
+def test_styles_inherited_and_invisible_dropped():
+    with pytest.warns(UserWarning, match="styles.svg.*text"):
+        el = load_element(FIX / "styles.svg")
+    assert len(el.paths) == 4  # fill+stroke none, display:none, hidden, opacity 0 dropped
+    s0, s1, s2, s3 = (a.style for a in el.paths)
+    assert (s0.fill, s0.stroke, s0.stroke_width, s0.opacity, s0.stroke_linejoin) == ("#00ff00", "#112233", 2.0, 0.5, "round")
+    assert s1.fill is None and s1.stroke_opacity == pytest.approx(0.25) and s1.stroke_linecap == "square"
+    assert s2.fill == "#0000ff"  # CSS class
+    assert s2.opacity == pytest.approx(0.25)  # group 0.5 x own 0.5
+    assert s2.fill_opacity == pytest.approx(0.3)
+    assert s3.stroke_width == pytest.approx(6.0)  # inherited 2 x scale(3)
+    np.testing.assert_allclose(np.linalg.norm(el.paths[3].subpaths[0] - [60, 60], axis=1), 6.0, atol=1e-9)
+
+
+def test_default_fill_black_and_colours_as_hex(tmp_path):
+    body = '<rect width="1" height="1"/><rect width="1" height="1" fill="rgb(255,0,0)" stroke="currentColor" color="teal"/>'
+    el = load_element(_write(tmp_path, "c.svg", _svg(body)))
+    assert el.paths[0].style.fill == "#000000" and el.paths[0].style.stroke is None
+    assert el.paths[1].style.fill == "#ff0000" and el.paths[1].style.stroke == "#008080"
+
+
+# --------------------------------------------------------------------------- shapes and flattening
+
+
+def test_all_shape_kinds():
+    el = load_element(FIX / "shapes.svg", tolerance=0.01)
+    assert len(el.paths) == 8
+    rr, circle, ellipse, poly, pline, line, path, use = el.paths
+    # rounded rect: area of a 40x20 rect minus (4 - pi) r^2
+    assert _region(rr).area == pytest.approx(800 - (4 - math.pi) * 25, abs=0.01 * 120)
+    # circle: vertices on the circle, chords within tolerance
+    c = circle.subpaths[0]
+    np.testing.assert_allclose(np.linalg.norm(c - [100, 100], axis=1), 30, atol=1e-9)
+    mids = (c + np.roll(c, -1, axis=0)) / 2
+    assert (30 - np.linalg.norm(mids - [100, 100], axis=1)).max() <= 0.01
+    # rotated ellipse: points satisfy the ellipse equation in the rotated frame
+    q = ellipse.subpaths[0] - [200, 100]
+    th = math.radians(-30)
+    r = q @ np.array([[math.cos(th), math.sin(th)], [-math.sin(th), math.cos(th)]])
+    np.testing.assert_allclose((r[:, 0] / 40) ** 2 + (r[:, 1] / 10) ** 2, 1.0, atol=1e-9)
+    np.testing.assert_allclose(poly.subpaths[0], [[0, 200], [50, 200], [25, 240]])
+    assert poly.closed == (True,) and pline.closed == (False,) and line.closed == (False,)
+    np.testing.assert_allclose(line.subpaths[0], [[200, 200], [250, 260]])
+    assert len(path.subpaths) == 2 and path.closed == (True, True)  # relative commands, 2 subpaths
+    np.testing.assert_allclose(path.subpaths[1], [[360, 300], [370, 300], [370, 310]])
+    assert path.subpaths[0].max(axis=0)[1] == pytest.approx(352.5, abs=0.01)  # arc radii scaled up
+    np.testing.assert_allclose(use.subpaths[0], [[50, 300], [60, 300], [55, 308]])
+
+
+@pytest.mark.parametrize("tol", [1.0, 0.1, 0.01, 0.001])
+def test_cubic_flattening_error_within_tolerance(tol):
+    el = load_element(FIX / "bezier.svg", tolerance=tol)
+    poly = el.paths[0].subpaths[0]
+    P = np.array([[10, 80], [40, 10], [65, 10], [95, 80]], float)
+    t = np.linspace(0, 1, 6001)[:, None]
+    curve = (1 - t) ** 3 * P[0] + 3 * (1 - t) ** 2 * t * P[1] + 3 * (1 - t) * t**2 * P[2] + t**3 * P[3]
+    assert _seg_dist(curve, poly).max() <= tol * (1 + 1e-9)
+    np.testing.assert_allclose(poly[[0, -1]], P[[0, 3]])
+    if tol >= 0.01:
+        assert len(poly) < 200  # adaptive, not absurdly dense
+
+
+def test_quadratic_and_arc_flattening_under_transform(tmp_path):
+    body = '<g transform="matrix(2 0.5 -0.3 1.5 10 20)"><path d="M0 0 Q 50 80 100 0 A 30 20 15 1 1 40 -30" fill="none" stroke="black"/></g>'
+    tol = 0.05
+    el = load_element(_write(tmp_path, "q.svg", _svg(body, 'viewBox="0 0 400 400"')), tolerance=tol)
+    poly = el.paths[0].subpaths[0]
+    A = np.array([[2, -0.3], [0.5, 1.5]])
+    t = np.linspace(0, 1, 5001)[:, None]
+    Q = np.array([[0, 0], [50, 80], [100, 0]], float)
+    quad = ((1 - t) ** 2 * Q[0] + 2 * (1 - t) * t * Q[1] + t**2 * Q[2]) @ A.T + [10, 20]
+    assert _seg_dist(quad, poly).max() <= tol * (1 + 1e-9)
+    # arc end point transformed exactly; every arc vertex lies on the transformed ellipse
+    np.testing.assert_allclose(poly[-1], np.array([40, -30]) @ A.T + [10, 20], atol=1e-9)
+
+
+def test_default_tolerance_is_relative_to_size(tmp_path):
+    small = load_element(_write(tmp_path, "s.svg", _svg('<circle cx="0" cy="0" r="1"/>')))
+    big = load_element(_write(tmp_path, "b.svg", _svg('<circle cx="0" cy="0" r="1000"/>')))
+    assert len(small.paths[0].subpaths[0]) == len(big.paths[0].subpaths[0])  # scale invariant
+    c = big.paths[0].subpaths[0]
+    mids = (c + np.roll(c, -1, axis=0)) / 2
+    diag = 2000 * math.sqrt(2)
+    assert (1000 - np.linalg.norm(mids, axis=1)).max() <= 1e-3 * diag
+
+
+def test_duplicate_points_and_degenerate_subpaths_removed(tmp_path):
+    body = '<path d="M0 0 L0 0 L10 0 L10 0 L10 10 L0 0 Z M50 50 L50 50 Z M20 20 L 30 30"/>'
+    el = load_element(_write(tmp_path, "d.svg", _svg(body)))
+    art = el.paths[0]
+    assert len(art.subpaths) == 2
+    np.testing.assert_allclose(art.subpaths[0], [[0, 0], [10, 0], [10, 10]])
+    assert art.closed == (True, False)
+
+
+def test_tolerance_parameter_validated():
+    for bad in (0, -1, float("nan"), float("inf"), "x"):
+        with pytest.raises(ParameterError):
+            load_element(FIX / "bezier.svg", tolerance=bad)
+
+
+# --------------------------------------------------------------------------- .path format
+
+
+def test_pathfile_element_styles_and_reverse_order():
+    el = load_element(FIX / "mini.path")
+    assert el.name == "mini" and el.source == "mini.path"
+    assert len(el.paths) == 2  # the type-1 detail path is ignored
+    open_path, square = el.paths  # reverse file order
+    assert square.closed == (True,) and open_path.closed == (False,)
+    np.testing.assert_allclose(square.subpaths[0], [[0, 0], [10, 0], [10, 10], [0, 10]])
+    assert (square.style.fill, square.style.stroke) == ("#f06465", None)
+    assert (open_path.style.fill, open_path.style.stroke, open_path.style.stroke_width) == (None, "#ff0000", 0.5)
+
+
+def test_pathfile_container_regions_and_holes():
+    c = load_container(FIX / "holes.path")
+    assert c.area == pytest.approx(100 * 100 - 50 * 50 + 50 * 50)
+    assert c.region.geom_type == "MultiPolygon"
+    assert not c.region.contains(shapely.Point(50, 50))
+    assert c.paths[0].style.stroke == "#000000" and c.paths[0].style.fill == "#ffffff"  # defaults
+    assert all(len(a.subpaths[0]) == 4 for a in c.paths)  # repeated closing point dropped
+
+
+def test_pathfile_palette_lines(tmp_path):
+    p = _write(tmp_path, "pal.path", "1\nforeground_color 0 3 -1\nbackground_color 0 8 0\n0 1 0 0 0 1 0 1 1\n0 1 0 5 5 6 5 6 6\n")
+    el = load_element(p)
+    assert [(a.style.stroke, a.style.fill) for a in el.paths] == [(None, "#beddf4"), ("#ff0000", "#ffffff")]
+
+
+@pytest.mark.parametrize(
+    "content, line",
+    [
+        ("1\n0 1 0 0 0 1 1 2\n", "line 2"),
+        ("1\n\n0 1 0 0 0 1 1 2 2\n0 1 q 0 0 1 1\n", "line 4"),
+        ("1\n0 2 0 0 0 1 1\n", "line 2"),
+        ("1\n0 1 9 0 0 1 1\n", "line 2"),
+        ("1\nbackground_color_rgb 0 300,0,0\n", "line 2"),
+        ("1\n0 1\n", "line 2"),
+        ("1 2\n", "line 1"),
+        ("0\n", "line 1"),
+        ("1\n0 1 0 0 0 nan 1\n", "line 2"),
+    ],
+)
+def test_pathfile_malformed_lines(tmp_path, content, line):
+    p = _write(tmp_path, "bad.path", content)
+    with pytest.raises(InputError, match=rf"bad\.path: {line}"):
+        load_element(p)
+
+
+def test_pathfile_parse_keeps_raw_records():
+    pf = parse_pathfile("mini.path", (FIX / "mini.path").read_bytes())
+    assert pf.num_regions == 1 and len(pf.records) == 3
+    assert [r.path_type for r in pf.records] == [0, 0, 1]
+    assert pf.records[0].line == 4
+
+
+# --------------------------------------------------------------------------- shared data
+
+
+@needs_data
+@pytest.mark.parametrize("animal", ANIMALS)
+def test_svg_and_path_elements_are_equivalent(animal):
+    a = load_element(DATA / "animals" / f"{animal}.svg")
+    b = load_element(DATA / "repulsionpak_format" / "animals" / f"{animal}.path")
+    assert len(a.paths) == len(b.paths)
+    for pa, pb in zip(a.paths, b.paths):  # both in reverse file order
+        assert pa.closed == pb.closed
+        assert pa.style.fill == pb.style.fill
+        assert len(pa.subpaths[0]) == len(pb.subpaths[0])
+        np.testing.assert_allclose(pa.subpaths[0], pb.subpaths[0], atol=1e-3)
+
+
+@needs_data
+def test_svg_and_path_containers_are_equivalent():
+    a = load_container(DATA / "containers" / "heart.svg")
+    b = load_container(DATA / "repulsionpak_format" / "containers" / "heart.path")
+    assert a.area == pytest.approx(b.area, rel=1e-6)
+    assert a.area == pytest.approx(122440, rel=1e-3)
+    assert a.region.symmetric_difference(b.region).area < 1e-3 * a.area
+    assert a.svg_root == {"width": "500", "height": "500", "viewBox": "0 0 500 500"}
+    np.testing.assert_allclose(a.bounds, (6.06, 66.19, 493.99, 474.0), atol=0.01)
+
+
+@needs_data
+def test_load_elements_on_directories():
+    els = load_elements([DATA / "animals", DATA / "animals" / "cat.svg", DATA / "secondary"])
+    assert [e.name for e in els] == ANIMALS + ["small_cat"]  # sorted, duplicate cat dropped
+    paths = load_elements([DATA / "repulsionpak_format" / "animals"])
+    assert [e.source for e in paths] == [f"{a}.path" for a in ANIMALS]
+
+
+# --------------------------------------------------------------------------- directories, sniffing
+
+
+def test_load_elements_directory_rules(tmp_path):
+    d = tmp_path / "lib"
+    d.mkdir()
+    shutil.copy(FIX / "rect_scaled.svg", d / "b.svg")
+    shutil.copy(FIX / "mini.path", d / "a.path")
+    (d / "notes.txt").write_text("x")
+    (d / "sub").mkdir()
+    shutil.copy(FIX / "bezier.svg", d / "sub" / "c.svg")  # not recursive
+    els = load_elements([d, d / "b.svg", str(d)])
+    assert [e.source for e in els] == ["a.path", "b.svg"]
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (empty / "readme.txt").write_text("x")
+    with pytest.raises(InputError, match="empty"):
+        load_elements([empty])
+
+
+def test_unknown_suffix_is_sniffed(tmp_path):
+    a = _write(tmp_path, "art.dat", (FIX / "rect_scaled.svg").read_bytes())
+    b = _write(tmp_path, "art2.txt", (FIX / "mini.path").read_bytes())
+    assert len(load_element(a).paths) == 1
+    assert len(load_element(b).paths) == 2
+    with pytest.raises(InputError, match="art3.bin"):
+        load_element(_write(tmp_path, "art3.bin", b"\x89PNG\r\n\x1a\n\x00\x00"))
+
+
+def test_svgz_is_read(tmp_path):
+    import gzip
+
+    p = _write(tmp_path, "z.svgz", gzip.compress((FIX / "rect_scaled.svg").read_bytes()))
+    assert load_container(p).area == pytest.approx(800)
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def _bad_inputs(tmp_path: Path) -> dict[str, Path]:
+    S = _svg
+    cases = {
+        "empty.svg": b"",
+        "blank.svg": b"  \n\t",
+        "notxml.svg": b"this is not xml",
+        "truncated.svg": S('<rect width="3" height="3"/>').encode()[:60],
+        "binary.svg": bytes(range(256)) * 4,
+        "html.svg": b"<html><body/></html>",
+        "bomb.svg": (
+            b'<?xml version="1.0"?><!DOCTYPE svg [<!ENTITY a "aaaaaaaaaa">'
+            b'<!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;"><!ENTITY c "&b;&b;&b;&b;&b;&b;&b;&b;&b;&b;">]>'
+            b'<svg xmlns="http://www.w3.org/2000/svg">&c;</svg>'
+        ),
+        "external.svg": (
+            b'<?xml version="1.0"?><!DOCTYPE svg [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
+            b'<svg xmlns="http://www.w3.org/2000/svg"><text>&x;</text></svg>'
+        ),
+        "nogeometry.svg": S('<text x="1" y="1">only text</text>').encode(),
+        "infinite.svg": S('<path d="M0 0 L1e400 0 L1 1 Z"/>').encode(),
+        "overflow.svg": S('<path d="M0 0 L1 0 L1 1 Z" transform="scale(1e200) scale(1e200)"/>').encode(),
+        "usecycle.svg": S('<g id="a"><use href="#a"/></g>').encode(),
+        "usebomb.svg": S(
+            '<defs><rect id="r0" width="1" height="1"/>'
+            + "".join(f'<g id="r{i}">' + f'<use href="#r{i - 1}"/>' * 10 + "</g>" for i in range(1, 8))
+            + '</defs><use href="#r7"/>'
+        ).encode(),
+        "deep.svg": S("<g>" * 400 + '<rect width="1" height="1"/>' + "</g>" * 400).encode(),
+        "zerosize.svg": S('<rect width="3" height="3"/>', 'width="0" height="10" viewBox="0 0 10 10"').encode(),
+        "wrongns.svg": b'<svg xmlns="http://example.com/ns"><rect width="3" height="3"/></svg>',
+        "empty.path": b"\n",
+        "binary.path": b"1\n\x00\x01\x02",
+    }
+    out = {name: _write(tmp_path, name, data) for name, data in cases.items()}
+    out["missing.svg"] = tmp_path / "missing.svg"
+    (tmp_path / "folder.svg").mkdir()
+    out["folder.svg"] = tmp_path / "folder.svg"
+    return out
+
+
+@pytest.mark.parametrize("loader", [load_element, load_container])
+def test_bad_inputs_raise_input_error_naming_the_file(tmp_path, loader):
+    for name, path in _bad_inputs(tmp_path).items():
+        with pytest.raises(InputError) as info, warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            loader(path)
+        assert name in str(info.value), (name, str(info.value))
+        assert info.value.path is not None and info.value.path.endswith(name)
+
+
+def test_entity_declarations_message(tmp_path):
+    cases = _bad_inputs(tmp_path)
+    for name in ("bomb.svg", "external.svg"):
+        with pytest.raises(InputError, match="declares XML entities, which are not allowed"):
+            load_element(cases[name])
+
+
+def test_point_budget(tmp_path, monkeypatch):
+    pts = " ".join(f"L{i} {i % 7}" for i in range(1, 3000))
+    p = _write(tmp_path, "many.svg", _svg(f'<path d="M0 0 {pts}" fill="none" stroke="black"/>', 'viewBox="0 0 3000 10"'))
+    assert load_element(p).paths[0].n_points == 3000
+    monkeypatch.setattr(svg_read, "MAX_POINTS", 1000)
+    with pytest.raises(InputError, match="many.svg.*more than 1000 points"):
+        load_element(p)
+    big = _write(tmp_path, "bigcurve.svg", _svg('<path d="M0 0 C 1e9 0 1e9 1e9 0 1e9"/>'))
+    with pytest.raises(InputError, match="bigcurve.svg.*points"):
+        load_element(big, tolerance=1e-6)
+
+
+def test_unsupported_content_warns_and_is_skipped(tmp_path):
+    body = (
+        '<image href="x.png" width="5" height="5"/><text>t</text>'
+        '<rect width="5" height="5" filter="url(#f)"/>'
+        '<symbol id="s"><rect width="50" height="50"/></symbol>'
+        '<mask id="m"><rect width="70" height="70" fill="white"/></mask>'
+    )
+    with pytest.warns(UserWarning, match="warn.svg.*filter.*image.*text"):
+        el = load_element(_write(tmp_path, "warn.svg", _svg(body)))
+    assert len(el.paths) == 1  # symbol and mask content are not drawn
+    np.testing.assert_allclose(el.paths[0].subpaths[0].max(axis=0), [5, 5])
+
+
+def test_use_of_symbol_is_drawn(tmp_path):
+    body = '<defs><symbol id="s"><rect width="5" height="5"/></symbol></defs><use href="#s" x="10" y="10"/>'
+    el = load_element(_write(tmp_path, "sym.svg", _svg(body)))
+    np.testing.assert_allclose(el.paths[0].subpaths[0], [[10, 10], [15, 10], [15, 15], [10, 15]])
+
+
+# --------------------------------------------------------------------------- fuzzing
+
+
+_SVG_PIECES = [
+    "<svg", "</svg>", ' xmlns="http://www.w3.org/2000/svg"', ' viewBox="0 0 10 10"', ' width="1e400"', ">",
+    '<path d="', "M 0 0", "L 5 5", "C 1 2 3 4 5 6", "A 5 5 0 1 1 9 9", "Z", "nan", "1e308", "-", ".", '"/>',
+    '<rect width="3" height="3"', ' transform="scale(0)"', ' transform="rotate(45)"', ' fill-rule="evenodd"',
+    '<g id="a">', "</g>", '<use href="#a"/>', "<!ENTITY x 'y'>", "<!DOCTYPE svg>", "&x;", '<circle r="-1"/>',
+    '<polygon points="0,0 1"/>', ' class="hole"', ' style="fill:url(#q);stroke-width:1e309"', "<text>t</text>",
+    '<ellipse rx="2" ry="0"/>', "\x00", "\xff", " ",
+]
+
+
+@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(data=st.one_of(st.binary(max_size=300), st.lists(st.sampled_from(_SVG_PIECES), max_size=30).map(lambda x: "".join(x).encode("utf-8", "surrogatepass"))))
+def test_fuzz_only_input_errors_escape(tmp_path, data):
+    for suffix in (".svg", ".path", ".dat"):
+        p = tmp_path / f"fuzz{suffix}"
+        p.write_bytes(data)
+        for loader in (load_element, load_container):
+            try:
+                _quiet(loader, p)
+            except InputError as exc:
+                assert "fuzz" in str(exc)
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    d=st.lists(
+        st.tuples(st.sampled_from("MLHVCSQTAZmlhvcsqtaz"), st.lists(st.floats(allow_nan=True, allow_infinity=True, width=32), max_size=7)),
+        max_size=12,
+    ),
+    rule=st.sampled_from(["nonzero", "evenodd"]),
+)
+def test_fuzz_path_data(tmp_path, d, rule):
+    dstr = " ".join(cmd + " " + " ".join(repr(float(v)) for v in vals) for cmd, vals in d)
+    p = tmp_path / "fuzzpath.svg"
+    p.write_text(_svg(f'<path fill-rule="{rule}" d="{dstr}"/>'))
+    for loader in (load_element, load_container):
+        try:
+            res = _quiet(loader, p)
+        except InputError as exc:
+            assert "fuzzpath.svg" in str(exc)
+            continue
+        if loader is load_container:
+            assert res.region.is_valid and res.area > 0
+        else:
+            for art in res.paths:
+                assert all(len(s) >= 2 and np.all(np.isfinite(s)) for s in art.subpaths)
