@@ -14,14 +14,22 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from repulsionpak.errors import InputError, ParameterError
-from repulsionpak.io import load_container, load_element, load_elements, parse_pathfile, rings_to_region
-from repulsionpak.io import svg_read
+from repulsionpak.io import (
+    load_container,
+    load_element,
+    load_elements,
+    parse_pathfile,
+    rings_to_region,
+    svg_read,
+)
 
 FIX = Path(__file__).parent / "fixtures"
 DATA = Path("/work/shared/data")
 ANIMALS = ["bear", "bird", "bunny", "cat", "dog", "fox", "mouse", "penguin", "snake"]
 
-needs_data = pytest.mark.skipif(not (DATA / "animals").is_dir(), reason="shared data set not available")
+needs_data = pytest.mark.skipif(
+    not (DATA / "animals").is_dir(), reason="shared data set not available"
+)
 
 
 def _svg(body: str, root: str = 'viewBox="0 0 100 100"') -> str:
@@ -49,7 +57,9 @@ def _seg_dist(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
     a, b = poly[:-1], poly[1:]
     ab = b - a
     ap = points[:, None, :] - a[None]
-    t = np.clip((ap * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300)[None], 0, 1)
+    t = np.clip(
+        (ap * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300)[None], 0, 1
+    )
     closest = a[None] + t[..., None] * ab[None]
     return np.linalg.norm(points[:, None, :] - closest, axis=-1).min(axis=1)
 
@@ -64,7 +74,9 @@ def test_rect_transforms_and_units_give_user_units():
     art = el.paths[0]
     assert art.closed == (True,)
     # rect (1,2,10,20) scaled by 2 then translated by (5,7); width="10cm" is NOT applied
-    np.testing.assert_allclose(art.subpaths[0], [[7, 11], [27, 11], [27, 51], [7, 51]], atol=1e-12)
+    np.testing.assert_allclose(
+        art.subpaths[0], [[7, 11], [27, 11], [27, 51], [7, 51]], atol=1e-12
+    )
     assert art.style.fill == "#ff0000" and art.style.stroke == "#0000ff"
     assert art.style.stroke_width == pytest.approx(6.0)  # 3 x scale(2)
 
@@ -79,20 +91,32 @@ def test_container_area_with_scale_transform():
 
 def test_viewbox_offset_and_non_uniform_viewport_not_applied():
     el = load_element(FIX / "viewbox_offset.svg")
-    np.testing.assert_allclose(el.paths[0].subpaths[0], [[55, 22], [59, 22], [59, 24], [55, 24]], atol=1e-9)
+    np.testing.assert_allclose(
+        el.paths[0].subpaths[0], [[55, 22], [59, 22], [59, 24], [55, 24]], atol=1e-9
+    )
     assert el.paths[0].style.stroke_width == pytest.approx(0.5)
 
 
 def test_root_transform_and_nested_svg(tmp_path):
     body = '<svg x="10" y="20" width="20" height="20" viewBox="0 0 10 10"><rect width="10" height="10"/></svg>'
-    p = _write(tmp_path, "nested.svg", _svg(body, 'width="5in" height="5in" viewBox="0 0 100 100"'))
+    p = _write(
+        tmp_path,
+        "nested.svg",
+        _svg(body, 'width="5in" height="5in" viewBox="0 0 100 100"'),
+    )
     el = load_element(p)
     # nested viewport scales its content by 2 and moves it to (10, 20): part of user space
-    np.testing.assert_allclose(el.paths[0].subpaths[0], [[10, 20], [30, 20], [30, 40], [10, 40]], atol=1e-9)
+    np.testing.assert_allclose(
+        el.paths[0].subpaths[0], [[10, 20], [30, 20], [30, 40], [10, 40]], atol=1e-9
+    )
 
 
 def test_no_viewbox_means_px_user_units(tmp_path):
-    p = _write(tmp_path, "px.svg", _svg('<rect x="1" y="1" width="3" height="4"/>', 'width="200" height="100"'))
+    p = _write(
+        tmp_path,
+        "px.svg",
+        _svg('<rect x="1" y="1" width="3" height="4"/>', 'width="200" height="100"'),
+    )
     c = load_container(p)
     assert c.area == pytest.approx(12.0)
     assert c.svg_root == {"width": "200", "height": "100"}
@@ -100,7 +124,9 @@ def test_no_viewbox_means_px_user_units(tmp_path):
 
 def test_doctype_public_is_allowed():
     el = load_element(FIX / "doctype.svg")
-    np.testing.assert_allclose(el.paths[0].subpaths[0], [[0, 0], [4, 0], [4, 3], [0, 3]])
+    np.testing.assert_allclose(
+        el.paths[0].subpaths[0], [[0, 0], [4, 0], [4, 3], [0, 3]]
+    )
 
 
 # --------------------------------------------------------------------------- fill rules, holes
@@ -110,9 +136,13 @@ def test_fill_rules_make_holes():
     el = load_element(FIX / "holes.svg")
     assert [a.style.fill_rule for a in el.paths] == ["nonzero", "evenodd", "nonzero"]
     areas = [_region(a).area for a in el.paths]
-    assert areas[0] == pytest.approx(1600.0)  # same orientation + nonzero: inner square filled
+    assert areas[0] == pytest.approx(
+        1600.0
+    )  # same orientation + nonzero: inner square filled
     assert areas[1] == pytest.approx(1200.0)  # evenodd: hole
-    assert areas[2] == pytest.approx(1200.0)  # opposite orientation: hole under nonzero too
+    assert areas[2] == pytest.approx(
+        1200.0
+    )  # opposite orientation: hole under nonzero too
     c = load_container(FIX / "holes.svg")
     assert c.area == pytest.approx(1600 + 1200 + 1200)
 
@@ -153,7 +183,10 @@ def test_hole_by_id_and_nearly_closed_path(tmp_path):
 
 def test_container_errors(tmp_path):
     line = _write(tmp_path, "line.svg", _svg('<path d="M0 0 L10 10" stroke="black"/>'))
-    with pytest.raises(InputError, match="line.svg.*no closed path"), warnings.catch_warnings():
+    with (
+        pytest.raises(InputError, match="line.svg.*no closed path"),
+        warnings.catch_warnings(),
+    ):
         warnings.simplefilter("ignore")
         load_container(line)
     flat = _write(tmp_path, "flat.svg", _svg('<path d="M0 0 L10 0 L20 0 Z"/>'))
@@ -167,15 +200,29 @@ def test_container_errors(tmp_path):
 def test_styles_inherited_and_invisible_dropped():
     with pytest.warns(UserWarning, match="styles.svg.*text"):
         el = load_element(FIX / "styles.svg")
-    assert len(el.paths) == 4  # fill+stroke none, display:none, hidden, opacity 0 dropped
+    assert (
+        len(el.paths) == 4
+    )  # fill+stroke none, display:none, hidden, opacity 0 dropped
     s0, s1, s2, s3 = (a.style for a in el.paths)
-    assert (s0.fill, s0.stroke, s0.stroke_width, s0.opacity, s0.stroke_linejoin) == ("#00ff00", "#112233", 2.0, 0.5, "round")
-    assert s1.fill is None and s1.stroke_opacity == pytest.approx(0.25) and s1.stroke_linecap == "square"
+    assert (s0.fill, s0.stroke, s0.stroke_width, s0.opacity, s0.stroke_linejoin) == (
+        "#00ff00",
+        "#112233",
+        2.0,
+        0.5,
+        "round",
+    )
+    assert (
+        s1.fill is None
+        and s1.stroke_opacity == pytest.approx(0.25)
+        and s1.stroke_linecap == "square"
+    )
     assert s2.fill == "#0000ff"  # CSS class
     assert s2.opacity == pytest.approx(0.25)  # group 0.5 x own 0.5
     assert s2.fill_opacity == pytest.approx(0.3)
     assert s3.stroke_width == pytest.approx(6.0)  # inherited 2 x scale(3)
-    np.testing.assert_allclose(np.linalg.norm(el.paths[3].subpaths[0] - [60, 60], axis=1), 6.0, atol=1e-9)
+    np.testing.assert_allclose(
+        np.linalg.norm(el.paths[3].subpaths[0] - [60, 60], axis=1), 6.0, atol=1e-9
+    )
 
 
 def test_default_fill_black_and_colours_as_hex(tmp_path):
@@ -203,13 +250,22 @@ def test_all_shape_kinds():
     q = ellipse.subpaths[0] - [200, 100]
     th = math.radians(-30)
     r = q @ np.array([[math.cos(th), math.sin(th)], [-math.sin(th), math.cos(th)]])
-    np.testing.assert_allclose((r[:, 0] / 40) ** 2 + (r[:, 1] / 10) ** 2, 1.0, atol=1e-9)
+    np.testing.assert_allclose(
+        (r[:, 0] / 40) ** 2 + (r[:, 1] / 10) ** 2, 1.0, atol=1e-9
+    )
     np.testing.assert_allclose(poly.subpaths[0], [[0, 200], [50, 200], [25, 240]])
-    assert poly.closed == (True,) and pline.closed == (False,) and line.closed == (False,)
+    assert (
+        poly.closed == (True,) and pline.closed == (False,) and line.closed == (False,)
+    )
     np.testing.assert_allclose(line.subpaths[0], [[200, 200], [250, 260]])
-    assert len(path.subpaths) == 2 and path.closed == (True, True)  # relative commands, 2 subpaths
+    assert len(path.subpaths) == 2 and path.closed == (
+        True,
+        True,
+    )  # relative commands, 2 subpaths
     np.testing.assert_allclose(path.subpaths[1], [[360, 300], [370, 300], [370, 310]])
-    assert path.subpaths[0].max(axis=0)[1] == pytest.approx(352.5, abs=0.01)  # arc radii scaled up
+    assert path.subpaths[0].max(axis=0)[1] == pytest.approx(
+        352.5, abs=0.01
+    )  # arc radii scaled up
     np.testing.assert_allclose(use.subpaths[0], [[50, 300], [60, 300], [55, 308]])
 
 
@@ -219,7 +275,12 @@ def test_cubic_flattening_error_within_tolerance(tol):
     poly = el.paths[0].subpaths[0]
     P = np.array([[10, 80], [40, 10], [65, 10], [95, 80]], float)
     t = np.linspace(0, 1, 6001)[:, None]
-    curve = (1 - t) ** 3 * P[0] + 3 * (1 - t) ** 2 * t * P[1] + 3 * (1 - t) * t**2 * P[2] + t**3 * P[3]
+    curve = (
+        (1 - t) ** 3 * P[0]
+        + 3 * (1 - t) ** 2 * t * P[1]
+        + 3 * (1 - t) * t**2 * P[2]
+        + t**3 * P[3]
+    )
     assert _seg_dist(curve, poly).max() <= tol * (1 + 1e-9)
     np.testing.assert_allclose(poly[[0, -1]], P[[0, 3]])
     if tol >= 0.01:
@@ -229,7 +290,9 @@ def test_cubic_flattening_error_within_tolerance(tol):
 def test_quadratic_and_arc_flattening_under_transform(tmp_path):
     body = '<g transform="matrix(2 0.5 -0.3 1.5 10 20)"><path d="M0 0 Q 50 80 100 0 A 30 20 15 1 1 40 -30" fill="none" stroke="black"/></g>'
     tol = 0.05
-    el = load_element(_write(tmp_path, "q.svg", _svg(body, 'viewBox="0 0 400 400"')), tolerance=tol)
+    el = load_element(
+        _write(tmp_path, "q.svg", _svg(body, 'viewBox="0 0 400 400"')), tolerance=tol
+    )
     poly = el.paths[0].subpaths[0]
     A = np.array([[2, -0.3], [0.5, 1.5]])
     t = np.linspace(0, 1, 5001)[:, None]
@@ -237,13 +300,21 @@ def test_quadratic_and_arc_flattening_under_transform(tmp_path):
     quad = ((1 - t) ** 2 * Q[0] + 2 * (1 - t) * t * Q[1] + t**2 * Q[2]) @ A.T + [10, 20]
     assert _seg_dist(quad, poly).max() <= tol * (1 + 1e-9)
     # arc end point transformed exactly; every arc vertex lies on the transformed ellipse
-    np.testing.assert_allclose(poly[-1], np.array([40, -30]) @ A.T + [10, 20], atol=1e-9)
+    np.testing.assert_allclose(
+        poly[-1], np.array([40, -30]) @ A.T + [10, 20], atol=1e-9
+    )
 
 
 def test_default_tolerance_is_relative_to_size(tmp_path):
-    small = load_element(_write(tmp_path, "s.svg", _svg('<circle cx="0" cy="0" r="1"/>')))
-    big = load_element(_write(tmp_path, "b.svg", _svg('<circle cx="0" cy="0" r="1000"/>')))
-    assert len(small.paths[0].subpaths[0]) == len(big.paths[0].subpaths[0])  # scale invariant
+    small = load_element(
+        _write(tmp_path, "s.svg", _svg('<circle cx="0" cy="0" r="1"/>'))
+    )
+    big = load_element(
+        _write(tmp_path, "b.svg", _svg('<circle cx="0" cy="0" r="1000"/>'))
+    )
+    assert len(small.paths[0].subpaths[0]) == len(
+        big.paths[0].subpaths[0]
+    )  # scale invariant
     c = big.paths[0].subpaths[0]
     mids = (c + np.roll(c, -1, axis=0)) / 2
     diag = 2000 * math.sqrt(2)
@@ -251,7 +322,9 @@ def test_default_tolerance_is_relative_to_size(tmp_path):
 
 
 def test_duplicate_points_and_degenerate_subpaths_removed(tmp_path):
-    body = '<path d="M0 0 L0 0 L10 0 L10 0 L10 10 L0 0 Z M50 50 L50 50 Z M20 20 L 30 30"/>'
+    body = (
+        '<path d="M0 0 L0 0 L10 0 L10 0 L10 10 L0 0 Z M50 50 L50 50 Z M20 20 L 30 30"/>'
+    )
     el = load_element(_write(tmp_path, "d.svg", _svg(body)))
     art = el.paths[0]
     assert len(art.subpaths) == 2
@@ -276,7 +349,11 @@ def test_pathfile_element_styles_and_reverse_order():
     assert square.closed == (True,) and open_path.closed == (False,)
     np.testing.assert_allclose(square.subpaths[0], [[0, 0], [10, 0], [10, 10], [0, 10]])
     assert (square.style.fill, square.style.stroke) == ("#f06465", None)
-    assert (open_path.style.fill, open_path.style.stroke, open_path.style.stroke_width) == (None, "#ff0000", 0.5)
+    assert (
+        open_path.style.fill,
+        open_path.style.stroke,
+        open_path.style.stroke_width,
+    ) == (None, "#ff0000", 0.5)
 
 
 def test_pathfile_container_regions_and_holes():
@@ -284,14 +361,25 @@ def test_pathfile_container_regions_and_holes():
     assert c.area == pytest.approx(100 * 100 - 50 * 50 + 50 * 50)
     assert c.region.geom_type == "MultiPolygon"
     assert not c.region.contains(shapely.Point(50, 50))
-    assert c.paths[0].style.stroke == "#000000" and c.paths[0].style.fill == "#ffffff"  # defaults
-    assert all(len(a.subpaths[0]) == 4 for a in c.paths)  # repeated closing point dropped
+    assert (
+        c.paths[0].style.stroke == "#000000" and c.paths[0].style.fill == "#ffffff"
+    )  # defaults
+    assert all(
+        len(a.subpaths[0]) == 4 for a in c.paths
+    )  # repeated closing point dropped
 
 
 def test_pathfile_palette_lines(tmp_path):
-    p = _write(tmp_path, "pal.path", "1\nforeground_color 0 3 -1\nbackground_color 0 8 0\n0 1 0 0 0 1 0 1 1\n0 1 0 5 5 6 5 6 6\n")
+    p = _write(
+        tmp_path,
+        "pal.path",
+        "1\nforeground_color 0 3 -1\nbackground_color 0 8 0\n0 1 0 0 0 1 0 1 1\n0 1 0 5 5 6 5 6 6\n",
+    )
     el = load_element(p)
-    assert [(a.style.stroke, a.style.fill) for a in el.paths] == [(None, "#beddf4"), ("#ff0000", "#ffffff")]
+    assert [(a.style.stroke, a.style.fill) for a in el.paths] == [
+        (None, "#beddf4"),
+        ("#ff0000", "#ffffff"),
+    ]
 
 
 @pytest.mark.parametrize(
@@ -350,8 +438,12 @@ def test_svg_and_path_containers_are_equivalent():
 
 @needs_data
 def test_load_elements_on_directories():
-    els = load_elements([DATA / "animals", DATA / "animals" / "cat.svg", DATA / "secondary"])
-    assert [e.name for e in els] == ANIMALS + ["small_cat"]  # sorted, duplicate cat dropped
+    els = load_elements(
+        [DATA / "animals", DATA / "animals" / "cat.svg", DATA / "secondary"]
+    )
+    assert [e.name for e in els] == ANIMALS + [
+        "small_cat"
+    ]  # sorted, duplicate cat dropped
     paths = load_elements([DATA / "repulsionpak_format" / "animals"])
     assert [e.source for e in paths] == [f"{a}.path" for a in ANIMALS]
 
@@ -388,7 +480,9 @@ def test_unknown_suffix_is_sniffed(tmp_path):
 def test_svgz_is_read(tmp_path):
     import gzip
 
-    p = _write(tmp_path, "z.svgz", gzip.compress((FIX / "rect_scaled.svg").read_bytes()))
+    p = _write(
+        tmp_path, "z.svgz", gzip.compress((FIX / "rect_scaled.svg").read_bytes())
+    )
     assert load_container(p).area == pytest.approx(800)
 
 
@@ -415,15 +509,24 @@ def _bad_inputs(tmp_path: Path) -> dict[str, Path]:
         ),
         "nogeometry.svg": S('<text x="1" y="1">only text</text>').encode(),
         "infinite.svg": S('<path d="M0 0 L1e400 0 L1 1 Z"/>').encode(),
-        "overflow.svg": S('<path d="M0 0 L1 0 L1 1 Z" transform="scale(1e200) scale(1e200)"/>').encode(),
+        "overflow.svg": S(
+            '<path d="M0 0 L1 0 L1 1 Z" transform="scale(1e200) scale(1e200)"/>'
+        ).encode(),
         "usecycle.svg": S('<g id="a"><use href="#a"/></g>').encode(),
         "usebomb.svg": S(
             '<defs><rect id="r0" width="1" height="1"/>'
-            + "".join(f'<g id="r{i}">' + f'<use href="#r{i - 1}"/>' * 10 + "</g>" for i in range(1, 8))
+            + "".join(
+                f'<g id="r{i}">' + f'<use href="#r{i - 1}"/>' * 10 + "</g>"
+                for i in range(1, 8)
+            )
             + '</defs><use href="#r7"/>'
         ).encode(),
-        "deep.svg": S("<g>" * 400 + '<rect width="1" height="1"/>' + "</g>" * 400).encode(),
-        "zerosize.svg": S('<rect width="3" height="3"/>', 'width="0" height="10" viewBox="0 0 10 10"').encode(),
+        "deep.svg": S(
+            "<g>" * 400 + '<rect width="1" height="1"/>' + "</g>" * 400
+        ).encode(),
+        "zerosize.svg": S(
+            '<rect width="3" height="3"/>', 'width="0" height="10" viewBox="0 0 10 10"'
+        ).encode(),
         "wrongns.svg": b'<svg xmlns="http://example.com/ns"><rect width="3" height="3"/></svg>',
         "empty.path": b"\n",
         "binary.path": b"1\n\x00\x01\x02",
@@ -448,18 +551,29 @@ def test_bad_inputs_raise_input_error_naming_the_file(tmp_path, loader):
 def test_entity_declarations_message(tmp_path):
     cases = _bad_inputs(tmp_path)
     for name in ("bomb.svg", "external.svg"):
-        with pytest.raises(InputError, match="declares XML entities, which are not allowed"):
+        with pytest.raises(
+            InputError, match="declares XML entities, which are not allowed"
+        ):
             load_element(cases[name])
 
 
 def test_point_budget(tmp_path, monkeypatch):
     pts = " ".join(f"L{i} {i % 7}" for i in range(1, 3000))
-    p = _write(tmp_path, "many.svg", _svg(f'<path d="M0 0 {pts}" fill="none" stroke="black"/>', 'viewBox="0 0 3000 10"'))
+    p = _write(
+        tmp_path,
+        "many.svg",
+        _svg(
+            f'<path d="M0 0 {pts}" fill="none" stroke="black"/>',
+            'viewBox="0 0 3000 10"',
+        ),
+    )
     assert load_element(p).paths[0].n_points == 3000
     monkeypatch.setattr(svg_read, "MAX_POINTS", 1000)
     with pytest.raises(InputError, match="many.svg.*more than 1000 points"):
         load_element(p)
-    big = _write(tmp_path, "bigcurve.svg", _svg('<path d="M0 0 C 1e9 0 1e9 1e9 0 1e9"/>'))
+    big = _write(
+        tmp_path, "bigcurve.svg", _svg('<path d="M0 0 C 1e9 0 1e9 1e9 0 1e9"/>')
+    )
     with pytest.raises(InputError, match="bigcurve.svg.*points"):
         load_element(big, tolerance=1e-6)
 
@@ -480,45 +594,200 @@ def test_unsupported_content_warns_and_is_skipped(tmp_path):
 def test_use_of_symbol_is_drawn(tmp_path):
     body = '<defs><symbol id="s"><rect width="5" height="5"/></symbol></defs><use href="#s" x="10" y="10"/>'
     el = load_element(_write(tmp_path, "sym.svg", _svg(body)))
-    np.testing.assert_allclose(el.paths[0].subpaths[0], [[10, 10], [15, 10], [15, 15], [10, 15]])
+    np.testing.assert_allclose(
+        el.paths[0].subpaths[0], [[10, 10], [15, 10], [15, 15], [10, 15]]
+    )
 
 
 # --------------------------------------------------------------------------- fuzzing
 
 
 _SVG_PIECES = [
-    "<svg", "</svg>", ' xmlns="http://www.w3.org/2000/svg"', ' viewBox="0 0 10 10"', ' width="1e400"', ">",
-    '<path d="', "M 0 0", "L 5 5", "C 1 2 3 4 5 6", "A 5 5 0 1 1 9 9", "Z", "nan", "1e308", "-", ".", '"/>',
-    '<rect width="3" height="3"', ' transform="scale(0)"', ' transform="rotate(45)"', ' fill-rule="evenodd"',
-    '<g id="a">', "</g>", '<use href="#a"/>', "<!ENTITY x 'y'>", "<!DOCTYPE svg>", "&x;", '<circle r="-1"/>',
-    '<polygon points="0,0 1"/>', ' class="hole"', ' style="fill:url(#q);stroke-width:1e309"', "<text>t</text>",
-    '<ellipse rx="2" ry="0"/>', "\x00", "\xff", " ",
+    "<svg",
+    "</svg>",
+    ' xmlns="http://www.w3.org/2000/svg"',
+    ' viewBox="0 0 10 10"',
+    ' width="1e400"',
+    ">",
+    '<path d="',
+    "M 0 0",
+    "L 5 5",
+    "C 1 2 3 4 5 6",
+    "A 5 5 0 1 1 9 9",
+    "Z",
+    "nan",
+    "1e308",
+    "-",
+    ".",
+    '"/>',
+    '<rect width="3" height="3"',
+    ' transform="scale(0)"',
+    ' transform="rotate(45)"',
+    ' fill-rule="evenodd"',
+    '<g id="a">',
+    "</g>",
+    '<use href="#a"/>',
+    "<!ENTITY x 'y'>",
+    "<!DOCTYPE svg>",
+    "&x;",
+    '<circle r="-1"/>',
+    '<polygon points="0,0 1"/>',
+    ' class="hole"',
+    ' style="fill:url(#q);stroke-width:1e309"',
+    "<text>t</text>",
+    '<ellipse rx="2" ry="0"/>',
+    "\x00",
+    "\xff",
+    " ",
 ]
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(data=st.one_of(st.binary(max_size=300), st.lists(st.sampled_from(_SVG_PIECES), max_size=30).map(lambda x: "".join(x).encode("utf-8", "surrogatepass"))))
+_NUM = st.one_of(
+    st.integers(-5, 120).map(str),
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
+    st.sampled_from(
+        ["1e308", "-1e308", "1e-320", "0", "nan", "inf", "", "5%", "2mm", "x"]
+    ),
+)
+_TF = st.one_of(
+    st.just(""),
+    st.builds(
+        lambda f, a, b: f' transform="{f}({a} {b})"',
+        st.sampled_from(["translate", "scale", "rotate", "skewX", "matrix", "bogus"]),
+        _NUM,
+        _NUM,
+    ),
+)
+_STYLE = st.sampled_from(
+    [
+        "",
+        ' fill="none" stroke="red"',
+        ' fill-rule="evenodd"',
+        ' class="hole"',
+        ' opacity="0"',
+        ' style="display:none"',
+        ' stroke-width="1e309" stroke="blue"',
+        ' fill="url(#nope) red"',
+        ' visibility="hidden"',
+    ]
+)
+_D = st.lists(
+    st.tuples(st.sampled_from("MLHVCSQTAZmlhvcsqtaz"), st.lists(_NUM, max_size=7)),
+    max_size=8,
+).map(lambda d: " ".join(c + " " + " ".join(v) for c, v in d))
+_SHAPE = st.one_of(
+    st.builds(lambda d, t, s: f'<path d="{d}"{t}{s}/>', _D, _TF, _STYLE),
+    st.builds(
+        lambda a, b, c, d, t, s: (
+            f'<rect x="{a}" y="{b}" width="{c}" height="{d}" rx="{a}"{t}{s}/>'
+        ),
+        _NUM,
+        _NUM,
+        _NUM,
+        _NUM,
+        _TF,
+        _STYLE,
+    ),
+    st.builds(
+        lambda a, b, c, t, s: f'<circle cx="{a}" cy="{b}" r="{c}"{t}{s}/>',
+        _NUM,
+        _NUM,
+        _NUM,
+        _TF,
+        _STYLE,
+    ),
+    st.builds(
+        lambda p, t, s: f'<polygon points="{p}"{t}{s}/>',
+        st.lists(_NUM, max_size=8).map(" ".join),
+        _TF,
+        _STYLE,
+    ),
+    st.builds(lambda i, t: f'<use href="#g{i}"{t}/>', st.integers(0, 2), _TF),
+    st.just("<text>x</text>"),
+)
+_BODY = st.recursive(
+    st.lists(_SHAPE, max_size=4).map("".join),
+    lambda inner: st.builds(
+        lambda ch, t, s, i: f'<g id="g{i}"{t}{s}>' + "".join(ch) + "</g>",
+        st.lists(inner, max_size=3),
+        _TF,
+        _STYLE,
+        st.integers(0, 2),
+    ),
+    max_leaves=8,
+)
+_STRUCTURED = st.builds(
+    lambda w, h, vb, b: (
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="{vb}">{b}</svg>'.encode()
+    ),
+    _NUM,
+    _NUM,
+    st.lists(_NUM, max_size=5).map(" ".join),
+    _BODY,
+)
+_SEEDS = [
+    (FIX / n).read_bytes() for n in ("shapes.svg", "mini.path", "container_holes.svg")
+]
+_MUTATED = st.builds(
+    lambda k, i, b: (
+        _SEEDS[k][: i % len(_SEEDS[k])]
+        + bytes([b])
+        + _SEEDS[k][i % len(_SEEDS[k]) + 1 :]
+    ),
+    st.integers(0, len(_SEEDS) - 1),
+    st.integers(0, 10_000),
+    st.integers(0, 255),
+)
+_ALMOST = st.lists(st.sampled_from(_SVG_PIECES), max_size=30).map(
+    lambda x: "".join(x).encode("utf-8", "surrogatepass")
+)
+
+
+@settings(
+    max_examples=200,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(data=st.one_of(st.binary(max_size=300), _ALMOST, _STRUCTURED, _MUTATED))
 def test_fuzz_only_input_errors_escape(tmp_path, data):
     for suffix in (".svg", ".path", ".dat"):
         p = tmp_path / f"fuzz{suffix}"
         p.write_bytes(data)
         for loader in (load_element, load_container):
             try:
-                _quiet(loader, p)
+                res = _quiet(loader, p)
             except InputError as exc:
                 assert "fuzz" in str(exc)
+                continue
+            if loader is load_container:
+                assert res.region.is_valid and res.area > 0
+            else:
+                assert res.paths and all(
+                    np.all(np.isfinite(s)) for a in res.paths for s in a.subpaths
+                )
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=80,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
 @given(
     d=st.lists(
-        st.tuples(st.sampled_from("MLHVCSQTAZmlhvcsqtaz"), st.lists(st.floats(allow_nan=True, allow_infinity=True, width=32), max_size=7)),
+        st.tuples(
+            st.sampled_from("MLHVCSQTAZmlhvcsqtaz"),
+            st.lists(
+                st.floats(allow_nan=True, allow_infinity=True, width=32), max_size=7
+            ),
+        ),
         max_size=12,
     ),
     rule=st.sampled_from(["nonzero", "evenodd"]),
 )
 def test_fuzz_path_data(tmp_path, d, rule):
-    dstr = " ".join(cmd + " " + " ".join(repr(float(v)) for v in vals) for cmd, vals in d)
+    dstr = " ".join(
+        cmd + " " + " ".join(repr(float(v)) for v in vals) for cmd, vals in d
+    )
     p = tmp_path / "fuzzpath.svg"
     p.write_text(_svg(f'<path fill-rule="{rule}" d="{dstr}"/>'))
     for loader in (load_element, load_container):

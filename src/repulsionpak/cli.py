@@ -212,9 +212,8 @@ def invariants(packing, metrics: dict) -> dict:
     worst = 0.0
     for i, j in pairs:
         inter = shapely.intersection(skins[i], skins[j])
-        if not inter.is_empty:
-            minx, miny, maxx, maxy = inter.bounds
-            worst = max(worst, min(maxx - minx, maxy - miny))
+        if inter.area > 0:  # depth = diameter of the largest disc inside the overlap
+            worst = max(worst, 2.0 * shapely.maximum_inscribed_circle(inter).length)
     x = packing.state.x * packing.frame.unit
     region = packing.container.region
     outside = ~shapely.contains_xy(shapely.buffer(region, tol), x[:, 0], x[:, 1])

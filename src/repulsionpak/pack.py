@@ -103,7 +103,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     size = typical_size(templates, placement.template_index) / frame.unit
     cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
     model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
-                               field_h=gap / frame.unit / 3.0)
+                               gap=gap / frame.unit)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     res: RunResult = sim.run(on_snapshot, should_stop=should_stop)

@@ -82,13 +82,16 @@ class SimParams:
     cell_size: float = _doc(
         0.65, "× element size", "Neighbour-grid cell width relative to the typical final element "
         "diameter (paper: 6–10% of a container holding ~25 elements).")
+    outside_block: float = _doc(
+        0.25, "× gap", "A skin vertex this far outside the container blocks its element's growth "
+        "(beyond the paper: keeps growth pressure from pushing border elements out).")
     relax_passes: int = _doc(2, "-", "Self-intersection relaxation cycles per step (sec. 7: 2–3).")
     relax_fraction: float = _doc(0.5, "× mean edge", "Minimum distance of non-neighbouring vertices.")
     stop_window: int = _doc(100, "iterations", "w, sliding window of the stopping rule (sec. 8).")
     stop_epsilon: float = _doc(
-        2e-5, "area fraction / iteration", "ε: stop when the RMS of the per-iteration change of the "
-        "area fraction over the window falls below this (the paper samples once per second with "
-        "ε = 0.01; we sample every iteration).")
+        3e-5, "relative / iteration", "ε: stop when the RMS of the per-iteration change of the "
+        "moving meshes' area fraction over the window, divided by that area fraction, falls below "
+        "this (the paper samples once per second with ε = 0.01; we sample every iteration).")
     min_iterations: int = _doc(300, "iterations", "Never stop before this many iterations.")
     max_iterations: int = _doc(20000, "iterations", "Hard bound on the number of iterations.")
     settle_iterations: int = _doc(
@@ -100,9 +103,9 @@ class SecondaryParams:
     """Sec. 9: secondary elements."""
 
     d_min: float = _doc(
-        0.75, "× gap", "Seeds need at least this distance to the nearest mesh or boundary "
-        "(paper: 5–10 px on a 1000 px grid).")
-    d_sep: float = _doc(1.0, "× d_min-scaled", "Seeds are at least d_sep × (2·d_min) apart.")
+        1.5, "× gap", "d_min: seeds need at least this distance to the nearest mesh or the "
+        "boundary (paper: 5–10 px on a 1000 px grid, about one gap).")
+    d_sep: float = _doc(2.5, "× gap", "d_sep: kept seeds are at least this far apart (paper: 10 px).")
     grid: int = _doc(1000, "pixels", "Longer side of the distance-transform grid.")
     max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")
     initial_fraction: float = _doc(

@@ -6,14 +6,14 @@ from .svg_read import load_container, load_element, load_elements, rings_to_regi
 from .svg_write import read_packing_svg, write_packing_svg
 
 __all__ = [
+    "container_from_pathfile",
+    "element_from_pathfile",
+    "load_container",
     "load_element",
     "load_elements",
-    "load_container",
-    "write_packing_svg",
+    "parse_pathfile",
     "read_packing_svg",
     "render_png",
-    "parse_pathfile",
-    "element_from_pathfile",
-    "container_from_pathfile",
     "rings_to_region",
+    "write_packing_svg",
 ]

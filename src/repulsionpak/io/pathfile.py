@@ -30,7 +30,14 @@ from ..types import ArtPath, Container, Element, Style
 from . import svg_read
 from .svg_read import clean_points, finalize_region, rings_to_region, warn
 
-__all__ = ["PathRecord", "PathFile", "parse_pathfile", "element_from_pathfile", "container_from_pathfile", "PALETTE"]
+__all__ = [
+    "PALETTE",
+    "PathFile",
+    "PathRecord",
+    "container_from_pathfile",
+    "element_from_pathfile",
+    "parse_pathfile",
+]
 
 BOUNDARY, DETAIL, FOCAL, FIELD, SEED, STREAM, SKELETON, HOLE = range(8)
 #: Palette of the older ``foreground_color`` / ``background_color`` lines (index -> RGB).
@@ -70,36 +77,52 @@ class PathFile:
 
 
 def _hex(rgb) -> str:
-    return "#%02x%02x%02x" % tuple(int(c) for c in rgb)
+    r, g, b = (int(c) for c in rgb)
+    return f"#{r:02x}{g:02x}{b:02x}"
 
 
 def _int(path, lineno: int, token: str, what: str) -> int:
     try:
         return int(token)
     except ValueError:
-        raise InputError(path, f"line {lineno}: {what} must be an integer, got {token[:40]!r}; fix or remove the line") from None
+        raise InputError(
+            path,
+            f"line {lineno}: {what} must be an integer, got {token[:40]!r}; fix or remove the line",
+        ) from None
 
 
 def parse_pathfile(path: str | Path, data: bytes | str) -> PathFile:
     """Parse ``.path`` content strictly. ``path`` is used in error messages only."""
     if isinstance(data, bytes):
         if b"\x00" in data:
-            raise InputError(path, "is a binary file, not a RepulsionPak .path text file")
+            raise InputError(
+                path, "is a binary file, not a RepulsionPak .path text file"
+            )
         try:
             text = data.decode("utf-8-sig")
         except UnicodeDecodeError:
-            raise InputError(path, "is not a UTF-8/ASCII text file; a .path file is plain text") from None
+            raise InputError(
+                path, "is not a UTF-8/ASCII text file; a .path file is plain text"
+            ) from None
     else:
         text = data
     lines = text.splitlines()
     if not lines or not lines[0].strip():
-        raise InputError(path, "line 1: expected the number of regions; the file is empty or starts with a blank line")
+        raise InputError(
+            path,
+            "line 1: expected the number of regions; the file is empty or starts with a blank line",
+        )
     first = lines[0].split()
     if len(first) != 1:
-        raise InputError(path, f"line 1: expected the number of regions (one integer), got {lines[0][:60]!r}")
+        raise InputError(
+            path,
+            f"line 1: expected the number of regions (one integer), got {lines[0][:60]!r}",
+        )
     num_regions = _int(path, 1, first[0], "the number of regions")
     if num_regions < 1:
-        raise InputError(path, f"line 1: the number of regions must be >= 1, got {num_regions}")
+        raise InputError(
+            path, f"line 1: the number of regions must be >= 1, got {num_regions}"
+        )
 
     pf = PathFile(num_regions, [])
     total = 0
@@ -107,7 +130,10 @@ def parse_pathfile(path: str | Path, data: bytes | str) -> PathFile:
     def region_index(lineno: int, token: str) -> int:
         r = _int(path, lineno, token, "the region index")
         if not 0 <= r < num_regions:
-            raise InputError(path, f"line {lineno}: region {r} is out of range (the file declares {num_regions} region(s))")
+            raise InputError(
+                path,
+                f"line {lineno}: region {r} is out of range (the file declares {num_regions} region(s))",
+            )
         return r
 
     for i, raw in enumerate(lines[1:], start=2):
@@ -123,15 +149,22 @@ def parse_pathfile(path: str | Path, data: bytes | str) -> PathFile:
             for tok in tokens[2:]:
                 parts = tok.split(",")
                 if len(parts) != 3:
-                    raise InputError(path, f"line {i}: colour {tok[:40]!r} must be 'r,g,b' (or -1,-1,-1 for none)")
+                    raise InputError(
+                        path,
+                        f"line {i}: colour {tok[:40]!r} must be 'r,g,b' (or -1,-1,-1 for none)",
+                    )
                 rgb = [_int(path, i, c, "a colour component") for c in parts]
                 if all(c == -1 for c in rgb):
                     cols.append(None)
                 elif all(0 <= c <= 255 for c in rgb):
                     cols.append(_hex(rgb))
                 else:
-                    raise InputError(path, f"line {i}: colour {tok!r} has components outside 0..255")
-            (pf.stroke_colours if head.startswith("fore") else pf.fill_colours)[r] = cols
+                    raise InputError(
+                        path, f"line {i}: colour {tok!r} has components outside 0..255"
+                    )
+            (pf.stroke_colours if head.startswith("fore") else pf.fill_colours)[r] = (
+                cols
+            )
             continue
         if head in ("foreground_color", "background_color"):
             if len(tokens) < 2:
@@ -145,21 +178,33 @@ def parse_pathfile(path: str | Path, data: bytes | str) -> PathFile:
                 elif k in PALETTE:
                     cols.append(_hex(PALETTE[k]))
                 else:
-                    raise InputError(path, f"line {i}: palette index {k} is not one of -1..8")
-            (pf.stroke_colours if head.startswith("fore") else pf.fill_colours)[r] = cols
+                    raise InputError(
+                        path, f"line {i}: palette index {k} is not one of -1..8"
+                    )
+            (pf.stroke_colours if head.startswith("fore") else pf.fill_colours)[r] = (
+                cols
+            )
             continue
         if len(tokens) < 3:
-            raise InputError(path, f"line {i}: a path record needs '<region> <is_closed> <path_type> x0 y0 ...', got {raw[:60]!r}")
+            raise InputError(
+                path,
+                f"line {i}: a path record needs '<region> <is_closed> <path_type> x0 y0 ...', got {raw[:60]!r}",
+            )
         r = region_index(i, tokens[0])
         flag = _int(path, i, tokens[1], "the closed flag")
         if flag not in (0, 1):
-            raise InputError(path, f"line {i}: the closed flag must be 0 or 1, got {flag}")
+            raise InputError(
+                path, f"line {i}: the closed flag must be 0 or 1, got {flag}"
+            )
         ptype = _int(path, i, tokens[2], "the path type")
         if not 0 <= ptype <= 7:
             raise InputError(path, f"line {i}: path type {ptype} is not one of 0..7")
         coords = tokens[3:]
         if len(coords) % 2:
-            raise InputError(path, f"line {i}: odd number of coordinates ({len(coords)}); every point needs x and y")
+            raise InputError(
+                path,
+                f"line {i}: odd number of coordinates ({len(coords)}); every point needs x and y",
+            )
         try:
             pts = np.array([float(c) for c in coords], dtype=float).reshape(-1, 2)
         except ValueError:
@@ -169,7 +214,9 @@ def parse_pathfile(path: str | Path, data: bytes | str) -> PathFile:
             raise InputError(path, f"line {i}: non-finite coordinate (NaN or infinity)")
         total += len(pts)
         if total > svg_read.MAX_POINTS:
-            raise InputError(path, f"has more than {svg_read.MAX_POINTS} points; simplify the file")
+            raise InputError(
+                path, f"has more than {svg_read.MAX_POINTS} points; simplify the file"
+            )
         if len(pts) < 2:
             continue
         pf.records.append(PathRecord(r, bool(flag), ptype, pts, i))
@@ -189,21 +236,36 @@ def _styles(pf: PathFile, path) -> dict[int, Style]:
     out: dict[int, Style] = {}
     short = False
     for region in range(pf.num_regions):
-        bounds = [rec for rec in pf.records if rec.region == region and rec.path_type == BOUNDARY]
+        bounds = [
+            rec
+            for rec in pf.records
+            if rec.region == region and rec.path_type == BOUNDARY
+        ]
         has_lines = region in pf.stroke_colours or region in pf.fill_colours
         strokes = pf.stroke_colours.get(region)
         fills = pf.fill_colours.get(region)
         for k, rec in enumerate(bounds):
             if has_lines:
-                if (strokes is not None and k >= len(strokes)) or (fills is not None and k >= len(fills)):
+                if (strokes is not None and k >= len(strokes)) or (
+                    fills is not None and k >= len(fills)
+                ):
                     short = True
-                stroke = strokes[k] if strokes is not None and k < len(strokes) else DEFAULT_STROKE
-                fill = fills[k] if fills is not None and k < len(fills) else DEFAULT_FILL
+                stroke = (
+                    strokes[k]
+                    if strokes is not None and k < len(strokes)
+                    else DEFAULT_STROKE
+                )
+                fill = (
+                    fills[k] if fills is not None and k < len(fills) else DEFAULT_FILL
+                )
             else:
                 stroke, fill = DEFAULT_STROKE, DEFAULT_FILL
             out[id(rec)] = Style(fill=fill, stroke=stroke, stroke_width=STROKE_WIDTH)
     if short:
-        warn(path, "a colour line has fewer entries than boundary paths; the others use stroke black, fill white")
+        warn(
+            path,
+            "a colour line has fewer entries than boundary paths; the others use stroke black, fill white",
+        )
     return out
 
 
@@ -236,12 +298,17 @@ def element_from_pathfile(path: str | Path, data: bytes | str) -> Element:
             continue
         arts.append(ArtPath((pts,), (closed,), style))
     if not arts:
-        raise InputError(p, "has no visible region-0 boundary or focal path; an element needs at least one")
+        raise InputError(
+            p,
+            "has no visible region-0 boundary or focal path; an element needs at least one",
+        )
     arts.reverse()
     return Element(name=p.stem, source=p.name, paths=tuple(arts))
 
 
-def container_from_pathfile(path: str | Path, data: bytes | str, tolerance: float | None = None) -> Container:
+def container_from_pathfile(
+    path: str | Path, data: bytes | str, tolerance: float | None = None
+) -> Container:
     """Container from a ``.path`` file: type-0 paths of every region are outer
     boundaries (always closed), type-7 paths are holes (subtracted)."""
     p = Path(str(path))
@@ -249,9 +316,14 @@ def container_from_pathfile(path: str | Path, data: bytes | str, tolerance: floa
     styles = _styles(pf, p)
     recs = [r for r in pf.records if r.path_type in (BOUNDARY, HOLE)]
     if any(r.path_type == FOCAL for r in pf.records):
-        warn(p, "focal paths (type 2) of a container are not supported and were ignored")
+        warn(
+            p, "focal paths (type 2) of a container are not supported and were ignored"
+        )
     if not recs:
-        raise InputError(p, "has no boundary path (type 0); a container needs at least one closed outline")
+        raise InputError(
+            p,
+            "has no boundary path (type 0); a container needs at least one closed outline",
+        )
     allpts = np.concatenate([r.points for r in recs])
     if tolerance is None:
         span = allpts.max(axis=0) - allpts.min(axis=0)
@@ -264,11 +336,14 @@ def container_from_pathfile(path: str | Path, data: bytes | str, tolerance: floa
             pts = pts[:-1]
         if len(pts) < 3:
             continue
-        geom = rings_to_region([pts], "nonzero")
+        geom = rings_to_region([pts], "nonzero", p)
         (holes if rec.path_type == HOLE else outer).append(geom)
         arts.append(ArtPath((pts,), (True,), styles.get(id(rec), _default_style())))
     if not outer:
-        raise InputError(p, "has no usable boundary path (type 0 with at least 3 points); a container needs an outline")
+        raise InputError(
+            p,
+            "has no usable boundary path (type 0 with at least 3 points); a container needs an outline",
+        )
     region = shapely.union_all(outer)
     if holes:
         region = region.difference(shapely.union_all(holes))

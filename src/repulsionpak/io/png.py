@@ -12,7 +12,7 @@ import shapely
 
 from ..errors import OutputError, ParameterError
 from ..types import ArtPath, Container, PlacedArt
-from .svg_read import rings_to_region
+from .svg_read import RegionTooComplex, rings_to_region
 from .svg_write import atomic_write_bytes
 
 __all__ = ["render_png"]
@@ -29,9 +29,19 @@ def _fill_path(art: ArtPath):
     rings = [np.asarray(p, dtype=float) for p in art.subpaths if len(p) >= 3]
     if not rings:
         return None
-    if art.style.fill_rule == "evenodd" and len(rings) > 1:
-        region = rings_to_region(rings, "evenodd")
-        polys = [g for g in shapely.get_parts(region) if isinstance(g, shapely.Polygon) and not g.is_empty]
+    if art.style.fill_rule == "evenodd":
+        try:
+            region = rings_to_region(rings, "evenodd")
+        except RegionTooComplex:  # pathological outline: draw it with the nonzero rule
+            region = None
+    else:
+        region = None
+    if region is not None:
+        polys = [
+            g
+            for g in shapely.get_parts(region)
+            if isinstance(g, shapely.Polygon) and not g.is_empty
+        ]
         rings = []
         for poly in polys:
             poly = shapely.geometry.polygon.orient(poly, 1.0)  # exterior CCW, holes CW
@@ -43,7 +53,11 @@ def _fill_path(art: ArtPath):
     for r in rings:
         verts.append(r)
         verts.append(r[:1])
-        codes.append(np.concatenate([[MPath.MOVETO], np.full(len(r) - 1, MPath.LINETO), [MPath.CLOSEPOLY]]))
+        codes.append(
+            np.concatenate(
+                [[MPath.MOVETO], np.full(len(r) - 1, MPath.LINETO), [MPath.CLOSEPOLY]]
+            )
+        )
     return MPath(np.concatenate(verts), np.concatenate(codes).astype(MPath.code_type))
 
 
@@ -74,7 +88,14 @@ def _draw_art(ax, art: ArtPath, stroke_scale: float, pt_per_unit: float) -> None
     if st.fill is not None and st.opacity * st.fill_opacity > 0:
         fp = _fill_path(art)
         if fp is not None:
-            ax.add_patch(PathPatch(fp, facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity), edgecolor="none", linewidth=0))
+            ax.add_patch(
+                PathPatch(
+                    fp,
+                    facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity),
+                    edgecolor="none",
+                    linewidth=0,
+                )
+            )
     width = st.stroke_width * stroke_scale * pt_per_unit
     if st.stroke is not None and st.opacity * st.stroke_opacity > 0 and width > 0:
         sp = _stroke_path(art)
@@ -114,14 +135,18 @@ def render_png(
         raise ParameterError(f"size_px must be between 16 and 20000, got {size_px}")
     import matplotlib
 
-    if "matplotlib.pyplot" not in sys.modules:  # never switch the backend under a running pyplot
+    if (
+        "matplotlib.pyplot" not in sys.modules
+    ):  # never switch the backend under a running pyplot
         matplotlib.use("Agg")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
     x0, y0, x1, y1 = container.bounds
     if not all(math.isfinite(v) for v in (x0, y0, x1, y1)):
-        raise OutputError(f"{path}: the container has non-finite bounds; nothing was rendered")
+        raise OutputError(
+            f"{path}: the container has non-finite bounds; nothing was rendered"
+        )
     w, h = max(x1 - x0, 1e-12), max(y1 - y0, 1e-12)
     m = 0.02 * max(w, h)
     x0, y0, w, h = x0 - m, y0 - m, w + 2 * m, h + 2 * m
@@ -139,6 +164,13 @@ def render_png(
     fig = Figure(figsize=(W / _DPI, H / _DPI), dpi=_DPI)
     canvas = FigureCanvasAgg(fig)
     transparent = background is None or str(background).lower() == "none"
+    if not transparent:
+        from matplotlib.colors import is_color_like
+
+        if not is_color_like(background):
+            raise ParameterError(
+                f"background {background!r} is not a colour; use e.g. 'white', '#ffffff' or None"
+            )
     fig.patch.set_facecolor("none" if transparent else background)
     fig.patch.set_alpha(0.0 if transparent else 1.0)
     ax = fig.add_axes((0, 0, 1, 1))
@@ -146,7 +178,9 @@ def render_png(
     ax.patch.set_visible(False)
     ax.set_xlim(x0, x0 + w)
     ax.set_ylim(y0 + h, y0)  # y down
-    ax.set_aspect("equal")  # data and pixel aspect agree, so the axes keep the whole figure
+    ax.set_aspect(
+        "equal"
+    )  # data and pixel aspect agree, so the axes keep the whole figure
 
     if show_container:
         if container.paths:
@@ -159,7 +193,14 @@ def render_png(
             for poly in shapely.get_parts(container.region):
                 if isinstance(poly, shapely.Polygon) and not poly.is_empty:
                     for ring in [poly.exterior, *poly.interiors]:
-                        ax.add_patch(PathPatch(MPath(np.asarray(ring.coords)), facecolor="none", edgecolor="black", linewidth=0.8))
+                        ax.add_patch(
+                            PathPatch(
+                                MPath(np.asarray(ring.coords)),
+                                facecolor="none",
+                                edgecolor="black",
+                                linewidth=0.8,
+                            )
+                        )
     for pa in placed:
         for art in pa.paths:
             _draw_art(ax, art, pa.stroke_scale, pt_per_unit)

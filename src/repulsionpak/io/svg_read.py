@@ -40,12 +40,12 @@ from ..errors import InputError, ParameterError, RepulsionPakError
 from ..types import ArtPath, Container, Element, Style
 
 __all__ = [
+    "MAX_FILE_BYTES",
+    "MAX_POINTS",
+    "load_container",
     "load_element",
     "load_elements",
-    "load_container",
     "rings_to_region",
-    "MAX_POINTS",
-    "MAX_FILE_BYTES",
 ]
 
 #: Largest input file accepted (bytes, after gzip decompression for ``.svgz``).
@@ -80,13 +80,23 @@ def guard(path: str | Path, what: str = "file"):
     except RepulsionPakError:
         raise
     except RecursionError:
-        raise InputError(path, f"the {what} is nested too deeply to be read; simplify its structure") from None
+        raise InputError(
+            path, f"the {what} is nested too deeply to be read; simplify its structure"
+        ) from None
     except MemoryError:
-        raise InputError(path, f"the {what} is too large to be read into memory; simplify it") from None
-    except Exception as exc:  # noqa: BLE001 - deliberately broad: readers never leak raw errors
+        raise InputError(
+            path, f"the {what} is too large to be read into memory; simplify it"
+        ) from None
+    except Exception as exc:
         text = str(exc).strip()
-        detail = f"{type(exc).__name__}: {text.splitlines()[0][:200]}" if text else type(exc).__name__
-        raise InputError(path, f"the {what} could not be read ({detail}); check that it is valid") from exc
+        detail = (
+            f"{type(exc).__name__}: {text.splitlines()[0][:200]}"
+            if text
+            else type(exc).__name__
+        )
+        raise InputError(
+            path, f"the {what} could not be read ({detail}); check that it is valid"
+        ) from exc
 
 
 def check_tolerance(tolerance: float | None) -> float | None:
@@ -96,9 +106,13 @@ def check_tolerance(tolerance: float | None) -> float | None:
     try:
         tol = float(tolerance)
     except (TypeError, ValueError):
-        raise ParameterError(f"tolerance must be a positive number, got {tolerance!r}") from None
+        raise ParameterError(
+            f"tolerance must be a positive number, got {tolerance!r}"
+        ) from None
     if not math.isfinite(tol) or tol <= 0:
-        raise ParameterError(f"tolerance must be a positive finite number, got {tolerance!r}")
+        raise ParameterError(
+            f"tolerance must be a positive finite number, got {tolerance!r}"
+        )
     return tol
 
 
@@ -113,7 +127,9 @@ def read_input_bytes(path: str | Path, what: str = "file") -> bytes:
     try:
         exists, is_dir = p.exists(), p.is_dir()
     except (OSError, ValueError) as exc:
-        raise InputError(p, f"cannot access the {what} ({exc}); check the path") from None
+        raise InputError(
+            p, f"cannot access the {what} ({exc}); check the path"
+        ) from None
     if not exists:
         raise InputError(p, f"{what} not found; check the path")
     if is_dir:
@@ -122,19 +138,30 @@ def read_input_bytes(path: str | Path, what: str = "file") -> bytes:
         with open(p, "rb") as fh:
             data = fh.read(MAX_FILE_BYTES + 1)
     except OSError as exc:
-        raise InputError(p, f"the {what} cannot be read ({exc.strerror or exc}); check its permissions") from None
+        raise InputError(
+            p,
+            f"the {what} cannot be read ({exc.strerror or exc}); check its permissions",
+        ) from None
     if len(data) > MAX_FILE_BYTES:
-        raise InputError(p, f"the {what} is larger than {MAX_FILE_BYTES} bytes; simplify it")
+        raise InputError(
+            p, f"the {what} is larger than {MAX_FILE_BYTES} bytes; simplify it"
+        )
     if data[:2] == b"\x1f\x8b":
         try:
             with gzip.GzipFile(fileobj=io.BytesIO(data)) as gz:
                 data = gz.read(MAX_FILE_BYTES + 1)
         except (OSError, EOFError, zlib.error) as exc:
-            raise InputError(p, f"looks gzip-compressed but cannot be decompressed ({exc})") from None
+            raise InputError(
+                p, f"looks gzip-compressed but cannot be decompressed ({exc})"
+            ) from None
         if len(data) > MAX_FILE_BYTES:
-            raise InputError(p, f"decompresses to more than {MAX_FILE_BYTES} bytes; simplify it")
+            raise InputError(
+                p, f"decompresses to more than {MAX_FILE_BYTES} bytes; simplify it"
+            )
     if not data.strip():
-        raise InputError(p, f"the {what} is empty; give an SVG or .path file with geometry")
+        raise InputError(
+            p, f"the {what} is empty; give an SVG or .path file with geometry"
+        )
     return data
 
 
@@ -151,7 +178,10 @@ def sniff_kind(path: Path, data: bytes) -> str:
     first = head.split(b"\n", 1)[0].strip()
     if re.fullmatch(rb"[0-9]+", first):
         return "path"
-    raise InputError(path, "is neither an SVG nor a RepulsionPak .path file; give an .svg or .path file")
+    raise InputError(
+        path,
+        "is neither an SVG nor a RepulsionPak .path file; give an .svg or .path file",
+    )
 
 
 # --------------------------------------------------------------------------- regions
@@ -180,11 +210,26 @@ def polygon_parts(geom) -> shapely.Geometry:
         return shapely.Polygon()
     if isinstance(geom, (shapely.Polygon, shapely.MultiPolygon)):
         return geom
-    parts = [g for g in shapely.get_parts(geom) if isinstance(g, (shapely.Polygon, shapely.MultiPolygon)) and not g.is_empty]
+    parts = [
+        g
+        for g in shapely.get_parts(geom)
+        if isinstance(g, (shapely.Polygon, shapely.MultiPolygon)) and not g.is_empty
+    ]
     return shapely.union_all(parts) if parts else shapely.Polygon()
 
 
-def rings_to_region(rings: list[np.ndarray], fill_rule: str = "nonzero") -> shapely.Geometry:
+#: Work limits of :func:`rings_to_region` for pathological (heavily self-intersecting) input.
+MAX_REGION_FACES = 20_000
+MAX_REGION_WORK = 400_000_000
+
+
+class RegionTooComplex(ValueError):
+    """Raised by :func:`rings_to_region` when the outline has too many self-intersections."""
+
+
+def rings_to_region(
+    rings: list[np.ndarray], fill_rule: str = "nonzero", path=None
+) -> shapely.Geometry:
     """The area an SVG renderer fills for the closed subpaths ``rings`` under ``fill_rule``.
 
     ``rings``: list of (K_i, 2) arrays, each implicitly closed (no repeated closing
@@ -192,7 +237,9 @@ def rings_to_region(rings: list[np.ndarray], fill_rule: str = "nonzero") -> shap
     and self-intersecting rings: the linework is noded and every face of the
     arrangement is classified by the winding number of an interior point
     (``"nonzero"``: w != 0, ``"evenodd"``: w odd). Returns a valid Polygon or
-    MultiPolygon (empty if nothing is filled).
+    MultiPolygon (empty if nothing is filled). Outlines whose arrangement has more
+    than :data:`MAX_REGION_FACES` faces raise InputError naming ``path`` (or
+    :class:`RegionTooComplex` when ``path`` is None).
     """
     rings = [np.asarray(r, dtype=float) for r in rings if len(r) >= 3]
     if not rings:
@@ -203,7 +250,19 @@ def rings_to_region(rings: list[np.ndarray], fill_rule: str = "nonzero") -> shap
             return poly if poly.area > 0 else shapely.Polygon()
     lines = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings]
     noded = shapely.union_all(lines)
-    faces = [f for f in shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if f.area > 0]
+    faces = [
+        f
+        for f in shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+        if f.area > 0
+    ]
+    n_edges = sum(len(r) for r in rings)
+    if len(faces) > MAX_REGION_FACES or len(faces) * n_edges > MAX_REGION_WORK:
+        msg = (
+            f"an outline intersects itself too often ({len(faces)} faces); simplify it"
+        )
+        if path is not None:
+            raise InputError(path, msg)
+        raise RegionTooComplex(msg)
     if not faces:
         return shapely.Polygon()
     faces_arr = np.empty(len(faces), dtype=object)
@@ -234,12 +293,20 @@ def finalize_region(path, region, what: str = "container") -> shapely.Geometry:
     """Validate a container region: polygonal, valid (make_valid + warning), area > 0."""
     region = polygon_parts(region)
     if not region.is_valid:
-        warn(path, f"the {what} outline is not a valid polygon (self-intersections?); repaired with make_valid")
+        warn(
+            path,
+            f"the {what} outline is not a valid polygon (self-intersections?); repaired with make_valid",
+        )
         region = polygon_parts(shapely.make_valid(region))
     if region.is_empty or not region.area > 0:
-        raise InputError(path, f"the {what} has zero area; it needs at least one closed shape enclosing an area")
+        raise InputError(
+            path,
+            f"the {what} has zero area; it needs at least one closed shape enclosing an area",
+        )
     if not np.all(np.isfinite(region.bounds)):
-        raise InputError(path, f"the {what} has non-finite coordinates (NaN or infinity)")
+        raise InputError(
+            path, f"the {what} has non-finite coordinates (NaN or infinity)"
+        )
     return region
 
 
@@ -258,28 +325,45 @@ def parse_xml_hardened(path: str | Path, data: bytes) -> ET.Element:
     from defusedxml import DTDForbidden, EntitiesForbidden, ExternalReferenceForbidden
 
     try:
-        root = DET.fromstring(data, forbid_dtd=False, forbid_entities=True, forbid_external=True)
+        root = DET.fromstring(
+            data, forbid_dtd=False, forbid_entities=True, forbid_external=True
+        )
     except EntitiesForbidden:
-        raise InputError(path, "declares XML entities, which are not allowed (possible entity-expansion attack); remove the <!ENTITY> declarations") from None
+        raise InputError(
+            path,
+            "declares XML entities, which are not allowed (possible entity-expansion attack); remove the <!ENTITY> declarations",
+        ) from None
     except (ExternalReferenceForbidden, DTDForbidden):
-        raise InputError(path, "references external XML resources, which are not allowed; remove them") from None
+        raise InputError(
+            path,
+            "references external XML resources, which are not allowed; remove them",
+        ) from None
     except ET.ParseError as exc:
         pos = getattr(exc, "position", None)
         where = f" at line {pos[0]}, column {pos[1]}" if pos else ""
         reason = re.sub(r":\s*line \d+, column \d+\s*$", "", str(exc))
-        raise InputError(path, f"is not well-formed XML{where} ({reason}); the file may be truncated or not an SVG") from None
+        raise InputError(
+            path,
+            f"is not well-formed XML{where} ({reason}); the file may be truncated or not an SVG",
+        ) from None
     except (ValueError, UnicodeError, TypeError) as exc:
         raise InputError(path, f"is not readable XML ({exc}); check the file") from None
     if _local(root.tag) != "svg":
-        raise InputError(path, f"root element is <{_local(root.tag) or root.tag}>, not <svg>; give an SVG file")
+        raise InputError(
+            path,
+            f"root element is <{_local(root.tag) or root.tag}>, not <svg>; give an SVG file",
+        )
     if root.tag.startswith("{") and not root.tag.startswith("{" + SVG_NS + "}"):
         ns = root.tag[1:].split("}", 1)[0]
-        raise InputError(path, f"root <svg> is in namespace {ns!r}, not the SVG namespace {SVG_NS!r}; give an SVG file")
+        raise InputError(
+            path,
+            f"root <svg> is in namespace {ns!r}, not the SVG namespace {SVG_NS!r}; give an SVG file",
+        )
     return root
 
 
 def _href(el: ET.Element) -> str | None:
-    return el.get("{%s}href" % XLINK_NS) or el.get("href")
+    return el.get(f"{{{XLINK_NS}}}href") or el.get("href")
 
 
 def _check_tree(path, root: ET.Element) -> None:
@@ -289,7 +373,10 @@ def _check_tree(path, root: ET.Element) -> None:
     while stack:
         el, depth = stack.pop()
         if depth > MAX_DEPTH:
-            raise InputError(path, f"elements are nested more than {MAX_DEPTH} levels deep; flatten the groups")
+            raise InputError(
+                path,
+                f"elements are nested more than {MAX_DEPTH} levels deep; flatten the groups",
+            )
         i = el.get("id")
         if i is not None and i not in ids:
             ids[i] = el
@@ -303,9 +390,14 @@ def _check_tree(path, root: ET.Element) -> None:
         if key in memo:
             return memo[key]
         if key in visiting:
-            raise InputError(path, "a <use> element references itself (directly or through its ancestors); remove the cycle")
+            raise InputError(
+                path,
+                "a <use> element references itself (directly or through its ancestors); remove the cycle",
+            )
         if level > 4 * MAX_DEPTH:
-            raise InputError(path, "<use> references are chained too deeply; simplify the file")
+            raise InputError(
+                path, "<use> references are chained too deeply; simplify the file"
+            )
         visiting.add(key)
         nodes = 1
         chars = len(el.get("d") or "") + len(el.get("points") or "")
@@ -321,9 +413,15 @@ def _check_tree(path, root: ET.Element) -> None:
                 chars += ch
         visiting.discard(key)
         if nodes > MAX_EXPANDED_NODES:
-            raise InputError(path, f"expands to more than {MAX_EXPANDED_NODES} elements once <use> references are inlined; simplify it")
+            raise InputError(
+                path,
+                f"expands to more than {MAX_EXPANDED_NODES} elements once <use> references are inlined; simplify it",
+            )
         if chars > MAX_PATH_DATA_CHARS:
-            raise InputError(path, f"has more than {MAX_PATH_DATA_CHARS} characters of path data; simplify it")
+            raise InputError(
+                path,
+                f"has more than {MAX_PATH_DATA_CHARS} characters of path data; simplify it",
+            )
         memo[key] = (nodes, chars)
         return nodes, chars
 
@@ -361,7 +459,7 @@ def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
             notes.add("foreignObject")
     _nested_svgs_to_groups(root)
     if to_move:
-        defs = ET.SubElement(root, "{%s}defs" % SVG_NS)
+        defs = ET.SubElement(root, f"{{{SVG_NS}}}defs")
         for el in to_move:
             p = parent.get(el)
             # a moved element may live inside another moved element: only move the outermost
@@ -393,7 +491,14 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
 
     rvb = (root.get("viewBox") or "").replace(",", " ").split()
     try:
-        ref_w, ref_h = (float(rvb[2]), float(rvb[3])) if len(rvb) == 4 else (_length(root.get("width", "100"), 100), _length(root.get("height", "100"), 100))
+        ref_w, ref_h = (
+            (float(rvb[2]), float(rvb[3]))
+            if len(rvb) == 4
+            else (
+                _length(root.get("width", "100"), 100),
+                _length(root.get("height", "100"), 100),
+            )
+        )
     except ValueError:
         ref_w = ref_h = 100.0
     for el in [e for e in root.iter() if e is not root and _local(e.tag) == "svg"]:
@@ -407,22 +512,28 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
             try:
                 vbx, vby, vbw, vbh = (float(v) for v in vb)
                 if vbw > 0 and vbh > 0 and w > 0 and h > 0:
-                    tf = se.Viewbox.viewbox_transform(x, y, w, h, vbx, vby, vbw, vbh, el.get("preserveAspectRatio"))
+                    tf = se.Viewbox.viewbox_transform(
+                        x, y, w, h, vbx, vby, vbw, vbh, el.get("preserveAspectRatio")
+                    )
             except ValueError:
                 pass
         for k in ("x", "y", "width", "height", "viewBox", "preserveAspectRatio"):
             el.attrib.pop(k, None)
         own_tf = el.get("transform")
         el.set("transform", f"{own_tf} {tf}" if own_tf else tf)
-        el.tag = "{%s}g" % SVG_NS if el.tag.startswith("{") else "g"
+        el.tag = f"{{{SVG_NS}}}g" if el.tag.startswith("{") else "g"
 
 
 def _gradient_colours(root: ET.Element) -> dict[str, str]:
     """id -> colour of the first stop of each gradient (following href templates)."""
-    grads = {el.get("id"): el for el in root.iter() if _local(el.tag) in ("linearGradient", "radialGradient") and el.get("id")}
+    grads = {
+        el.get("id"): el
+        for el in root.iter()
+        if _local(el.tag) in ("linearGradient", "radialGradient") and el.get("id")
+    }
     out: dict[str, str] = {}
-    for gid in grads:
-        el, seen = grads[gid], set()
+    for gid, start in grads.items():
+        el, seen = start, set()
         while el is not None and id(el) not in seen:
             seen.add(id(el))
             stops = [s for s in el if _local(s.tag) == "stop"]
@@ -506,7 +617,7 @@ def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None,
     if not s or s.lower() == "none":
         return None, 1.0
     if s.lower().startswith("url("):
-        m = re.match(r"url\(\s*['\"]?#([^)'\"]+)['\"]?\s*\)\s*(.*)$", s, re.I)
+        m = re.match(r"url\(\s*['\"]?#([^)'\"]+)['\"]?\s*\)\s*(.*)$", s, re.IGNORECASE)
         fallback = m.group(2).strip() if m else ""
         if m and m.group(1) in gradients:
             notes.add("gradient (drawn with its first stop colour)")
@@ -524,7 +635,9 @@ def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None,
     return c.hexrgb.lower(), c.alpha / 255.0
 
 
-def _style_of(shape, opacity: float, det_scale: float, vp_scale: float, gradients, notes) -> Style:
+def _style_of(
+    shape, opacity: float, det_scale: float, vp_scale: float, gradients, notes
+) -> Style:
     values = shape.values
     fill, fill_alpha = _paint(values.get("fill", "black"), gradients, notes)
     stroke, stroke_alpha = _paint(values.get("stroke", "none"), gradients, notes)
@@ -550,8 +663,12 @@ def _style_of(shape, opacity: float, det_scale: float, vp_scale: float, gradient
         stroke=stroke,
         stroke_width=sw,
         opacity=_clamp01(opacity),
-        fill_opacity=_clamp01(_float_attr(values.get("fill-opacity"), 1.0) * fill_alpha),
-        stroke_opacity=_clamp01(_float_attr(values.get("stroke-opacity"), 1.0) * stroke_alpha),
+        fill_opacity=_clamp01(
+            _float_attr(values.get("fill-opacity"), 1.0) * fill_alpha
+        ),
+        stroke_opacity=_clamp01(
+            _float_attr(values.get("stroke-opacity"), 1.0) * stroke_alpha
+        ),
         fill_rule="evenodd" if rule == "evenodd" else "nonzero",
         stroke_linecap=cap if cap in ("butt", "round", "square") else "butt",
         stroke_linejoin=join if join in ("miter", "round", "bevel") else "miter",
@@ -571,14 +688,23 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     notes: set[str] = set()
     _sanitize(path, root_xml, notes)
     gradients = _gradient_colours(root_xml)
-    svg_root = {k: root_xml.get(k) for k in ("width", "height", "viewBox") if root_xml.get(k) is not None}
+    svg_root = {
+        k: root_xml.get(k)
+        for k in ("width", "height", "viewBox")
+        if root_xml.get(k) is not None
+    }
     root_attrs = {k: v for k, v in root_xml.attrib.items()}
     meta_el = next((c for c in root_xml if _local(c.tag) == "metadata"), None)
     metadata_text = meta_el.text if meta_el is not None else None
     for k in ("width", "height"):
         v = root_xml.get(k)
-        if v is not None and re.fullmatch(r"\s*[-+]?(0+(\.0*)?|\.0+)\s*[a-z%]*\s*", v, re.I):
-            raise InputError(path, f"the root <svg> has {k}=\"{v}\", so nothing is rendered; give it a positive size")
+        if v is not None and re.fullmatch(
+            r"\s*[-+]?(0+(\.0*)?|\.0+)\s*[a-z%]*\s*", v, re.IGNORECASE
+        ):
+            raise InputError(
+                path,
+                f'the root <svg> has {k}="{v}", so nothing is rendered; give it a positive size',
+            )
     clean = ET.tostring(root_xml, encoding="utf-8")
 
     doc = se.SVG.parse(io.BytesIO(clean), reify=False, on_error="ignore")
@@ -587,8 +713,21 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     root_tf = doc.values.get("transform") or ""
     vb = doc.viewbox_transform if doc.viewbox is not None else ""
     viewport = se.Matrix(f"{root_tf} {vb}".strip())
-    if abs(viewport.determinant) == 0 or not all(math.isfinite(v) for v in (viewport.a, viewport.b, viewport.c, viewport.d, viewport.e, viewport.f)):
-        raise InputError(path, "the root viewBox/size is degenerate (zero or non-finite); fix width, height and viewBox")
+    if abs(viewport.determinant) == 0 or not all(
+        math.isfinite(v)
+        for v in (
+            viewport.a,
+            viewport.b,
+            viewport.c,
+            viewport.d,
+            viewport.e,
+            viewport.f,
+        )
+    ):
+        raise InputError(
+            path,
+            "the root viewBox/size is degenerate (zero or non-finite); fix width, height and viewBox",
+        )
     inv_viewport = ~viewport
     vp_scale = math.sqrt(abs(viewport.determinant))
 
@@ -609,11 +748,15 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                     notes.add("clip-path/mask (ignored, shape drawn unclipped)")
                 m = child.transform * inv_viewport
                 mat = _matrix_to_np(m)
-                det_scale = math.sqrt(abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0]))
+                det_scale = math.sqrt(
+                    abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0])
+                )
                 op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
                 style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
                 segs = list(child.segments(transformed=False))
-                shapes.append(SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups))
+                shapes.append(
+                    SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups)
+                )
             elif isinstance(child, (se.Group, se.Use)):
                 attrs = own(child)
                 if "filter" in attrs:
@@ -627,7 +770,8 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
             elif isinstance(child, se.Image):
                 notes.add("image")
 
-    walk(doc, 1.0, False, ())
+    root_own = own(doc)
+    walk(doc, _clamp01(_float_attr(root_own.get("opacity"), 1.0)), False, ())
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
     return SvgDocument(shapes, svg_root, root_attrs, metadata_text)
@@ -663,8 +807,16 @@ def _control_points(seg) -> list:
     import svgelements as se
 
     if isinstance(seg, se.Arc):
-        c, u, v = np.array(_pt(seg.center)), np.array(_pt(seg.prx)) - np.array(_pt(seg.center)), np.array(_pt(seg.pry)) - np.array(_pt(seg.center))
-        return [_pt(seg.start), _pt(seg.end), *(c + su * u + sv * v for su in (-1, 1) for sv in (-1, 1))]
+        c, u, v = (
+            np.array(_pt(seg.center)),
+            np.array(_pt(seg.prx)) - np.array(_pt(seg.center)),
+            np.array(_pt(seg.pry)) - np.array(_pt(seg.center)),
+        )
+        return [
+            _pt(seg.start),
+            _pt(seg.end),
+            *(c + su * u + sv * v for su in (-1, 1) for sv in (-1, 1)),
+        ]
     pts = []
     for name in ("start", "control", "control1", "control2", "end"):
         p = getattr(seg, name, None)
@@ -696,7 +848,9 @@ def default_tolerance(bounds) -> float:
     return 1e-3 * diag if diag > 0 and math.isfinite(diag) else 1e-9
 
 
-def flatten_shape(path, sh: SvgShape, tol: float, budget: PointBudget) -> list[tuple[np.ndarray, bool]]:
+def flatten_shape(
+    path, sh: SvgShape, tol: float, budget: PointBudget
+) -> list[tuple[np.ndarray, bool]]:
     """Flatten one shape into (K, 2) polylines in user units with chord error <= ``tol``.
 
     Béziers are sampled uniformly in t with n = ceil(sqrt(max|B''| / (8 tol))) pieces
@@ -721,7 +875,10 @@ def flatten_shape(path, sh: SvgShape, tol: float, budget: PointBudget) -> list[t
         cur = None
         pts = local @ L.T + t
         if not np.all(np.isfinite(pts)):
-            raise InputError(path, "has non-finite coordinates (NaN or infinity); check the path data and transforms")
+            raise InputError(
+                path,
+                "has non-finite coordinates (NaN or infinity); check the path data and transforms",
+            )
         pts = clean_points(pts, closed, eps)
         if len(pts) >= 2:
             out.append((pts, closed))
@@ -751,12 +908,17 @@ def flatten_shape(path, sh: SvgShape, tol: float, budget: PointBudget) -> list[t
                 d = (P[0] - 2 * P[1] + P[2]) @ L.T
                 bound = 2.0 * float(np.hypot(*d))
             else:
-                P = np.array([_pt(seg.start), _pt(seg.control1), _pt(seg.control2), _pt(seg.end)])
+                P = np.array(
+                    [_pt(seg.start), _pt(seg.control1), _pt(seg.control2), _pt(seg.end)]
+                )
                 d1 = (P[0] - 2 * P[1] + P[2]) @ L.T
                 d2 = (P[1] - 2 * P[2] + P[3]) @ L.T
                 bound = 6.0 * max(float(np.hypot(*d1)), float(np.hypot(*d2)))
             if not np.all(np.isfinite(P)) or not math.isfinite(bound):
-                raise InputError(path, "has non-finite coordinates (NaN or infinity); check the path data")
+                raise InputError(
+                    path,
+                    "has non-finite coordinates (NaN or infinity); check the path data",
+                )
             n = max(1, math.ceil(math.sqrt(bound / (8.0 * tol)))) if bound > 0 else 1
             n = budget.take(n)
             s = np.linspace(0.0, 1.0, n + 1)[1:, None]
@@ -764,12 +926,22 @@ def flatten_shape(path, sh: SvgShape, tol: float, budget: PointBudget) -> list[t
             if len(P) == 3:
                 pts = r * r * P[0] + 2 * r * s * P[1] + s * s * P[2]
             else:
-                pts = r**3 * P[0] + 3 * r * r * s * P[1] + 3 * r * s * s * P[2] + s**3 * P[3]
+                pts = (
+                    r**3 * P[0]
+                    + 3 * r * r * s * P[1]
+                    + 3 * r * s * s * P[2]
+                    + s**3 * P[3]
+                )
             pts[-1] = P[-1]
             cur.append(pts)
         elif isinstance(seg, se.Arc):
             end = np.array([_pt(seg.end)])
-            if seg.center is None or seg.prx is None or seg.pry is None or not seg.sweep:
+            if (
+                seg.center is None
+                or seg.prx is None
+                or seg.pry is None
+                or not seg.sweep
+            ):
                 cur.append(end)
                 budget.take(1)
                 continue
@@ -779,14 +951,19 @@ def flatten_shape(path, sh: SvgShape, tol: float, budget: PointBudget) -> list[t
             K = math.sqrt(float(u @ u + v @ v))
             sweep = abs(float(seg.sweep))
             if not (math.isfinite(K) and math.isfinite(sweep)):
-                raise InputError(path, "has non-finite coordinates (NaN or infinity); check the path data")
+                raise InputError(
+                    path,
+                    "has non-finite coordinates (NaN or infinity); check the path data",
+                )
             if K == 0 or seg.rx == 0 or seg.ry == 0:
                 cur.append(end)
                 budget.take(1)
                 continue
             n = max(1, math.ceil(sweep * math.sqrt(K / (8.0 * tol))))
             n = budget.take(n)
-            pts = np.asarray(seg.npoint(np.linspace(0.0, 1.0, n + 1)[1:]), dtype=float).reshape(-1, 2)
+            pts = np.asarray(
+                seg.npoint(np.linspace(0.0, 1.0, n + 1)[1:]), dtype=float
+            ).reshape(-1, 2)
             pts[-1] = end[0]
             cur.append(pts)
         else:  # unknown segment type: keep its end point
@@ -802,19 +979,28 @@ def flatten_shape(path, sh: SvgShape, tol: float, budget: PointBudget) -> list[t
 def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
     doc = parse_svg_shapes(path, data)
     shapes = [s for s in doc.shapes if s.style.visible]
-    tol = tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
+    tol = (
+        tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
+    )
     budget = PointBudget(path)
     arts = []
     for sh in shapes:
         subs = flatten_shape(path, sh, tol, budget)
         if subs:
-            arts.append(ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style))
+            arts.append(
+                ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style)
+            )
     if not arts:
-        raise InputError(path, "has no visible geometry (no filled or stroked shape); an element needs at least one visible path")
+        raise InputError(
+            path,
+            "has no visible geometry (no filled or stroked shape); an element needs at least one visible path",
+        )
     return Element(name=path.stem, source=path.name, paths=tuple(arts))
 
 
-def container_from_shapes(path, shapes: list[SvgShape], tol: float, budget: PointBudget, svg_root: dict) -> Container:
+def container_from_shapes(
+    path, shapes: list[SvgShape], tol: float, budget: PointBudget, svg_root: dict
+) -> Container:
     """Build a Container from visible SVG shapes (closed subpaths only; holes subtracted)."""
     outer, holes, arts = [], [], []
     n_open = 0
@@ -831,29 +1017,49 @@ def container_from_shapes(path, shapes: list[SvgShape], tol: float, budget: Poin
                 rings.append(pts)
         if not rings:
             continue
-        geom = rings_to_region(rings, sh.style.fill_rule)
+        geom = rings_to_region(rings, sh.style.fill_rule, path)
         (holes if sh.hole else outer).append(geom)
         arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), sh.style))
     if n_open:
-        warn(path, f"ignored {n_open} open subpath(s) of the container (first point != last point); close them with Z to use them")
+        warn(
+            path,
+            f"ignored {n_open} open subpath(s) of the container (first point != last point); close them with Z to use them",
+        )
     if not arts:
-        raise InputError(path, "has no closed path; a container needs at least one closed outline")
+        raise InputError(
+            path, "has no closed path; a container needs at least one closed outline"
+        )
     region = shapely.union_all(outer) if outer else shapely.Polygon()
     if holes:
         hole_region = shapely.union_all(holes)
         if region.is_empty:
-            raise InputError(path, "has only hole shapes and no outer outline; mark at least one shape as the container")
-        if not hole_region.difference(region).area <= 1e-9 * max(hole_region.area, 1e-300):
-            warn(path, "a hole shape is not entirely inside the container outline; only its overlap is removed")
+            raise InputError(
+                path,
+                "has only hole shapes and no outer outline; mark at least one shape as the container",
+            )
+        if not hole_region.difference(region).area <= 1e-9 * max(
+            hole_region.area, 1e-300
+        ):
+            warn(
+                path,
+                "a hole shape is not entirely inside the container outline; only its overlap is removed",
+            )
         region = region.difference(hole_region)
     region = finalize_region(path, region)
-    return Container(source=Path(str(path)).name, region=region, paths=tuple(arts), svg_root=dict(svg_root))
+    return Container(
+        source=Path(str(path)).name,
+        region=region,
+        paths=tuple(arts),
+        svg_root=dict(svg_root),
+    )
 
 
 def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Container:
     doc = parse_svg_shapes(path, data)
     shapes = [s for s in doc.shapes if s.style.visible]
-    tol = tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
+    tol = (
+        tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
+    )
     return container_from_shapes(path, shapes, tol, PointBudget(path), doc.svg_root)
 
 
@@ -906,18 +1112,31 @@ def load_elements(paths, tolerance: float | None = None) -> list[Element]:
         if p.is_dir():
             try:
                 found = sorted(
-                    (c for c in p.iterdir() if c.is_file() and c.suffix.lower() in _ELEMENT_SUFFIXES),
+                    (
+                        c
+                        for c in p.iterdir()
+                        if c.is_file() and c.suffix.lower() in _ELEMENT_SUFFIXES
+                    ),
                     key=lambda c: c.name,
                 )
             except OSError as exc:
-                raise InputError(p, f"cannot list the directory ({exc.strerror or exc}); check its permissions") from None
+                raise InputError(
+                    p,
+                    f"cannot list the directory ({exc.strerror or exc}); check its permissions",
+                ) from None
             if not found:
-                raise InputError(p, "directory contains no .svg or .path element file; put element files in it or name the files directly")
+                raise InputError(
+                    p,
+                    "directory contains no .svg or .path element file; put element files in it or name the files directly",
+                )
             files.extend(found)
         else:
             files.append(p)
     if not files:
-        raise InputError(None, "no element file given; give at least one .svg or .path file or a directory of them")
+        raise InputError(
+            None,
+            "no element file given; give at least one .svg or .path file or a directory of them",
+        )
     seen: set[str] = set()
     out = []
     for f in files:

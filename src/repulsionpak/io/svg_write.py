@@ -49,7 +49,13 @@ from .svg_read import (
     shape_bounds,
 )
 
-__all__ = ["write_packing_svg", "packing_svg_string", "read_packing_svg", "atomic_write_bytes", "format_number"]
+__all__ = [
+    "atomic_write_bytes",
+    "format_number",
+    "packing_svg_string",
+    "read_packing_svg",
+    "write_packing_svg",
+]
 
 SVG_NS = "http://www.w3.org/2000/svg"
 _DEFAULT_STYLE = Style()
@@ -65,7 +71,9 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> None:
     p = Path(path)
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
-        raise OutputError(f"{p}: the output directory {parent} does not exist; create it first")
+        raise OutputError(
+            f"{p}: the output directory {parent} does not exist; create it first"
+        )
     if p.is_dir():
         raise OutputError(f"{p}: is a directory; give a file name for the output")
     tmp_name = None
@@ -78,7 +86,9 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> None:
         os.replace(tmp_name, p)
         tmp_name = None
     except OSError as exc:
-        raise OutputError(f"{p}: cannot write the output ({exc.strerror or exc}); check the directory permissions") from None
+        raise OutputError(
+            f"{p}: cannot write the output ({exc.strerror or exc}); check the directory permissions"
+        ) from None
     finally:
         if tmp_name is not None:
             try:
@@ -132,7 +142,9 @@ def _path_d(subpaths, closed) -> str:
 def _check_finite(path, subpaths, what: str) -> None:
     for pts in subpaths:
         if not np.all(np.isfinite(np.asarray(pts, dtype=float))):
-            raise OutputError(f"{path}: {what} has non-finite coordinates (NaN or infinity); nothing was written")
+            raise OutputError(
+                f"{path}: {what} has non-finite coordinates (NaN or infinity); nothing was written"
+            )
 
 
 def _style_attrs(style: Style, stroke_scale: float = 1.0) -> list[tuple[str, str]]:
@@ -204,7 +216,11 @@ def _json_safe(obj):
 def _view(container: Container) -> list[tuple[str, str]]:
     root = dict(container.svg_root or {})
     out = []
-    if root.get("viewBox") is None and root.get("width") is None and root.get("height") is None:
+    if (
+        root.get("viewBox") is None
+        and root.get("width") is None
+        and root.get("height") is None
+    ):
         x0, y0, x1, y1 = container.bounds
         w, h = x1 - x0, y1 - y0
         m = 0.02 * max(w, h) if max(w, h) > 0 else 1.0
@@ -238,17 +254,21 @@ def packing_svg_string(
         name = str(key)
         name = name if name.startswith("data-") else f"data-{name}"
         if not _NAME_RE.match(name) or name in ("data-gap", "data-partial"):
-            raise ValueError(f"attrs key {key!r} cannot be written as an SVG data-* attribute")
+            raise ValueError(
+                f"attrs key {key!r} cannot be written as an SVG data-* attribute"
+            )
         root_attrs.append((name, str(value)))
-    lines = ["<?xml version=\"1.0\" encoding=\"UTF-8\"?>", f"<svg{_attrs(root_attrs)}>"]
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>', f"<svg{_attrs(root_attrs)}>"]
 
     meta = {"partial": bool(partial)}
     meta.update(_json_safe(dict(metadata or {})))
     meta["partial"] = bool(partial)
-    lines.append(f"  <metadata>{escape(json.dumps(meta, sort_keys=True, separators=(', ', ': ')))}</metadata>")
+    lines.append(
+        f"  <metadata>{escape(json.dumps(meta, sort_keys=True, separators=(', ', ': ')))}</metadata>"
+    )
 
     # container
-    lines.append(f"  <g id=\"container\"{_attrs([('data-source', container.source)])}>")
+    lines.append(f'  <g id="container"{_attrs([("data-source", container.source)])}>')
     x0, y0, x1, y1 = container.bounds
     diag = math.hypot(x1 - x0, y1 - y0) or 1.0
     for art in container.paths:
@@ -260,17 +280,23 @@ def packing_svg_string(
     _check_finite(path, rings, "the container region")
     region_d = _path_d(rings, closed)
     if not container.paths and region_d:
-        lines.append(f"    <path fill=\"none\" stroke=\"#000000\" stroke-width=\"{_fmt_g(diag / 1000)}\" fill-rule=\"evenodd\" d={quoteattr(region_d)}/>")
+        lines.append(
+            f'    <path class="container-outline" fill="none" stroke="#000000" stroke-width="{_fmt_g(diag / 1000)}" fill-rule="evenodd" d={quoteattr(region_d)}/>'
+        )
     if region_d:
-        lines.append(f"    <path class=\"container-region\" fill=\"none\" stroke=\"none\" fill-rule=\"evenodd\" d={quoteattr(region_d)}/>")
+        lines.append(
+            f'    <path class="container-region" fill="none" stroke="none" fill-rule="evenodd" d={quoteattr(region_d)}/>'
+        )
     lines.append("  </g>")
 
     # elements
-    lines.append("  <g id=\"elements\">")
+    lines.append('  <g id="elements">')
     for pa in placed:
         kind = str(pa.kind)
         if kind not in ("primary", "secondary"):
-            raise ValueError(f"PlacedArt.kind must be 'primary' or 'secondary', got {kind!r}")
+            raise ValueError(
+                f"PlacedArt.kind must be 'primary' or 'secondary', got {kind!r}"
+            )
         g = [("class", f"element {kind}"), ("data-source", pa.source)]
         if pa.deformation is not None:
             g.append(("data-deformation", repr(float(pa.deformation))))
@@ -286,12 +312,14 @@ def packing_svg_string(
     # debug layers
     for name, polys in (debug_layers or {}).items():
         safe = re.sub(r"[^A-Za-z0-9_.-]", "_", str(name))
-        lines.append(f"  <g id={quoteattr('debug-' + safe)} style=\"display:none\">")
+        lines.append(f'  <g id={quoteattr("debug-" + safe)} style="display:none">')
         arrays = [np.asarray(p, dtype=float).reshape(-1, 2) for p in polys]
         arrays = [a for a in arrays if len(a) >= 2 and np.all(np.isfinite(a))]
         if arrays:
             d = _path_d(arrays, [len(a) >= 3 for a in arrays])
-            lines.append(f"    <path fill=\"none\" stroke=\"#0077ff\" stroke-width=\"{_fmt_g(diag / 2000)}\" d={quoteattr(d)}/>")
+            lines.append(
+                f'    <path fill="none" stroke="#0077ff" stroke-width="{_fmt_g(diag / 2000)}" d={quoteattr(d)}/>'
+            )
         lines.append("  </g>")
     lines.append("</svg>")
     return "\n".join(lines) + "\n"
@@ -315,7 +343,9 @@ def write_packing_svg(
     ``metadata`` is stored as JSON in ``<metadata>``. Raises OutputError if the
     directory does not exist or the file cannot be written.
     """
-    text = packing_svg_string(container, placed, gap, attrs, debug_layers, partial, metadata, path=path)
+    text = packing_svg_string(
+        container, placed, gap, attrs, debug_layers, partial, metadata, path=path
+    )
     atomic_write_bytes(path, text.encode("utf-8"))
 
 
@@ -347,7 +377,10 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
             try:
                 info["gap"] = float(info["gap"])
             except ValueError:
-                raise InputError(p, f"data-gap={info['gap']!r} is not a number; fix it or pass the gap explicitly") from None
+                raise InputError(
+                    p,
+                    f"data-gap={info['gap']!r} is not a number; fix it or pass the gap explicitly",
+                ) from None
         else:
             info["gap"] = None
         meta = None
@@ -360,7 +393,9 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
         if "partial" in info:
             info["partial"] = str(info["partial"]).strip().lower() == "true"
         else:
-            info["partial"] = bool(meta.get("partial", False)) if isinstance(meta, dict) else False
+            info["partial"] = (
+                bool(meta.get("partial", False)) if isinstance(meta, dict) else False
+            )
 
         container_shapes, region_shapes = [], []
         container_attrs = None
@@ -369,39 +404,67 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
             cont = next((g for g in sh.groups if g.get("id") == "container"), None)
             if cont is not None:
                 container_attrs = cont
-                if "container-region" in _classes(sh.attrs):
+                classes = _classes(sh.attrs)
+                if "container-region" in classes:
                     region_shapes.append(sh)
-                elif sh.style.visible:
+                elif sh.style.visible and "container-outline" not in classes:
                     container_shapes.append(sh)
                 continue
             grp = next(
-                (g for g in reversed(sh.groups) if "element" in _classes(g) and _classes(g) & {"primary", "secondary"}),
+                (
+                    g
+                    for g in reversed(sh.groups)
+                    if "element" in _classes(g)
+                    and _classes(g) & {"primary", "secondary"}
+                ),
                 None,
             )
             if grp is None or not sh.style.visible:
                 continue
             groups.setdefault(id(grp), (grp, []))[1].append(sh)
         if container_attrs is None:
-            raise InputError(p, 'has no <g id="container">; it is not a packing written by repulsionpak')
+            raise InputError(
+                p,
+                'has no <g id="container">; it is not a packing written by repulsionpak',
+            )
 
-        everything = container_shapes + region_shapes + [s for _, shs in groups.values() for s in shs]
+        everything = (
+            container_shapes
+            + region_shapes
+            + [s for _, shs in groups.values() for s in shs]
+        )
         tol = default_tolerance(shape_bounds(everything))
         budget = PointBudget(p, limit=10 * svg_read.MAX_POINTS)
         source = container_attrs.get("data-source") or p.name
         if region_shapes:
             rings = []
             for sh in region_shapes:
-                rings.extend(pts for pts, _ in flatten_shape(p, sh, tol, budget) if len(pts) >= 3)
-            region = finalize_region(p, rings_to_region(rings, "evenodd"))
+                rings.extend(
+                    pts for pts, _ in flatten_shape(p, sh, tol, budget) if len(pts) >= 3
+                )
+            region = finalize_region(p, rings_to_region(rings, "evenodd", p))
             arts = []
             for sh in container_shapes:
                 subs = flatten_shape(p, sh, tol, budget)
                 if subs:
-                    arts.append(ArtPath(tuple(q for q, _ in subs), tuple(c for _, c in subs), sh.style))
-            container = Container(source=source, region=region, paths=tuple(arts), svg_root=dict(doc.svg_root))
+                    arts.append(
+                        ArtPath(
+                            tuple(q for q, _ in subs),
+                            tuple(c for _, c in subs),
+                            sh.style,
+                        )
+                    )
+            container = Container(
+                source=source,
+                region=region,
+                paths=tuple(arts),
+                svg_root=dict(doc.svg_root),
+            )
         else:
             c = container_from_shapes(p, container_shapes, tol, budget, doc.svg_root)
-            container = Container(source=source, region=c.region, paths=c.paths, svg_root=c.svg_root)
+            container = Container(
+                source=source, region=c.region, paths=c.paths, svg_root=c.svg_root
+            )
 
         placed = []
         for grp, shapes in groups.values():
@@ -411,7 +474,13 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
             for sh in shapes:
                 subs = flatten_shape(p, sh, tol, budget)
                 if subs:
-                    arts.append(ArtPath(tuple(q for q, _ in subs), tuple(c for _, c in subs), sh.style))
+                    arts.append(
+                        ArtPath(
+                            tuple(q for q, _ in subs),
+                            tuple(c for _, c in subs),
+                            sh.style,
+                        )
+                    )
             deformation = grp.get("data-deformation")
             try:
                 deformation = float(deformation) if deformation is not None else None

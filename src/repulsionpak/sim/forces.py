@@ -219,12 +219,15 @@ def _field_sample(values, ox, oy, inv_h, px, py):
 
 
 @njit(cache=True, parallel=True)
-def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F):
+def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_depth):
     """Eq. 5: F_b = k_b (p_b − x) for a vertex outside the container, p_b the closest
-    boundary point, from the signed distance field: p_b − x = −sdf · ∇sdf/|∇sdf|."""
+    boundary point, from the signed distance field: p_b − x = −sdf · ∇sdf/|∇sdf|.
+    ``outside[i]`` is set for vertices more than ``block_depth`` outside: they block their
+    element's growth like an overlap does."""
     for k in prange(active_all.shape[0]):
         i = active_all[k]
         d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
+        outside[i] = d > block_depth
         if d <= 0.0:
             continue
         n = np.sqrt(gx * gx + gy * gy)

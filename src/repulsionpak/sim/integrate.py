@@ -25,15 +25,18 @@ def euler_step(x, v, F, active_all, dt, vmax):
 
 
 @njit(cache=True)
-def grow(inside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_dt, allow):
+def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_dt, allow):
     """Sec. 6: every moving element with no skin vertex inside another mesh grows by one
-    step; growth factor = 1 + n_M·k_g·Δt. Returns the number of elements that grew."""
+    step; growth factor = 1 + n_M·k_g·Δt. Returns the number of elements that grew.
+
+    Beyond the paper, a skin vertex outside the container also blocks growth: otherwise
+    growth pressure pushes border elements through the (penalty) boundary force."""
     grew = 0
     for e in range(n_grow.shape[0]):
         if moving[e] and allow:
             blocked = False
             for i in range(elem_vstart[e], elem_vstart[e] + elem_nskin[e]):
-                if inside[i]:
+                if inside[i] or outside[i]:
                     blocked = True
                     break
             if not blocked:

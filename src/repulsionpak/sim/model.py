@@ -89,6 +89,7 @@ class Model:
     kind: list[str]  # (M,) "primary" | "secondary"
     field: Field  # container signed distance
     container_area: float
+    gap: float  # the requested gap, simulation units
     cell_size: float  # segment grid cell width (repulsion range)
     tri_cell_size: float  # triangle grid cell width (>= the longest mesh edge)
     grid_origin: tuple[float, float]
@@ -126,7 +127,7 @@ def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def build_model(templates: Sequence[Template], placement: Placement, frame: SimFrame,
-                region_sim, cell_size: float, field_h: float, kinds: Sequence[str] | None = None,
+                region_sim, cell_size: float, gap: float, kinds: Sequence[str] | None = None,
                 frozen: Sequence[bool] | None = None, base: tuple["Model", State] | None = None
                 ) -> tuple[Model, State]:
     """Concatenate the placed meshes into a :class:`Model` and an initial :class:`State`.
@@ -191,7 +192,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
                              np.asarray(placement.template_index, np.int32)]).astype(np.int32)
     minx, miny, maxx, maxy = region_sim.bounds
     margin = 0.25 * max(maxx - minx, maxy - miny)
-    fld = container_field(region_sim, field_h, margin)
+    fld = container_field(region_sim, gap / 3.0, margin)
     longest = max(float(np.max(np.linalg.norm(t.verts[t.springs[:t.n_edges, 0]] - t.verts[t.springs[:t.n_edges, 1]], axis=1)))
                   for t in templates) / frame.unit
     tri_cell = min(1.3 * longest, cell_size)
@@ -208,7 +209,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         tri_elem=np.ascontiguousarray(np.concatenate(t_elem), dtype=np.int32),
         vtri_ptr=vtri_ptr, vtri=vtri, vnbr_ptr=vnbr_ptr, vnbr=vnbr,
         frozen=frozen_all, template_index=tindex, kind=kinds_all, field=fld,
-        container_area=float(region_sim.area), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
+        container_area=float(region_sim.area), gap=float(gap), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
         grid_origin=(float(minx - cell_size), float(miny - cell_size)),
         grid_extent=(float(maxx - minx + 2 * cell_size), float(maxy - miny + 2 * cell_size)),
     )

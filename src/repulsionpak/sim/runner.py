@@ -73,12 +73,14 @@ class Simulator:
         self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.seg_a), len(m.tris))
         self.F = np.zeros((N, 2))
         self.inside = np.zeros(N, np.bool_)
+        self.outside = np.zeros(N, np.bool_)
         self.nb_count = np.zeros(N, np.int64)
         self.nb_elem = np.zeros((N, MAX_NEIGHBOURS), np.int32)
         self.nb_d2 = np.zeros((N, MAX_NEIGHBOURS))
         self.nb_q = np.zeros((N, MAX_NEIGHBOURS, 2))
         self.growth = np.ones(M)
         self.areas = np.zeros(M)
+        self.moving_area = 0.0
         sp_start = np.searchsorted(m.spring_elem, np.arange(M)).astype(np.int64)
         self.sp_start = sp_start
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
@@ -104,10 +106,11 @@ class Simulator:
                         p.k_repulsion, p.soft, F)
         edge_force(x, m.springs, m.rest0, m.spring_elem, self.growth, self.moving, p.k_edge, F)
         boundary_force(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
-                       1.0 / m.field.h, p.k_boundary, F)
+                       1.0 / m.field.h, p.k_boundary, F, self.outside,
+                       p.outside_block * m.gap)
         overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, p.k_overlap, F)
         euler_step(x, st.v, F, self.active_all, self.dt, p.velocity_cap * self.dt)
-        grow(self.inside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow, self.growth,
+        grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow, self.growth,
              p.k_growth * p.dt, self.allow_growth)
         if p.relax_passes > 0:
             relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_start,
@@ -115,6 +118,7 @@ class Simulator:
                                      p.relax_passes, p.relax_fraction)
         skin_areas(x, m.elem_vstart, m.elem_nskin, self.areas)
         st.iteration += 1
+        self.moving_area = float(self.areas[self.moving].sum() / m.container_area)
         return float(self.areas.sum() / m.container_area)
 
     @property
@@ -131,8 +135,10 @@ class Simulator:
         """Iterate until the stopping rule of sec. 8 holds (or ``max_iterations``), then
         settle without growth for ``settle_iterations``.
 
-        Stopping rule: RMS of the per-iteration change of the area fraction over the last
-        ``stop_window`` iterations < ``stop_epsilon``. ``should_stop()`` returning True (or
+        Stopping rule: RMS of the per-iteration change of the area fraction of the moving
+        meshes over the last ``stop_window`` iterations, relative to that area fraction,
+        < ``stop_epsilon`` (relative, so a phase of small secondary elements is judged by
+        its own growth, not by the frozen primaries'). ``should_stop()`` returning True (or
         KeyboardInterrupt) ends the run early with ``stopped_by="interrupted"``.
         """
         p, st = self.params, self.state
@@ -150,10 +156,10 @@ class Simulator:
                 if not math.isfinite(a) or not np.isfinite(st.x[self.active_all[:1]]).all():
                     self._recover()
                     continue
-                hist.append(a)
+                hist.append(self.moving_area)
                 if len(hist) > w:
                     d = np.diff(np.asarray(hist[-(w + 1):]))
-                    rms = float(np.sqrt(np.mean(d * d)))
+                    rms = float(np.sqrt(np.mean(d * d))) / max(self.moving_area, 1e-12)
                 if st.iteration % 200 == 0:
                     self._check_exploded()
                     self._good = st.copy()

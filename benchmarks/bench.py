@@ -1,0 +1,136 @@
+"""Reproducible timings of repulsionpak (not part of the test run).
+
+    python benchmarks/bench.py iteration            # ms/iteration vs vertex count (example library)
+    python benchmarks/bench.py preprocess           # preprocessing time per element
+    python benchmarks/bench.py heart                # whole `repulsionpak pack` on ../shared/data (2 runs)
+    python benchmarks/bench.py all
+
+Fixed seeds; results are printed as Markdown table rows for docs/benchmarks.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import shapely
+
+HERE = Path(__file__).resolve().parent
+SHARED = HERE.parent.parent / "shared" / "data"
+
+
+def machine() -> str:
+    import os
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def bench_iteration(targets=(1500, 12000, 50000, 100000), steps=50) -> None:
+    """ms per simulation iteration on square containers filled with the example library."""
+    import dataclasses
+
+    from repulsionpak import examples
+    from repulsionpak.io import load_elements
+    from repulsionpak.pack import prepare, typical_size
+    from repulsionpak.params import Params
+    from repulsionpak.sim.model import SimFrame, build_model
+    from repulsionpak.sim.runner import Simulator
+    from repulsionpak.types import Container
+
+    elements = load_elements(examples.element_files())
+    print("| vertices | elements | ms/iteration | peak RSS (MB) |")
+    print("| ---: | ---: | ---: | ---: |")
+    for target in targets:
+        # about 75 vertices per element at gap 5 with the default element size
+        count = max(4, int(target / 75))
+        side = 60.0 * np.sqrt(count)
+        region = shapely.box(0, 0, side, side)
+        cont = Container("bench", region)
+        params = Params(gap=5.0, seed=1)
+        params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
+        rng = np.random.default_rng(1)
+        templates, placement, gap = prepare(cont, elements, params, rng)
+        frame = SimFrame.for_region(region)
+        rs = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+        size = typical_size(templates, placement.template_index) / frame.unit
+        model, state = build_model(templates, placement, frame, rs,
+                                   cell_size=max(params.sim.cell_size * size, 3 * gap / frame.unit),
+                                   gap=gap / frame.unit)
+        sim = Simulator(model, state, params.sim)
+        for _ in range(5):
+            sim.step()
+        # grow them a while so the scene is dense, then time
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            sim.step()
+        ms = (time.perf_counter() - t0) / steps * 1e3
+        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        print(f"| {model.n_vertices} | {model.n_elements} | {ms:.2f} | {rss:.0f} |", flush=True)
+
+
+def bench_preprocess() -> None:
+    from repulsionpak import examples
+    from repulsionpak.io import load_elements
+    from repulsionpak.preprocess import build_template, outline_of
+
+    elements = load_elements(examples.element_files())
+    t0 = time.perf_counter()
+    n = 0
+    for e in elements:
+        o = outline_of(e)
+        scale = 60.0 / np.sqrt(o.area)
+        build_template(o, scale, 5.0)
+        n += 1
+    dt = (time.perf_counter() - t0) / n
+    print(f"preprocess: {dt * 1e3:.1f} ms per element ({n} elements, gap 5, ~60 units across)")
+
+
+def bench_heart(runs: int = 2) -> None:
+    if not SHARED.exists():
+        print("heart: ../shared/data not found, skipped")
+        return
+    cmd = ["repulsionpak", "pack", str(SHARED / "containers" / "heart.svg"), str(SHARED / "animals"),
+           "-o", "/tmp/bench-heart.svg", "--gap", "5.2", "--seed", "1", "--report", "/tmp/bench-heart.json", "-q"]
+    for k in range(runs):
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True)
+        wall = time.perf_counter() - t0
+        import json
+
+        rep = json.loads(Path("/tmp/bench-heart.json").read_text())
+        its = rep["iterations"]["primary"]
+        print(f"heart run {k + 1}: wall {wall:.1f} s, {its} iterations, "
+              f"{rep['seconds']['primary'] / its * 1e3:.2f} ms/iteration, area fraction "
+              f"{rep['area_fraction']:.3f}, {rep['n_vertices']} vertices", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("what", choices=["iteration", "preprocess", "heart", "all"])
+    a = ap.parse_args()
+    print(f"machine: {machine()}")
+    print(f"date: {time.strftime('%Y-%m-%d')}")
+    if a.what in ("preprocess", "all"):
+        bench_preprocess()
+    if a.what in ("heart", "all"):
+        bench_heart()
+    if a.what in ("iteration", "all"):
+        bench_iteration()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

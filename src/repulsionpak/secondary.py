@@ -1,0 +1,123 @@
+"""Secondary elements (sec. 9): seed the pockets the primaries left, grow them with the
+primaries frozen (they still repel and can be overlapped into, but never move)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import shapely
+from scipy import ndimage
+
+from .evaluate import rasterize
+from .params import SecondaryParams
+from .placement import Placement
+from .preprocess import build_template, outline_of
+from .sim.model import build_model
+from .sim.runner import Simulator, Snapshot
+from .types import Element
+
+
+def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: SecondaryParams
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Seed points far from every mesh and from the container boundary.
+
+    Distance transform of the negative space on a grid of ``params.grid`` pixels along
+    the container's longer side; candidates are pixels whose distance is above
+    d_min = ``params.d_min``·gap, taken by decreasing distance and kept when no kept seed
+    is within d_sep = ``params.d_sep``·gap (sec. 9).
+
+    Returns (seeds (K, 2), distances (K,)) in container units.
+    """
+    polys = [shapely.make_valid(shapely.Polygon(s)) for s in skins]
+    bounds = region.bounds
+    cont, info = rasterize([region], bounds, grid=params.grid)
+    occ, _ = rasterize(polys, bounds, grid=params.grid)
+    h = info["pixel_size"]
+    neg = cont & ~occ
+    dist = ndimage.distance_transform_edt(neg, sampling=h)
+    d_min = params.d_min * gap
+    d_sep = params.d_sep * gap
+    iy, ix = np.nonzero(dist > d_min)
+    if len(iy) == 0:
+        return np.zeros((0, 2)), np.zeros(0)
+    d = dist[iy, ix]
+    order = np.argsort(-d, kind="stable")
+    pts = np.column_stack([info["x0"] + (ix[order] + 0.5) * h, info["y0"] + (iy[order] + 0.5) * h])
+    d = d[order]
+    # greedy: a candidate is kept when no kept seed is within d_sep; a coarse hash of kept
+    # seeds keeps this O(candidates)
+    cell = d_sep
+    kept: dict[tuple[int, int], list[int]] = {}
+    out = []
+    d_sep2 = d_sep * d_sep
+    for k in range(len(pts)):
+        px, py = pts[k]
+        cx, cy = int(px // cell), int(py // cell)
+        ok = True
+        for gx in (cx - 1, cx, cx + 1):
+            for gy in (cy - 1, cy, cy + 1):
+                for j in kept.get((gx, gy), ()):
+                    if (pts[j, 0] - px) ** 2 + (pts[j, 1] - py) ** 2 < d_sep2:
+                        ok = False
+                        break
+                if not ok:
+                    break
+            if not ok:
+                break
+        if ok:
+            kept.setdefault((cx, cy), []).append(k)
+            out.append(k)
+            if params.max_count is not None and len(out) >= params.max_count:
+                break
+    out = np.asarray(out, dtype=np.int64)
+    return pts[out], d[out]
+
+
+def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator,
+                  on_snapshot: Callable[[Snapshot], None] | None = None,
+                  should_stop: Callable[[], bool] | None = None) -> int:
+    """Run the secondary phase on ``packing`` in place; returns the number of elements added."""
+    p = packing.params
+    sp = p.secondary
+    gap = packing.gap
+    t0 = time.perf_counter()
+    seeds, dist = pocket_seeds(packing.container.region, packing.skins(), gap, sp)
+    packing.seconds["seeding"] = time.perf_counter() - t0
+    if len(seeds) == 0:
+        packing.stopped_by["secondary"] = "no_pockets"
+        return 0
+    outlines = [outline_of(e) for e in elements]
+    # templates at the scale of a typical pocket: skin radius ~ median pocket radius
+    target_r = float(np.median(dist))
+    templates = []
+    for o in outlines:
+        r_art = float(np.sqrt(o.area / np.pi))
+        scale = max(target_r - p.preprocess.skin_offset * gap, 0.5 * target_r) / max(r_art, 1e-12)
+        templates.append(build_template(o, scale, gap, p.preprocess))
+    order = rng.permutation(len(templates))
+    assign = order[np.arange(len(seeds)) % len(templates)]
+    radius = np.array([templates[i].radius for i in assign])
+    shrink = float(sp.initial_fraction * np.min(dist / radius))
+    angles = rng.uniform(0, 2 * np.pi, len(seeds)) if p.placement.rotate else np.zeros(len(seeds))
+    base_index = len(packing.templates)
+    placement = Placement(assign + base_index, seeds, angles, shrink)
+    all_templates = list(packing.templates) + templates
+    region_sim = shapely.affinity.scale(packing.container.region, 1 / packing.frame.unit,
+                                        1 / packing.frame.unit, origin=(0, 0))
+    m0 = packing.model
+    model, state = build_model(all_templates, placement, packing.frame, region_sim,
+                               cell_size=m0.cell_size, gap=m0.gap,
+                               kinds=["secondary"] * len(seeds),
+                               frozen=np.ones(m0.n_elements, bool), base=(m0, packing.state))
+    t1 = time.perf_counter()
+    sim = Simulator(model, state, p.sim, phase="secondary")
+    res = sim.run(on_snapshot, should_stop=should_stop)
+    packing.templates = all_templates
+    packing.model, packing.state = model, state
+    packing.iterations["secondary"] = res.iterations
+    packing.seconds["secondary"] = time.perf_counter() - t1 + packing.seconds["seeding"]
+    packing.stopped_by["secondary"] = res.stopped_by
+    packing.area_fraction_meshes = res.area_fraction
+    return len(seeds)

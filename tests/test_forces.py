@@ -1,0 +1,522 @@
+"""Each simulation kernel alone (paper sec. 5–7): edge, repulsion, overlap and boundary
+forces, the contact query, the Euler step, growth and the self-intersection relaxation.
+
+Models are tiny: hand-built arrays of 1–3 triangles per mesh, or two square elements
+through ``preprocess.build_template`` + ``sim.model.build_model``.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import numba
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import Point, Polygon, box
+
+from repulsionpak.params import SimParams
+from repulsionpak.placement import Placement
+from repulsionpak.preprocess import build_template, outline_of
+from repulsionpak.sim.forces import (
+    boundary_force,
+    contact_query,
+    edge_force,
+    outside_distance,
+    overlap_force,
+    repulsion_force,
+)
+from repulsionpak.sim.grid import Grid
+from repulsionpak.sim.integrate import euler_step, grow, skin_areas
+from repulsionpak.sim.model import SimFrame, _csr, build_model, container_field
+from repulsionpak.sim.runner import MAX_NEIGHBOURS, Simulator
+from repulsionpak.sim.selfintersect import relax_self_intersections
+from repulsionpak.types import ArtPath, Element, Style
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_numba_thread():
+    """The machine is small and shared: numba's OpenMP threads spin against other
+    processes and make tiny kernels ~50x slower. Results do not depend on it."""
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    yield
+    numba.set_num_threads(old)
+
+
+def _has_param(fn, name: str) -> bool:
+    return name in inspect.signature(getattr(fn, "py_func", fn)).parameters
+
+
+def _call_by_name(fn, values: dict):
+    """Call ``fn`` with positional arguments picked by parameter name from ``values``
+    (the kernels' signatures grow optional outputs/knobs; tests pass neutral values)."""
+    names = list(inspect.signature(getattr(fn, "py_func", fn)).parameters)
+    missing = [n for n in names if n not in values]
+    if missing:
+        pytest.fail(f"{fn.__name__}: test does not know parameter(s) {missing}")
+    return fn(*[values[n] for n in names])
+
+
+def run_boundary(x, active, fld, k_b, F):
+    """boundary_force, with the ``outside`` flags when the kernel has them (returned)."""
+    outside = np.zeros(len(x), np.bool_)
+    _call_by_name(boundary_force, dict(
+        x=x, active_all=np.asarray(active, np.int64), values=fld.values, ox=fld.ox, oy=fld.oy,
+        inv_h=1.0 / fld.h, k_b=k_b, F=F, outside=outside, block_depth=0.0))
+    return outside
+
+
+def run_grow(inside, outside, vstart, nskin, moving, n_grow, growth, k, allow):
+    return _call_by_name(grow, dict(
+        inside=inside, outside=outside, elem_vstart=vstart, elem_nskin=nskin, moving=moving,
+        n_grow=n_grow, growth=growth, k_g_dt=k, allow=allow))
+
+
+def make_model(templates, placement, frame, region, cell_size, field_h):
+    """build_model with a field spacing ``field_h`` (older: field_h=, newer: gap=3·h)."""
+    if _has_param(build_model, "field_h"):
+        return build_model(templates, placement, frame, region, cell_size=cell_size, field_h=field_h)
+    return build_model(templates, placement, frame, region, cell_size=cell_size, gap=3.0 * field_h)
+
+
+# --------------------------------------------------------------------------------------
+# edge force (Eq. 3)
+
+
+def one_spring(d, rest, k_e=40.0, growth=1.0, moving=True):
+    x = np.array([[1.0, 2.0], [1.0 + 0.6 * d, 2.0 + 0.8 * d]])
+    F = np.zeros((2, 2))
+    edge_force(x, np.array([[0, 1]], np.int32), np.array([rest]), np.array([0], np.int32),
+               np.array([growth]), np.array([moving]), k_e, F)
+    return F
+
+
+def test_edge_force_zero_at_rest_length():
+    np.testing.assert_array_equal(one_spring(5.0, 5.0), 0.0)
+    # the rest length is rest0 · growth
+    np.testing.assert_allclose(one_spring(7.5, 5.0, growth=1.5), 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("d, rest", [(7.0, 5.0), (5.5, 5.0), (12.0, 2.0)])
+def test_edge_force_stretched_pulls_together_quadratically(d, rest):
+    k_e = 40.0
+    F = one_spring(d, rest, k_e)
+    u = np.array([0.6, 0.8])  # unit vector from vertex 0 to vertex 1
+    np.testing.assert_allclose(F[0], k_e * (d - rest) ** 2 * u, rtol=1e-12)
+    np.testing.assert_allclose(F[1], -F[0], rtol=1e-12)
+
+
+@pytest.mark.parametrize("d, rest", [(3.0, 5.0), (0.5, 2.0)])
+def test_edge_force_compressed_pushes_apart(d, rest):
+    k_e = 40.0
+    F = one_spring(d, rest, k_e)
+    u = np.array([0.6, 0.8])
+    np.testing.assert_allclose(F[0], -k_e * (d - rest) ** 2 * u, rtol=1e-12)
+    np.testing.assert_allclose(F[1], -F[0], rtol=1e-12)
+
+
+def test_edge_force_ignores_frozen_elements():
+    np.testing.assert_array_equal(one_spring(9.0, 5.0, moving=False), 0.0)
+
+
+def square_element(side=10.0, name="sq") -> Element:
+    ring = np.array([[0, 0], [side, 0], [side, side], [0, side]], float)
+    return Element(name, name + ".svg", (ArtPath((ring,), (True,), Style(fill="#000")),))
+
+
+@pytest.fixture(scope="module")
+def template():
+    return build_template(outline_of(square_element()), scale=1.0, gap=2.0)
+
+
+def two_square_model(template, pos0, pos1, angle1=0.0, shrink=1.0, region=None):
+    placement = Placement(np.array([0, 0]), np.array([pos0, pos1], float), np.array([0.0, angle1]), shrink)
+    region = region if region is not None else box(0, 0, 100, 100)
+    return make_model([template], placement, SimFrame(1.0), region, cell_size=15.0, field_h=1.0)
+
+
+def test_edge_force_conserves_momentum_on_a_mesh(template):
+    model, state = two_square_model(template, (30, 30), (60, 60))
+    rng = np.random.default_rng(3)
+    x = state.x + rng.normal(0, 0.8, state.x.shape)
+    F0 = rng.normal(0, 1, state.x.shape)
+    F = F0.copy()
+    growth = np.array([1.3, 0.9])
+    edge_force(x, model.springs, model.rest0, model.spring_elem, growth, np.ones(2, bool), 40.0, F)
+    dF = F - F0  # the kernel adds to F
+    assert np.abs(dF).max() > 1.0
+    for e in range(2):
+        s, t = model.elem_vstart[e], model.elem_vstart[e + 1]
+        np.testing.assert_allclose(dF[s:t].sum(axis=0), 0.0, atol=1e-9 * np.abs(dF).max())
+        # no net torque either: forces are central (along the springs)
+        r = x[s:t] - x[s:t].mean(axis=0)
+        torque = (r[:, 0] * dF[s:t, 1] - r[:, 1] * dF[s:t, 0]).sum()
+        assert abs(torque) <= 1e-9 * np.abs(dF).max() * 100
+
+
+def test_edge_force_is_zero_on_the_undeformed_mesh(template):
+    model, state = two_square_model(template, (30, 30), (60, 60), shrink=0.5)
+    F = np.zeros_like(state.x)
+    edge_force(state.x, model.springs, model.rest0, model.spring_elem, np.ones(2), np.ones(2, bool), 40.0, F)
+    np.testing.assert_allclose(F, 0.0, atol=1e-9)
+
+
+# --------------------------------------------------------------------------------------
+# repulsion force (Eq. 2)
+
+
+def repulse(x, q, inside=False, k_r=80.0, soft=1.0, F=None):
+    x = np.asarray([x], float)
+    q = np.asarray(q, float)
+    nb_q = np.zeros((1, MAX_NEIGHBOURS, 2))
+    nb_q[0, :len(q)] = q
+    F = np.zeros((1, 2)) if F is None else F
+    repulsion_force(x, np.array([0], np.int64), np.array([inside]), np.array([len(q)], np.int64),
+                    nb_q, k_r, soft, F)
+    return F[0]
+
+
+@pytest.mark.parametrize("q, soft", [((3.0, 4.0), 1.0), ((-0.3, 0.1), 1.0), ((10.0, -2.0), 0.5)])
+def test_repulsion_points_away_with_soft_inverse_square_magnitude(q, soft):
+    k_r = 80.0
+    x = np.array([0.5, -0.25])
+    f = repulse(x, [q], k_r=k_r, soft=soft)
+    u = x - np.asarray(q)
+    d = np.linalg.norm(u)
+    np.testing.assert_allclose(np.linalg.norm(f), k_r / (soft + d * d), rtol=1e-12)
+    np.testing.assert_allclose(f / np.linalg.norm(f), u / d, rtol=1e-12)
+
+
+def test_repulsion_sums_neighbours_and_adds_to_F():
+    x = np.array([0.0, 0.0])
+    q = [(2.0, 0.0), (-2.0, 0.0), (0.0, 1.0)]
+    F = np.array([[5.0, 7.0]])
+    f = repulse(x, q, k_r=10.0, F=F)
+    # the two symmetric neighbours cancel; the third pushes down with 10 / (1 + 1)
+    np.testing.assert_allclose(f, [5.0, 7.0 - 5.0], rtol=1e-12)
+
+
+def test_repulsion_is_zero_for_a_vertex_inside_another_mesh():
+    np.testing.assert_array_equal(repulse((0.0, 0.0), [(1.0, 1.0)], inside=True), 0.0)
+
+
+# --------------------------------------------------------------------------------------
+# overlap force (Eq. 4)
+
+
+def test_overlap_force_pulls_toward_incident_centroids():
+    # a fan of 3 triangles around vertex 0
+    x = np.array([[0.0, 0.0], [4.0, 0.0], [3.0, 3.0], [-1.0, 4.0], [-3.0, -1.0]])
+    tris = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4]], np.int32)
+    ptr, idx = _csr(len(x), tris.ravel(), np.repeat(np.arange(len(tris)), 3))
+    k_o = 80.0
+    F = np.zeros_like(x)
+    inside = np.zeros(len(x), np.bool_)
+    inside[0] = True
+    overlap_force(x, np.arange(len(x), dtype=np.int64), inside, tris, ptr, idx, k_o, F)
+    expected = k_o * sum(x[t].mean(axis=0) - x[0] for t in tris)
+    np.testing.assert_allclose(F[0], expected, rtol=1e-12)
+    assert np.abs(expected).max() > 1.0
+    np.testing.assert_array_equal(F[1:], 0.0)  # not inside: no overlap force
+    # a vertex not flagged inside gets nothing
+    F2 = np.zeros_like(x)
+    overlap_force(x, np.arange(len(x), dtype=np.int64), np.zeros(len(x), np.bool_), tris, ptr, idx, k_o, F2)
+    np.testing.assert_array_equal(F2, 0.0)
+
+
+def test_overlap_force_points_into_the_own_mesh(template):
+    model, state = two_square_model(template, (30, 30), (60, 60))
+    inside = np.zeros(model.n_vertices, np.bool_)
+    skin = np.flatnonzero(model.is_skin)
+    inside[skin] = True
+    F = np.zeros_like(state.x)
+    overlap_force(state.x, skin.astype(np.int64), inside, model.tris, model.vtri_ptr, model.vtri, 80.0, F)
+    for e in range(2):
+        s, n = model.elem_vstart[e], model.elem_nskin[e]
+        c = state.x[model.elem_vstart[e]:model.elem_vstart[e + 1]].mean(axis=0)
+        r = state.x[s:s + n] - c
+        # every skin vertex is pulled inward (towards its mesh)
+        assert ((F[s:s + n] * r).sum(axis=1) < 0).all()
+
+
+# --------------------------------------------------------------------------------------
+# boundary force (Eq. 5)
+
+
+@pytest.fixture(scope="module")
+def square_field():
+    return container_field(box(0, 0, 1000, 1000), h=5.0, margin=250.0)
+
+
+def test_container_field_is_a_signed_distance(square_field):
+    f = square_field
+    ny, nx = f.values.shape
+    xs = f.ox + f.h * np.arange(nx)
+    ys = f.oy + f.h * np.arange(ny)
+    j, i = ny // 2, nx // 2
+    assert f.values[j, i] == pytest.approx(-min(xs[i], 1000 - xs[i], ys[j], 1000 - ys[j]))
+    assert f.values[0, 0] == pytest.approx(np.hypot(xs[0], ys[0]))  # outside, corner
+    assert f.values.min() < 0 < f.values.max()
+
+
+def test_boundary_force_zero_inside(square_field):
+    x = np.array([[500.0, 500.0], [1.0, 999.0], [250.0, 3.0]])
+    F = np.zeros_like(x)
+    outside = run_boundary(x, [0, 1, 2], square_field, 80.0, F)
+    np.testing.assert_array_equal(F, 0.0)
+    assert not outside.any()
+
+
+@pytest.mark.parametrize("p, target", [
+    ((1037.0, 500.0), (1000.0, 500.0)),     # right of the container
+    ((420.0, -12.5), (420.0, 0.0)),         # below
+    ((-3.0, 777.0), (0.0, 777.0)),          # left, just outside
+    ((1030.0, 1040.0), (1000.0, 1000.0)),   # beyond a corner: towards the corner
+])
+def test_boundary_force_pulls_outside_vertex_to_closest_boundary_point(square_field, p, target):
+    k_b = 80.0
+    x = np.array([p, [500.0, 500.0]])
+    F = np.array([[1.0, -2.0], [0.0, 0.0]])
+    outside = run_boundary(x, [0, 1], square_field, k_b, F)
+    f = F[0] - np.array([1.0, -2.0])  # the kernel adds
+    expected = k_b * (np.asarray(target) - np.asarray(p))
+    dist = np.linalg.norm(np.asarray(target) - np.asarray(p))
+    # magnitude ≈ k_b · distance, direction towards the closest point (grid accuracy)
+    assert np.linalg.norm(f) == pytest.approx(k_b * dist, rel=0.02, abs=k_b * 0.05 * square_field.h)
+    cos = f @ expected / (np.linalg.norm(f) * np.linalg.norm(expected))
+    assert cos > 0.999
+    np.testing.assert_array_equal(F[1], 0.0)
+    if _has_param(boundary_force, "outside"):
+        assert outside[0] and not outside[1]
+
+
+def test_boundary_force_beyond_the_sampled_grid_points_back(square_field):
+    k_b = 80.0
+    x = np.array([[3000.0, 500.0]])  # far beyond the field's margin
+    F = np.zeros_like(x)
+    run_boundary(x, [0], square_field, k_b, F)
+    assert F[0, 0] < 0 and abs(F[0, 1]) < 1e-6 * abs(F[0, 0])
+    assert abs(F[0, 0]) == pytest.approx(k_b * 2000.0, rel=0.02)
+    d = np.zeros(1)
+    f = square_field
+    outside_distance(x, f.values, f.ox, f.oy, 1.0 / f.h, d)
+    assert d[0] == pytest.approx(2000.0, rel=0.01)
+
+
+def test_boundary_force_only_touches_active_vertices(square_field):
+    x = np.array([[1100.0, 500.0], [1100.0, 600.0]])
+    F = np.zeros_like(x)
+    run_boundary(x, [1], square_field, 80.0, F)
+    np.testing.assert_array_equal(F[0], 0.0)
+    assert F[1, 0] < 0
+
+
+# --------------------------------------------------------------------------------------
+# contact query
+
+
+def query(x, vert_elem, seg_a, seg_b, tris, tri_elem, active, cell=20.0, tri_cell=15.0,
+          origin=(-40.0, -40.0), extent=(120.0, 120.0)):
+    n = len(x)
+    seg_elem = vert_elem[seg_a].astype(np.int32)
+    g = Grid(origin, extent, cell, tri_cell, len(seg_a), len(tris))
+    g.rebuild(x, seg_a, seg_b, seg_elem, tris, tri_elem)
+    inside = np.zeros(n, np.bool_)
+    nb_count = np.zeros(n, np.int64)
+    nb_elem = np.full((n, MAX_NEIGHBOURS), -1, np.int32)
+    nb_d2 = np.zeros((n, MAX_NEIGHBOURS))
+    nb_q = np.zeros((n, MAX_NEIGHBOURS, 2))
+    contact_query(x, np.asarray(active, np.int64), vert_elem,
+                  g.segs.xy, g.segs.elem, g.segs.start, *g.segs.params,
+                  g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params,
+                  inside, nb_count, nb_elem, nb_d2, nb_q)
+    return inside, nb_count, nb_elem, nb_d2, nb_q
+
+
+def hand_two_squares():
+    """Mesh A: square [0,10]² (2 triangles); mesh B: square [8,18]×[3,13] (2 triangles)."""
+    a = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
+    b = a + np.array([8.0, 3.0])
+    x = np.vstack([a, b])
+    vert_elem = np.array([0, 0, 0, 0, 1, 1, 1, 1], np.int32)
+    tris = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]], np.int32)
+    tri_elem = np.array([0, 0, 1, 1], np.int32)
+    seg_a = np.array([0, 1, 2, 3, 4, 5, 6, 7], np.int64)
+    seg_b = np.array([1, 2, 3, 0, 5, 6, 7, 4], np.int64)
+    return x, vert_elem, seg_a, seg_b, tris, tri_elem
+
+
+def test_contact_query_detects_vertex_inside_another_mesh():
+    x, ve, sa, sb, tris, te = hand_two_squares()
+    inside, nb_count, nb_elem, nb_d2, nb_q = query(x, ve, sa, sb, tris, te, np.arange(8))
+    # A's corner (10,10) lies in B; B's corner (8,3) lies in A; nothing else
+    assert inside.tolist() == [False, False, True, False, True, False, False, False]
+    # inside vertices get no neighbour list (repulsion is off for them)
+    assert nb_count[2] == 0 and nb_count[4] == 0
+
+
+def test_contact_query_reports_closest_point_on_neighbour_skin():
+    x, ve, sa, sb, tris, te = hand_two_squares()
+    inside, nb_count, nb_elem, nb_d2, nb_q = query(x, ve, sa, sb, tris, te, np.arange(8))
+    skins = [Polygon(x[:4]).exterior, Polygon(x[4:]).exterior]
+    for i in np.flatnonzero(~inside):
+        other = 1 - ve[i]
+        assert nb_count[i] == 1
+        assert nb_elem[i, 0] == other
+        expected = shapely.shortest_line(Point(x[i]), skins[other]).coords[1]
+        np.testing.assert_allclose(nb_q[i, 0], expected, atol=1e-12)
+        assert nb_d2[i, 0] == pytest.approx(skins[other].distance(Point(x[i])) ** 2, rel=1e-12)
+    # spot checks: A's (10,0) → B's bottom edge at (10,3); B's (18,3) → A's right edge (10,3)
+    np.testing.assert_allclose(nb_q[1, 0], [10.0, 3.0])
+    np.testing.assert_allclose(nb_q[5, 0], [10.0, 3.0])
+
+
+def test_contact_query_ignores_far_meshes_and_only_fills_active():
+    x, ve, sa, sb, tris, te = hand_two_squares()
+    x = x.copy()
+    x[4:] += 70.0  # B far away (beyond the 3×3 window of 20-unit cells)
+    inside, nb_count, nb_elem, nb_d2, nb_q = query(x, ve, sa, sb, tris, te, np.arange(4))
+    assert not inside.any()
+    np.testing.assert_array_equal(nb_count, 0)
+
+
+def test_contact_query_on_built_model_matches_shapely(template):
+    # two squares of the template overlapping diagonally; field region large
+    model, state = two_square_model(template, (40, 40), (50, 47), angle1=0.4)
+    sim = Simulator(model, state, SimParams())
+    x = state.x
+    g = sim.grid
+    g.rebuild(x, sim.seg_a, sim.seg_b, sim.seg_elem, model.tris, model.tri_elem)
+    contact_query(x, sim.active_skin, model.vert_elem,
+                  g.segs.xy, g.segs.elem, g.segs.start, *g.segs.params,
+                  g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params,
+                  sim.inside, sim.nb_count, sim.nb_elem, sim.nb_d2, sim.nb_q)
+    skins = [Polygon(x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]]) for e in range(2)]
+    skin_idx = np.flatnonzero(model.is_skin)
+    truth = np.array([skins[1 - model.vert_elem[i]].contains(Point(x[i])) for i in skin_idx])
+    assert truth.any() and not truth.all()
+    np.testing.assert_array_equal(sim.inside[skin_idx], truth)
+    for i in skin_idx[~truth]:
+        other = 1 - model.vert_elem[i]
+        ring = skins[other].exterior
+        assert sim.nb_count[i] == 1 and sim.nb_elem[i, 0] == other
+        expected = np.asarray(shapely.shortest_line(Point(x[i]), ring).coords[1])
+        np.testing.assert_allclose(sim.nb_q[i, 0], expected, atol=1e-9)
+
+
+# --------------------------------------------------------------------------------------
+# Euler step, growth, areas
+
+
+def test_euler_step_caps_velocity():
+    x = np.zeros((4, 2))
+    v = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 0.0]])
+    F = np.array([[1000.0, 0.0], [0.3, -0.4], [0.0, 0.0], [1e6, 1e6]])
+    dt, vmax = 0.1, 0.5
+    euler_step(x, v, F, np.array([0, 1, 2], np.int64), dt, vmax)
+    # huge force: speed capped at vmax along F
+    np.testing.assert_allclose(v[0], [vmax, 0.0], rtol=1e-12)
+    # small force: v = F·dt, uncapped
+    np.testing.assert_allclose(v[1], [0.03, -0.04], rtol=1e-12)
+    # an existing velocity above the cap is capped too
+    np.testing.assert_allclose(v[2], [vmax, 0.0], rtol=1e-12)
+    np.testing.assert_allclose(x[:3], v[:3] * dt, rtol=1e-12)
+    assert (np.linalg.norm(v, axis=1) <= vmax * (1 + 1e-12)).all()
+    # inactive vertex untouched
+    np.testing.assert_array_equal(v[3], 0.0)
+    np.testing.assert_array_equal(x[3], 0.0)
+
+
+def test_grow_increments_only_unblocked_moving_elements():
+    # 4 elements of 5 vertices, the first 3 on the skin
+    vstart = np.array([0, 5, 10, 15, 20], np.int32)
+    nskin = np.array([3, 3, 3, 3], np.int32)
+    inside = np.zeros(20, np.bool_)
+    outside = np.zeros(20, np.bool_)
+    inside[1] = True   # element 0: a skin vertex inside another mesh -> blocked
+    inside[8] = True   # element 1: an interior (non-skin) vertex flagged -> not blocked
+    moving = np.array([True, True, False, True])  # element 2 frozen
+    n_grow = np.array([5, 5, 5, 0], np.int64)
+    growth = np.ones(4)
+    k = 0.001
+    grew = run_grow(inside, outside, vstart, nskin, moving, n_grow, growth, k, True)
+    assert grew == 2
+    assert n_grow.tolist() == [5, 6, 5, 1]
+    np.testing.assert_allclose(growth, 1 + n_grow * k)
+    grew = run_grow(inside, outside, vstart, nskin, moving, n_grow, growth, k, False)
+    assert grew == 0 and n_grow.tolist() == [5, 6, 5, 1]
+
+
+@pytest.mark.skipif(not _has_param(grow, "outside"), reason="grow() has no outside flags")
+def test_grow_blocked_by_skin_vertex_outside_container():
+    vstart = np.array([0, 4, 8], np.int32)
+    nskin = np.array([3, 3], np.int32)
+    inside = np.zeros(8, np.bool_)
+    outside = np.zeros(8, np.bool_)
+    outside[2] = True
+    n_grow = np.zeros(2, np.int64)
+    growth = np.ones(2)
+    assert run_grow(inside, outside, vstart, nskin, np.ones(2, bool), n_grow, growth, 0.01, True) == 1
+    assert n_grow.tolist() == [0, 1]
+
+
+def test_skin_areas_shoelace():
+    x = np.array([[0, 0], [4, 0], [4, 3], [0, 3], [1, 1], [10, 10], [12, 10], [10, 13]], float)
+    out = np.zeros(2)
+    skin_areas(x, np.array([0, 5, 8], np.int32), np.array([4, 3], np.int32), out)
+    np.testing.assert_allclose(out, [12.0, 3.0])
+
+
+# --------------------------------------------------------------------------------------
+# self-intersection relaxation (sec. 7)
+
+
+def ring_element(n=12, r=10.0):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    x = np.column_stack([r * np.cos(t), r * np.sin(t)])
+    springs = np.column_stack([np.arange(n), (np.arange(n) + 1) % n]).astype(np.int32)
+    ptr, nbr = _csr(n, np.concatenate([springs[:, 0], springs[:, 1]]),
+                    np.concatenate([springs[:, 1], springs[:, 0]]))
+    return x, springs, ptr, nbr
+
+
+def relax(x, springs, ptr, nbr, moving=True, fraction=0.5, passes=1):
+    n = len(x)
+    return relax_self_intersections(x, np.array([0, n], np.int32), np.array([n], np.int32),
+                                    np.array([moving]), np.array([0], np.int64),
+                                    np.array([len(springs)], np.int64), springs, ptr, nbr, passes, fraction)
+
+
+def test_relax_separates_close_non_neighbours():
+    x, springs, ptr, nbr = ring_element()
+    # pull vertices 3 and 9 (opposite, not joined) to 1 unit apart near the centre
+    x[3] = [0.0, 0.5]
+    x[9] = [0.0, -0.5]
+    before = x.copy()
+    lengths = np.linalg.norm(x[springs[:, 0]] - x[springs[:, 1]], axis=1)
+    lim = 0.5 * lengths.mean()
+    assert lim > 1.0
+    fixes = relax(x, springs, ptr, nbr)
+    assert fixes == 1
+    assert np.linalg.norm(x[3] - x[9]) == pytest.approx(lim, rel=1e-12)
+    np.testing.assert_allclose((x[3] + x[9]) / 2, (before[3] + before[9]) / 2, atol=1e-12)  # symmetric
+    others = np.setdiff1d(np.arange(len(x)), [3, 9])
+    np.testing.assert_array_equal(x[others], before[others])
+
+
+def test_relax_leaves_spring_neighbours_alone():
+    x, springs, ptr, nbr = ring_element()
+    x[1] = x[0] + [0.01, 0.0]  # joined by a spring: may be close
+    before = x.copy()
+    assert relax(x, springs, ptr, nbr) == 0
+    np.testing.assert_array_equal(x, before)
+
+
+def test_relax_ignores_frozen_elements():
+    x, springs, ptr, nbr = ring_element()
+    x[3] = [0.0, 0.5]
+    x[9] = [0.0, -0.5]
+    before = x.copy()
+    assert relax(x, springs, ptr, nbr, moving=False) == 0
+    np.testing.assert_array_equal(x, before)
