@@ -282,7 +282,6 @@ def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_po
     m = max(int(np.ceil(perimeter / step)), 4 * min_points)
     t = np.linspace(0.0, perimeter, m, endpoint=False)
     dense = np.column_stack([np.interp(t, cum, closed[:, 0]), np.interp(t, cum, closed[:, 1])])
-    # keep original corners exactly (interp already hits them only by chance)
     n = len(dense)
     dense2 = np.vstack([dense, dense[:1]])
     t2 = np.concatenate([t, [perimeter]])
@@ -296,8 +295,9 @@ def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_po
             ab = b - a
             L = np.hypot(*ab)
             mid = dense2[i + 1:j]
-            if len(mid) and L > 0:
-                dev = np.abs((mid[:, 0] - a[0]) * ab[1] - (mid[:, 1] - a[1]) * ab[0]) / L
+            if len(mid) and L > 0:  # distance of the skipped points to the chord *segment*
+                t = np.clip(((mid - a) @ ab) / (L * L), 0.0, 1.0)
+                dev = np.hypot(*(mid - (a + t[:, None] * ab)).T)
                 if dev.max() > tolerance:
                     break
             best = j

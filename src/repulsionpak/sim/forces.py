@@ -27,16 +27,17 @@ def _inside_triangle(px, py, ax, ay, bx, by, cx, cy):
 
 @njit(cache=True, parallel=True)
 def contact_query(x, active, vert_elem,
-                  seg_xy, seg_elem, seg_start, sox, soy, sinv, sgx, sgy,
+                  seg_xy, seg_elem, seg_start, seg_order, sox, soy, sinv, sgx, sgy,
                   tri_xy, tri_elem, tri_start, tox, toy, tinv, tgx, tgy,
-                  inside, nb_count, nb_elem, nb_d2, nb_q):
+                  inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
     """For each vertex in ``active`` (skin vertices of moving elements):
 
     * ``inside[i]``: the vertex lies in a triangle of another element (3×3 window of the
       triangle cells);
-    * otherwise ``nb_q[i, :nb_count[i]]``: the closest point on the skin of each other
-      element having a skin segment in the 3×3 window of the segment cells (``nb_elem``,
-      ``nb_d2`` alongside). At most ``nb_q.shape[1]`` neighbours are kept (closest win).
+    * ``nb_q[i, :nb_count[i]]``: the closest point on the skin of each other element
+      having a skin segment in the 3×3 window of the segment cells (``nb_elem``, ``nb_d2``
+      and the segment id ``nb_seg`` alongside). At most ``nb_q.shape[1]`` neighbours are
+      kept (the closest win). :func:`contact_update` refreshes these between full queries.
     """
     K = nb_q.shape[1]
     for k in prange(active.shape[0]):
@@ -62,7 +63,7 @@ def contact_query(x, active, vert_elem,
                         break
         inside[i] = hit
         cnt = 0
-        if not hit:
+        if True:
             cx, cy = cell_of(px, py, sox, soy, sinv, sgx, sgy)
             for yy in range(max(cy - 1, 0), min(cy + 2, sgy)):
                 for xx in range(max(cx - 1, 0), min(cx + 2, sgx)):
@@ -115,7 +116,88 @@ def contact_query(x, active, vert_elem,
                             nb_d2[i, slot] = d2
                             nb_q[i, slot, 0] = qx
                             nb_q[i, slot, 1] = qy
+                            nb_seg[i, slot] = seg_order[m]
         nb_count[i] = cnt
+
+
+@njit(cache=True, inline="always")
+def _closest_on_segment(x, a, b, px, py):
+    ax = x[a, 0]
+    ay = x[a, 1]
+    abx = x[b, 0] - ax
+    aby = x[b, 1] - ay
+    l2 = abx * abx + aby * aby
+    t = 0.0
+    if l2 > 0.0:
+        t = ((px - ax) * abx + (py - ay) * aby) / l2
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+    qx = ax + t * abx
+    qy = ay + t * aby
+    return (px - qx) * (px - qx) + (py - qy) * (py - qy), qx, qy
+
+
+@njit(cache=True, parallel=True)
+def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev,
+                   tri_xy, tri_elem, tri_start, tox, toy, tinv, tgx, tgy, near2,
+                   inside, nb_count, nb_d2, nb_q, nb_seg):
+    """Cheap refresh of :func:`contact_query`'s results between full queries.
+
+    Every stored closest point follows its neighbour's skin by walking from the stored
+    segment to the adjacent one while that is closer (vertices move at most
+    velocity_cap·Δt per step, so a few hops suffice). The point-in-mesh test is redone
+    only for vertices that were inside or whose nearest neighbouring skin is closer than
+    sqrt(near2): a vertex cannot get inside a mesh without crossing its skin.
+    """
+    for k in prange(active.shape[0]):
+        i = active[k]
+        e = vert_elem[i]
+        px = x[i, 0]
+        py = x[i, 1]
+        dmin = np.inf
+        for j in range(nb_count[i]):
+            s = nb_seg[i, j]
+            best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
+            for _ in range(16):
+                moved = False
+                n = seg_next[s]
+                d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+                if d2 < best:
+                    best, qx, qy, s, moved = d2, ax, ay, n, True
+                else:
+                    n = seg_prev[s]
+                    d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+                    if d2 < best:
+                        best, qx, qy, s, moved = d2, ax, ay, n, True
+                if not moved:
+                    break
+            nb_seg[i, j] = s
+            nb_d2[i, j] = best
+            nb_q[i, j, 0] = qx
+            nb_q[i, j, 1] = qy
+            if best < dmin:
+                dmin = best
+        if not inside[i] and dmin >= near2:
+            continue
+        cx, cy = cell_of(px, py, tox, toy, tinv, tgx, tgy)
+        hit = False
+        for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
+            if hit:
+                break
+            for xx in range(max(cx - 1, 0), min(cx + 2, tgx)):
+                if hit:
+                    break
+                c = yy * tgx + xx
+                for m in range(tri_start[c], tri_start[c + 1]):
+                    if tri_elem[m] == e:
+                        continue
+                    if _inside_triangle(px, py, tri_xy[m, 0], tri_xy[m, 1], tri_xy[m, 2],
+                                        tri_xy[m, 3], tri_xy[m, 4], tri_xy[m, 5]):
+                        hit = True
+                        break
+        inside[i] = hit
 
 
 @njit(cache=True, parallel=True)

@@ -123,10 +123,17 @@ class Grid:
         self.tris = CellList(origin, extent, tri_cell, n_triangles, 6)
 
     def rebuild(self, x, seg_a, seg_b, seg_elem, tris, tri_elem):
-        s, t = self.segs, self.tris
+        self.rebuild_segments(x, seg_a, seg_b, seg_elem)
+        self.rebuild_triangles(x, tris, tri_elem)
+
+    def rebuild_segments(self, x, seg_a, seg_b, seg_elem):
+        s = self.segs
         segment_midpoints(x, seg_a, seg_b, s._mx, s._my)
         bin_points(s._mx, s._my, s.ox, s.oy, s.inv_c, s.gx, s.gy, s.start, s.order, s._keys)
         gather_segments(x, seg_a, seg_b, seg_elem, s.order, s.xy, s.elem)
+
+    def rebuild_triangles(self, x, tris, tri_elem):
+        t = self.tris
         triangle_centroids(x, tris, t._mx, t._my)
         bin_points(t._mx, t._my, t.ox, t.oy, t.inv_c, t.gx, t.gy, t.start, t.order, t._keys)
         gather_triangles(x, tris, tri_elem, t.order, t.xy, t.elem)

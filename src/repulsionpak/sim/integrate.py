@@ -29,19 +29,25 @@ def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_d
     """Sec. 6: every moving element with no skin vertex inside another mesh grows by one
     step; growth factor = 1 + n_M·k_g·Δt. Returns the number of elements that grew.
 
-    Beyond the paper, a skin vertex outside the container also blocks growth: otherwise
-    growth pressure pushes border elements through the (penalty) boundary force."""
+    Beyond the paper, a skin vertex outside the container (``outside``) also makes its
+    element wait: growth pressure would push border elements through the penalty
+    boundary force.
+    """
     grew = 0
+    if not allow:
+        return 0
     for e in range(n_grow.shape[0]):
-        if moving[e] and allow:
-            blocked = False
-            for i in range(elem_vstart[e], elem_vstart[e] + elem_nskin[e]):
-                if inside[i] or outside[i]:
-                    blocked = True
-                    break
-            if not blocked:
-                n_grow[e] += 1
-                grew += 1
+        if not moving[e]:
+            continue
+        blocked = False
+        for i in range(elem_vstart[e], elem_vstart[e] + elem_nskin[e]):
+            if inside[i] or outside[i]:
+                blocked = True
+                break
+        if blocked:
+            continue
+        n_grow[e] += 1
+        grew += 1
         growth[e] = 1.0 + n_grow[e] * k_g_dt
     return grew
 

@@ -16,7 +16,8 @@ import numpy as np
 
 from ..errors import DivergedError
 from ..params import SimParams
-from .forces import boundary_force, contact_query, edge_force, overlap_force, repulsion_force
+from .forces import (boundary_force, contact_query, contact_update, edge_force, overlap_force,
+                     repulsion_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas
 from .model import Model, State
@@ -70,6 +71,17 @@ class Simulator:
         self.seg_a = np.concatenate(seg_a).astype(np.int64)
         self.seg_b = np.concatenate(seg_b).astype(np.int64)
         self.seg_elem = np.concatenate(seg_e).astype(np.int32)
+        # ring neighbours of every segment (segments of an element are consecutive)
+        nxt, prv = [], []
+        base = 0
+        for e in range(M):
+            n = int(m.elem_nskin[e])
+            idx = np.arange(n)
+            nxt.append(base + (idx + 1) % n)
+            prv.append(base + (idx - 1) % n)
+            base += n
+        self.seg_next = np.concatenate(nxt).astype(np.int64)
+        self.seg_prev = np.concatenate(prv).astype(np.int64)
         self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.seg_a), len(m.tris))
         self.F = np.zeros((N, 2))
         self.inside = np.zeros(N, np.bool_)
@@ -78,6 +90,7 @@ class Simulator:
         self.nb_elem = np.zeros((N, MAX_NEIGHBOURS), np.int32)
         self.nb_d2 = np.zeros((N, MAX_NEIGHBOURS))
         self.nb_q = np.zeros((N, MAX_NEIGHBOURS, 2))
+        self.nb_seg = np.zeros((N, MAX_NEIGHBOURS), np.int64)
         self.growth = np.ones(M)
         self.areas = np.zeros(M)
         self.moving_area = 0.0
@@ -85,6 +98,8 @@ class Simulator:
         self.sp_start = sp_start
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
         self.dt = params.dt
+        # a vertex this close to a neighbouring skin gets the exact inside test every step
+        self.near2 = (4.0 * params.velocity_cap * params.dt * params.dt * max(1, params.requery_every)) ** 2
         self.allow_growth = True
         self._good: State | None = None
         self._recoveries = 0
@@ -95,11 +110,18 @@ class Simulator:
         m, st, p = self.model, self.state, self.params
         x, F = st.x, self.F
         g = self.grid
-        g.rebuild(x, self.seg_a, self.seg_b, self.seg_elem, m.tris, m.tri_elem)
-        contact_query(x, self.active_skin, m.vert_elem,
-                      g.segs.xy, g.segs.elem, g.segs.start, *g.segs.params,
-                      g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params,
-                      self.inside, self.nb_count, self.nb_elem, self.nb_d2, self.nb_q)
+        g.rebuild_triangles(x, m.tris, m.tri_elem)
+        if st.iteration % p.requery_every == 0:
+            g.rebuild_segments(x, self.seg_a, self.seg_b, self.seg_elem)
+            contact_query(x, self.active_skin, m.vert_elem,
+                          g.segs.xy, g.segs.elem, g.segs.start, g.segs.order, *g.segs.params,
+                          g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params,
+                          self.inside, self.nb_count, self.nb_elem, self.nb_d2, self.nb_q, self.nb_seg)
+        else:
+            contact_update(x, self.active_skin, m.vert_elem, self.seg_a, self.seg_b,
+                           self.seg_next, self.seg_prev,
+                           g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params, self.near2,
+                           self.inside, self.nb_count, self.nb_d2, self.nb_q, self.nb_seg)
         F[:] = 0.0
         # F = F_r + F_e + F_b + F_o  (Eq. 1)
         repulsion_force(x, self.active_skin, self.inside, self.nb_count, self.nb_q,
@@ -110,8 +132,8 @@ class Simulator:
                        p.outside_block * m.gap)
         overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, p.k_overlap, F)
         euler_step(x, st.v, F, self.active_all, self.dt, p.velocity_cap * self.dt)
-        grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow, self.growth,
-             p.k_growth * p.dt, self.allow_growth)
+        grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
+             self.growth, p.k_growth * p.dt, self.allow_growth)
         if p.relax_passes > 0:
             relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_start,
                                      self.sp_nedge, m.springs, m.vnbr_ptr, m.vnbr,
@@ -120,6 +142,10 @@ class Simulator:
         st.iteration += 1
         self.moving_area = float(self.areas[self.moving].sum() / m.container_area)
         return float(self.areas.sum() / m.container_area)
+
+    def begin_settle(self) -> None:
+        """Stop growing; the last iterations only resolve overlaps and even out gaps."""
+        self.allow_growth = False
 
     @property
     def n_inside(self) -> int:
@@ -174,7 +200,7 @@ class Simulator:
                     if converged or st.iteration >= p.max_iterations:
                         stopped_by = "converged" if converged else "max_iterations"
                         settle_left = p.settle_iterations
-                        self.allow_growth = False
+                        self.begin_settle()
                 if settle_left is not None:
                     if settle_left <= 0:
                         break
