@@ -34,6 +34,11 @@ from repulsionpak.sim.selfintersect import relax_self_intersections
 from repulsionpak.types import ArtPath, Element, Style
 
 
+def no_neighbours(n):
+    """Empty neighbour lists (nb_count, nb_d2, nb_q) for kernels that take them."""
+    return np.zeros(n, np.int64), np.zeros((n, 1)), np.zeros((n, 1, 2))
+
+
 @pytest.fixture(autouse=True, scope="module")
 def _one_numba_thread():
     """The machine is small and shared: numba's OpenMP threads spin against other
@@ -63,7 +68,8 @@ def run_boundary(x, active, fld, k_b, F):
     outside = np.zeros(len(x), np.bool_)
     _call_by_name(boundary_force, {
         "x": x, "active_all": np.asarray(active, np.int64), "values": fld.values, "ox": fld.ox,
-        "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": k_b, "F": F, "outside": outside, "block_depth": 0.0})
+        "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": k_b, "F": F, "outside": outside, "block_depth": 0.0,
+        "inset": 0.0})
     return outside
 
 
@@ -214,15 +220,30 @@ def test_overlap_force_pulls_toward_incident_centroids():
     F = np.zeros_like(x)
     inside = np.zeros(len(x), np.bool_)
     inside[0] = True
-    overlap_force(x, np.arange(len(x), dtype=np.int64), inside, tris, ptr, idx, k_o, F)
+    overlap_force(x, np.arange(len(x), dtype=np.int64), inside, tris, ptr, idx, *no_neighbours(len(x)), k_o, F)
     expected = k_o * sum(x[t].mean(axis=0) - x[0] for t in tris)
     np.testing.assert_allclose(F[0], expected, rtol=1e-12)
     assert np.abs(expected).max() > 1.0
     np.testing.assert_array_equal(F[1:], 0.0)  # not inside: no overlap force
     # a vertex not flagged inside gets nothing
     F2 = np.zeros_like(x)
-    overlap_force(x, np.arange(len(x), dtype=np.int64), np.zeros(len(x), np.bool_), tris, ptr, idx, k_o, F2)
+    overlap_force(x, np.arange(len(x), dtype=np.int64), np.zeros(len(x), np.bool_), tris, ptr, idx, *no_neighbours(len(x)), k_o, F2)
     np.testing.assert_array_equal(F2, 0.0)
+
+
+def test_overlap_force_adds_ejection_towards_the_nearest_neighbouring_skin_point():
+    x = np.array([[0.0, 0.0], [4.0, 0.0], [3.0, 3.0]])
+    tris = np.array([[0, 1, 2]], np.int32)
+    ptr, idx = _csr(len(x), tris.ravel(), np.repeat(np.arange(len(tris)), 3))
+    inside = np.array([True, False, False])
+    nb_count = np.array([2, 0, 0], np.int64)
+    nb_d2 = np.array([[4.0, 1.0], [0, 0], [0, 0]])
+    nb_q = np.array([[[2.0, 0.0], [0.0, -1.0]], [[0, 0], [0, 0]], [[0, 0], [0, 0]]])
+    F = np.zeros_like(x)
+    overlap_force(x, np.arange(3, dtype=np.int64), inside, tris, ptr, idx, nb_count, nb_d2, nb_q, 10.0, F)
+    centroid_pull = 10.0 * (x.mean(axis=0) - x[0])
+    ejection = 10.0 * (np.array([0.0, -1.0]) - x[0])  # the nearer of the two stored points
+    np.testing.assert_allclose(F[0], centroid_pull + ejection, rtol=1e-12)
 
 
 def test_overlap_force_points_into_the_own_mesh(template):
@@ -231,7 +252,7 @@ def test_overlap_force_points_into_the_own_mesh(template):
     skin = np.flatnonzero(model.is_skin)
     inside[skin] = True
     F = np.zeros_like(state.x)
-    overlap_force(state.x, skin.astype(np.int64), inside, model.tris, model.vtri_ptr, model.vtri, 80.0, F)
+    overlap_force(state.x, skin.astype(np.int64), inside, model.tris, model.vtri_ptr, model.vtri, *no_neighbours(len(state.x)), 80.0, F)
     for e in range(2):
         s, n = model.elem_vstart[e], model.elem_nskin[e]
         c = state.x[model.elem_vstart[e]:model.elem_vstart[e + 1]].mean(axis=0)
@@ -302,6 +323,19 @@ def test_boundary_force_beyond_the_sampled_grid_points_back(square_field):
     f = square_field
     outside_distance(x, f.values, f.ox, f.oy, 1.0 / f.h, d)
     assert d[0] == pytest.approx(2000.0, rel=0.01)
+
+
+def test_boundary_inset_pulls_vertices_just_inside_the_boundary(square_field):
+    fld = square_field
+    x = np.array([[50.0, -0.5], [50.0, 5.0]])  # 0.5 outside the y=0 side; well inside
+    F = np.zeros_like(x)
+    _call_by_name(boundary_force, {
+        "x": x, "active_all": np.arange(2, dtype=np.int64), "values": fld.values, "ox": fld.ox,
+        "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": 10.0, "F": F, "outside": np.zeros(2, np.bool_),
+        "block_depth": 0.0, "inset": 1.0})
+    # pulled towards y = +1 (the inset boundary): magnitude k_b·(0.5 + 1.0), along +y
+    np.testing.assert_allclose(F[0], [0.0, 15.0], atol=0.3)
+    np.testing.assert_array_equal(F[1], 0.0)
 
 
 def test_boundary_force_only_touches_active_vertices(square_field):

@@ -224,9 +224,12 @@ def repulsion_force(x, active, inside, nb_count, nb_q, k_r, soft, F):
 
 
 @njit(cache=True, parallel=True)
-def overlap_force(x, active, inside, tris, vtri_ptr, vtri, k_o, F):
+def overlap_force(x, active, inside, tris, vtri_ptr, vtri, nb_count, nb_d2, nb_q, k_o, F):
     """Eq. 4: F_o = k_o Σ (p_i − x) over the centroids p_i of the triangles incident to x,
-    for vertices inside another mesh."""
+    for vertices inside another mesh — plus, beyond the paper, k_o (q − x) towards the
+    nearest point q on the neighbouring skin (the way out). Eq. 4 alone only contracts a
+    mesh; when two meshes overlap over a wide lens nothing pushed them apart and
+    neighbours growing around them could press them through each other."""
     for k in prange(active.shape[0]):
         i = active[k]
         if not inside[i]:
@@ -240,6 +243,13 @@ def overlap_force(x, active, inside, tris, vtri_ptr, vtri, k_o, F):
             c = tris[t, 2]
             fx += (x[a, 0] + x[b, 0] + x[c, 0]) / 3.0 - x[i, 0]
             fy += (x[a, 1] + x[b, 1] + x[c, 1]) / 3.0 - x[i, 1]
+        best = -1
+        for j in range(nb_count[i]):
+            if best < 0 or nb_d2[i, j] < nb_d2[i, best]:
+                best = j
+        if best >= 0:
+            fx += nb_q[i, best, 0] - x[i, 0]
+            fy += nb_q[i, best, 1] - x[i, 1]
         F[i, 0] += k_o * fx
         F[i, 1] += k_o * fy
 
@@ -301,15 +311,19 @@ def _field_sample(values, ox, oy, inv_h, px, py):
 
 
 @njit(cache=True, parallel=True)
-def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_depth):
+def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_depth, inset):
     """Eq. 5: F_b = k_b (p_b − x) for a vertex outside the container, p_b the closest
     boundary point, from the signed distance field: p_b − x = −sdf · ∇sdf/|∇sdf|.
-    ``outside[i]`` is set for vertices more than ``block_depth`` outside: they block their
-    element's growth like an overlap does."""
+
+    ``inset`` moves the boundary the force acts on that far inside the container (0 is
+    the paper's rule): skins then rest just inside the boundary instead of just outside,
+    so the art never crosses it. ``outside[i]`` is set for vertices more than
+    ``block_depth`` outside: they block their element's growth like an overlap does."""
     for k in prange(active_all.shape[0]):
         i = active_all[k]
         d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
         outside[i] = d > block_depth
+        d += inset
         if d <= 0.0:
             continue
         n = np.sqrt(gx * gx + gy * gy)
@@ -317,6 +331,81 @@ def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_
             continue
         F[i, 0] -= k_b * d * gx / n
         F[i, 1] -= k_b * d * gy / n
+
+
+@njit(cache=True)
+def inversion_force(x, tris, tri_elem, tri_rest, growth, moving, min_fraction, k, F):
+    """Beyond the paper (whose sec. 12 notes folded, unaesthetic bends): a triangle whose
+    signed area falls below ``min_fraction`` of its (grown) rest area pushes its vertices
+    along the gradient of its area, k·(A_min − A)/sqrt(A_rest) each, so meshes do not fold
+    over and the art mapped through them stays inside the skin."""
+    for t in range(tris.shape[0]):
+        e = tri_elem[t]
+        if not moving[e]:
+            continue
+        a = tris[t, 0]
+        b = tris[t, 1]
+        c = tris[t, 2]
+        area = 0.5 * ((x[b, 0] - x[a, 0]) * (x[c, 1] - x[a, 1]) - (x[b, 1] - x[a, 1]) * (x[c, 0] - x[a, 0]))
+        rest = tri_rest[t] * growth[e] * growth[e]
+        target = min_fraction * rest
+        if area >= target:
+            continue
+        mag = k * (target - area) / np.sqrt(rest)
+        # dA/dx_v = 0.5 * perp(x_next - x_prev) for v in (a, b, c) counter-clockwise
+        for j in range(3):
+            v = tris[t, j]
+            p = tris[t, (j + 1) % 3]
+            q = tris[t, (j + 2) % 3]
+            gx = 0.5 * (x[p, 1] - x[q, 1])
+            gy = 0.5 * (x[q, 0] - x[p, 0])
+            n = np.sqrt(gx * gx + gy * gy)
+            if n > 1e-12:
+                F[v, 0] += mag * gx / n
+                F[v, 1] += mag * gy / n
+
+
+@njit(cache=True, parallel=True)
+def project_inside(x, active_all, values, ox, oy, inv_h, limit):
+    """Hard constraint after the Euler step (beyond the paper): a vertex more than
+    ``limit`` outside the container is moved back to that distance along the field's
+    gradient. The penalty force of Eq. 5 alone lets strongly pushed vertices sit far out."""
+    for k in prange(active_all.shape[0]):
+        i = active_all[k]
+        d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
+        if d <= limit:
+            continue
+        n = np.sqrt(gx * gx + gy * gy)
+        if n < 1e-12:
+            continue
+        x[i, 0] -= (d - limit) * gx / n
+        x[i, 1] -= (d - limit) * gy / n
+
+
+@njit(cache=True)
+def corner_force(x, corners, tri_xy, tri_elem, tri_order, tri_start, tox, toy, tinv, tgx, tgy,
+                 tris, moving, k_b, F):
+    """Beyond the paper: the container's reflex corners (pointing into the container, like
+    the cleft of a heart) can slip between two skin vertices into a mesh, where no vertex
+    is outside. A corner found inside a triangle pushes that triangle's vertices away
+    from it, k_b·(v − c) each, like a vertex of a fixed obstacle."""
+    for k in range(corners.shape[0]):
+        cx = corners[k, 0]
+        cy = corners[k, 1]
+        gx, gy = cell_of(cx, cy, tox, toy, tinv, tgx, tgy)
+        for yy in range(max(gy - 1, 0), min(gy + 2, tgy)):
+            for xx in range(max(gx - 1, 0), min(gx + 2, tgx)):
+                c = yy * tgx + xx
+                for m in range(tri_start[c], tri_start[c + 1]):
+                    if not moving[tri_elem[m]]:
+                        continue
+                    if _inside_triangle(cx, cy, tri_xy[m, 0], tri_xy[m, 1], tri_xy[m, 2],
+                                        tri_xy[m, 3], tri_xy[m, 4], tri_xy[m, 5]):
+                        t = tri_order[m]
+                        for j in range(3):
+                            v = tris[t, j]
+                            F[v, 0] += k_b * (x[v, 0] - cx)
+                            F[v, 1] += k_b * (x[v, 1] - cy)
 
 
 @njit(cache=True)

@@ -86,6 +86,20 @@ def gather_triangles(x, tris, tri_elem, order, out_xy, out_elem):
         out_elem[k] = tri_elem[t]
 
 
+@njit(cache=True)
+def longest_edge(x, tris):
+    """Length of the longest triangle edge (the triangle grid's cells must not be smaller)."""
+    best = 0.0
+    for t in range(tris.shape[0]):
+        for j in range(3):
+            a = tris[t, j]
+            b = tris[t, (j + 1) % 3]
+            d = (x[a, 0] - x[b, 0]) ** 2 + (x[a, 1] - x[b, 1]) ** 2
+            if d > best:
+                best = d
+    return np.sqrt(best)
+
+
 class CellList:
     """Items (segments or triangles) binned into a uniform grid by counting sort, with their
     coordinates gathered in cell order so the queries stream through memory. Rebuilt in
@@ -119,8 +133,18 @@ class Grid:
     window) and triangles (small cells: only point-in-mesh tests)."""
 
     def __init__(self, origin, extent, seg_cell, tri_cell, n_segments, n_triangles):
+        self.origin, self.extent = origin, extent
         self.segs = CellList(origin, extent, seg_cell, n_segments, 4)
         self.tris = CellList(origin, extent, tri_cell, n_triangles, 6)
+        self.tri_cell = tri_cell
+
+    def fit_triangles(self, x, tris) -> None:
+        """Grow the triangle cells if a triangle got longer than a cell (meshes can grow
+        past their nominal size): a point-in-triangle test only looks one cell around."""
+        need = longest_edge(x, tris)
+        if need > self.tri_cell:
+            self.tri_cell = 1.3 * need
+            self.tris = CellList(self.origin, self.extent, self.tri_cell, len(tris), 6)
 
     def rebuild(self, x, seg_a, seg_b, seg_elem, tris, tri_elem):
         self.rebuild_segments(x, seg_a, seg_b, seg_elem)

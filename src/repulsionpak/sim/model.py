@@ -80,6 +80,7 @@ class Model:
     spring_is_edge: np.ndarray  # (S,) bool: mesh edge (True) or auxiliary spring
     tris: np.ndarray  # (T, 3) int32 global vertex indices
     tri_elem: np.ndarray  # (T,) int32
+    tri_rest: np.ndarray  # (T,) signed rest area at placement (before growth), > 0
     vtri_ptr: np.ndarray  # (N+1,) CSR: triangles incident to each vertex
     vtri: np.ndarray  # (K,)
     vnbr_ptr: np.ndarray  # (N+1,) CSR: vertices joined to each vertex by a spring
@@ -90,6 +91,7 @@ class Model:
     field: Field  # container signed distance
     container_area: float
     gap: float  # the requested gap, simulation units
+    corners: np.ndarray  # (C, 2) reflex corners of the container (pointing inwards)
     cell_size: float  # segment grid cell width (repulsion range)
     tri_cell_size: float  # triangle grid cell width (>= the longest mesh edge)
     grid_origin: tuple[float, float]
@@ -117,6 +119,32 @@ class State:
     def copy(self) -> "State":
         return State(self.x.copy(), self.v.copy(), self.n_grow.copy(), self.iteration,
                      list(self.area_history))
+
+
+def reflex_corners(region, max_angle_deg: float = 160.0) -> np.ndarray:
+    """Vertices of the container's rings where the region's interior angle exceeds 180°
+    + (180 − max_angle_deg), i.e. sharp corners pointing into the container. (C, 2)."""
+    out = []
+    polys = getattr(region, "geoms", [region])
+    for poly in polys:
+        rings = [(np.asarray(poly.exterior.coords)[:-1], True)]
+        rings += [(np.asarray(r.coords)[:-1], False) for r in poly.interiors]
+        for pts, is_outer in rings:
+            if len(pts) < 3:
+                continue
+            x, y = pts[:, 0], pts[:, 1]
+            area = 0.5 * (np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+            sign = 1.0 if area > 0 else -1.0  # orientation of this ring
+            prev, nxt = np.roll(pts, 1, axis=0), np.roll(pts, -1, axis=0)
+            u, w = pts - prev, nxt - pts
+            z = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]  # turn at the vertex
+            a, b = prev - pts, nxt - pts
+            cosang = (a * b).sum(axis=1) / np.maximum(np.hypot(*a.T) * np.hypot(*b.T), 1e-300)
+            ang = np.degrees(np.arccos(np.clip(cosang, -1, 1)))  # angle between the two edges
+            # outer ring: a turn against its orientation is reflex; a hole: the opposite
+            reflex = (z * sign < 0) if is_outer else (z * sign > 0)
+            out.extend(pts[reflex & (ang < max_angle_deg)])
+    return np.asarray(out, dtype=float).reshape(-1, 2)
 
 
 def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -196,6 +224,11 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     longest = max(float(np.max(np.linalg.norm(t.verts[t.springs[:t.n_edges, 0]] - t.verts[t.springs[:t.n_edges, 1]], axis=1)))
                   for t in templates) / frame.unit
     tri_cell = min(1.3 * longest, cell_size)
+    tri_pts = x[tris_a]
+    tri_rest = 0.5 * ((tri_pts[:, 1, 0] - tri_pts[:, 0, 0]) * (tri_pts[:, 2, 1] - tri_pts[:, 0, 1])
+                      - (tri_pts[:, 1, 1] - tri_pts[:, 0, 1]) * (tri_pts[:, 2, 0] - tri_pts[:, 0, 0]))
+    if base is not None:  # frozen elements: their current areas (they never move)
+        tri_rest[:len(base[0].tris)] = base[0].tri_rest
     model = Model(
         vert_elem=np.ascontiguousarray(np.concatenate(vert_elem), dtype=np.int32),
         elem_vstart=np.asarray(starts, np.int32),
@@ -207,9 +240,11 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         spring_is_edge=np.concatenate(s_edge),
         tris=tris_a,
         tri_elem=np.ascontiguousarray(np.concatenate(t_elem), dtype=np.int32),
+        tri_rest=np.ascontiguousarray(tri_rest),
         vtri_ptr=vtri_ptr, vtri=vtri, vnbr_ptr=vnbr_ptr, vnbr=vnbr,
         frozen=frozen_all, template_index=tindex, kind=kinds_all, field=fld,
-        container_area=float(region_sim.area), gap=float(gap), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
+        container_area=float(region_sim.area), gap=float(gap),
+        corners=reflex_corners(region_sim), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
         grid_origin=(float(minx - cell_size), float(miny - cell_size)),
         grid_extent=(float(maxx - minx + 2 * cell_size), float(maxy - miny + 2 * cell_size)),
     )

@@ -16,8 +16,8 @@ import numpy as np
 
 from ..errors import DivergedError
 from ..params import SimParams
-from .forces import (boundary_force, contact_query, contact_update, edge_force, overlap_force,
-                     repulsion_force)
+from .forces import (boundary_force, contact_query, contact_update, corner_force, edge_force,
+                     inversion_force, overlap_force, project_inside, repulsion_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas
 from .model import Model, State
@@ -110,6 +110,8 @@ class Simulator:
         m, st, p = self.model, self.state, self.params
         x, F = st.x, self.F
         g = self.grid
+        if st.iteration % p.requery_every == 0:
+            g.fit_triangles(x, m.tris)
         g.rebuild_triangles(x, m.tris, m.tri_elem)
         if st.iteration % p.requery_every == 0:
             g.rebuild_segments(x, self.seg_a, self.seg_b, self.seg_elem)
@@ -129,9 +131,19 @@ class Simulator:
         edge_force(x, m.springs, m.rest0, m.spring_elem, self.growth, self.moving, p.k_edge, F)
         boundary_force(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                        1.0 / m.field.h, p.k_boundary, F, self.outside,
-                       p.outside_block * m.gap)
-        overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, p.k_overlap, F)
+                       p.outside_block * m.gap, p.boundary_inset * m.gap)
+        overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, self.nb_count, self.nb_d2,
+                      self.nb_q, p.k_overlap, F)
+        if p.min_triangle_area > 0:
+            inversion_force(x, m.tris, m.tri_elem, m.tri_rest, self.growth, self.moving,
+                            p.min_triangle_area, p.k_overlap, F)
+        if len(m.corners):
+            corner_force(x, m.corners, g.tris.xy, g.tris.elem, g.tris.order, g.tris.start,
+                         *g.tris.params, m.tris, self.moving, p.k_corner, F)
         euler_step(x, st.v, F, self.active_all, self.dt, p.velocity_cap * self.dt)
+        if p.hard_boundary and not self.allow_growth:  # while settling
+            project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
+                           1.0 / m.field.h, 0.0)
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth)
         if p.relax_passes > 0:
