@@ -12,6 +12,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from ..errors import DivergedError
@@ -159,6 +160,16 @@ class Simulator:
         """Stop growing; the last iterations only resolve overlaps and even out gaps."""
         self.allow_growth = False
 
+    def threads(self) -> int:
+        """numba threads for this run: ``params.threads`` if set, else one thread below
+        ``parallel_threshold`` vertices (on small scenes thread start-up costs more than
+        it saves), all otherwise."""
+        if self.params.threads > 0:
+            return min(self.params.threads, numba.config.NUMBA_NUM_THREADS)
+        if self.model.n_vertices < self.params.parallel_threshold:
+            return 1
+        return numba.config.NUMBA_NUM_THREADS
+
     @property
     def n_inside(self) -> int:
         return int(count_inside(self.inside, self.active_skin))
@@ -181,6 +192,8 @@ class Simulator:
         """
         p, st = self.params, self.state
         self.refresh_growth()
+        threads = numba.get_num_threads()
+        numba.set_num_threads(self.threads())
         hist = st.area_history
         w = p.stop_window
         stopped_by = "max_iterations"
@@ -219,6 +232,8 @@ class Simulator:
                     settle_left -= 1
         except KeyboardInterrupt:
             stopped_by = "interrupted"
+        finally:
+            numba.set_num_threads(threads)
         self.allow_growth = True
         if on_snapshot is not None:
             on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,

@@ -1,0 +1,120 @@
+"""End-to-end packings checked by their metrics: the paper's heart scene (skipped without
+../shared/data), the .path inputs, and scenes made from the shipped example library
+(a container with a hole, one with two regions)."""
+
+from __future__ import annotations
+
+import importlib
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from repulsionpak import examples
+from repulsionpak.cli import app
+from repulsionpak.io import load_container, load_elements, read_packing_svg
+from repulsionpak.pack import pack
+from repulsionpak.params import params_from_dict
+
+ev = importlib.import_module("repulsionpak.evaluate")
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
+needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data is not available")
+
+
+def check_packing(container, placed, gap, min_area):
+    """The invariants every finished packing must meet; returns the metrics."""
+    m = ev.evaluate(container, placed, gap, grid=400)
+    assert m["overlap_area"] <= 1e-6 * container.area, "elements' art overlaps"
+    assert m["n_outside"] == 0, f"art outside the container: {m['outside']}"
+    assert m["area_fraction"] >= min_area
+    assert 0.75 * gap <= m["gap"]["median"] <= 1.25 * gap, m["gap"]
+    return m
+
+
+@needs_shared
+@pytest.mark.slow
+def test_heart_scene_like_the_paper(tmp_path):
+    """The issue's acceptance command: zero overlaps, all art inside, area >= 0.55,
+    median nearest-neighbour gap within ±25%, through the CLI with a report."""
+    out, rep = tmp_path / "out.svg", tmp_path / "report.json"
+    res = CliRunner().invoke(app, ["pack", str(SHARED / "containers" / "heart.svg"), str(SHARED / "animals"),
+                                   "-o", str(out), "--gap", "5.2", "--seed", "1", "--report", str(rep), "-q"])
+    assert res.exit_code == 0, res.output
+    container, placed, info = read_packing_svg(out)
+    assert info["gap"] == pytest.approx(5.2)
+    assert len(placed) >= 25 and all(p.kind == "primary" for p in placed)
+    m = check_packing(load_container(SHARED / "containers" / "heart.svg"), placed, 5.2, 0.55)
+    report = json.loads(rep.read_text())
+    for key in ("n_primary", "n_secondary", "n_vertices", "iterations", "seconds", "area_fraction", "gap",
+                "seed", "params"):
+        assert key in report
+    assert report["invariants"]["art_overlap_ok"] and report["invariants"]["vertices_inside_ok"]
+    assert report["area_fraction"] == pytest.approx(m["area_fraction"], abs=0.01)
+    # elements bend: some deformation, none torn apart
+    assert 0.0 < m["deformation"]["mean"] < 0.3
+
+
+@needs_shared
+@pytest.mark.slow
+def test_path_format_gives_an_equivalent_packing():
+    fmt = SHARED / "repulsionpak_format"
+    container = load_container(fmt / "containers" / "heart.path", tolerance=1.3)
+    elements = load_elements([fmt / "animals"])
+    p = pack(container, elements, params_from_dict({"gap": 5.2, "seed": 1}))
+    check_packing(container, p.placed, 5.2, 0.53)
+
+
+def test_container_with_a_hole():
+    container = load_container(examples.container_file("frame"))
+    elements = load_elements(examples.element_files()[:6])
+    p = pack(container, elements, params_from_dict({"gap": 8.0, "seed": 2, "placement": {"count": 14}}))
+    m = check_packing(container, p.placed, 8.0, 0.40)
+    hole = container.region.interiors[0]
+    import shapely
+
+    window = shapely.Polygon(hole)
+    assert all(ev.art_geometry(a).intersection(window).area < 1e-6 for a in p.placed)
+    assert m["n_primary"] == 14
+
+
+def test_container_with_two_regions():
+    container = load_container(examples.container_file("two_hearts"))
+    assert len(container.region.geoms) == 2
+    elements = load_elements(examples.element_files()[6:])
+    p = pack(container, elements, params_from_dict({"gap": 6.0, "seed": 3, "placement": {"count": 12}}))
+    check_packing(container, p.placed, 6.0, 0.40)
+    # both regions are used
+    import shapely
+
+    per_region = [sum(1 for a in p.placed if ev.art_geometry(a).intersects(r)) for r in container.region.geoms]
+    assert min(per_region) >= 3
+
+
+def test_same_seed_gives_byte_identical_svg(tmp_path):
+    args = ["pack", str(examples.container_file("circle")), *map(str, examples.element_files()[:4]),
+            "--gap", "10", "--count", "6", "-q", "--max-iterations", "600"]
+    r1 = CliRunner().invoke(app, [*args, "--seed", "7", "-o", str(tmp_path / "a.svg")])
+    r2 = CliRunner().invoke(app, [*args, "--seed", "7", "-o", str(tmp_path / "b.svg")])
+    assert r1.exit_code == 0 and r2.exit_code == 0, r1.output + r2.output
+    assert (tmp_path / "a.svg").read_bytes() == (tmp_path / "b.svg").read_bytes()
+    r3 = CliRunner().invoke(app, [*args, "--seed", "8", "-o", str(tmp_path / "c.svg")])
+    assert r3.exit_code == 0
+    assert (tmp_path / "a.svg").read_bytes() != (tmp_path / "c.svg").read_bytes()
+
+
+def test_evaluate_cli_json_agrees_with_library(tmp_path):
+    out = tmp_path / "p.svg"
+    r = CliRunner().invoke(app, ["pack", str(examples.container_file("circle")), *map(str, examples.element_files()[:5]),
+                                 "-o", str(out), "--gap", "8", "--count", "8", "--seed", "1", "-q"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(app, ["evaluate", str(out), "--json", "--plot", str(tmp_path / "scp.png")])
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.output)
+    container, placed, info = read_packing_svg(out)
+    direct = ev.evaluate(container, placed, info["gap"])
+    assert data["area_fraction"] == pytest.approx(direct["area_fraction"], abs=1e-9)
+    assert data["scp"]["q"][0] == pytest.approx(1 - data["area_fraction"], abs=0.01)
+    assert 8.0 / 2 in [pytest.approx(r) for r in data["scp"]["r"]]
+    assert (tmp_path / "scp.png").stat().st_size > 5000
