@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon, box
 
-from repulsionpak.errors import ParameterError
+from repulsionpak.errors import OutputError, ParameterError
 from repulsionpak.types import ArtPath, Container, PlacedArt, Style
 
 # the module (``repulsionpak.evaluate`` may be shadowed by the re-exported function)
@@ -437,6 +437,9 @@ def test_format_table(evaluated):
 
 def test_plot_scp(tmp_path, squares_scp, stripes_scp):
     out = tmp_path / "sub" / "scp.png"
+    with pytest.raises(OutputError):  # like every output: no directory is created silently
+        ev.plot_scp([("squares", squares_scp[2])], out, gap=GAP)
+    out.parent.mkdir()
     ev.plot_scp([("squares", squares_scp[2]), ("stripes", stripes_scp[2])], out, gap=GAP)
     assert out.stat().st_size > 5000
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
