@@ -106,32 +106,37 @@ class _Progress:
 
 
 class _StopFlag:
-    """SIGTERM handler that asks the simulation to stop at the next iteration."""
+    """SIGINT/SIGTERM handler: the first signal asks the simulation to stop after the
+    current iteration (a partial packing is then written); a second Ctrl-C aborts."""
 
     def __init__(self):
         self.stop = False
-        self._old = None
+        self._old = {}
 
     def __enter__(self):
         def handler(signum, frame):
+            if self.stop and signum == signal.SIGINT:
+                raise KeyboardInterrupt
             self.stop = True
 
-        with contextlib.suppress(ValueError):  # not in the main thread
-            self._old = signal.signal(signal.SIGTERM, handler)
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            with contextlib.suppress(ValueError):  # not in the main thread
+                self._old[sig] = signal.signal(sig, handler)
         return self
 
     def __call__(self) -> bool:
         return self.stop
 
     def __exit__(self, *exc):
-        if self._old is not None:
-            signal.signal(signal.SIGTERM, self._old)
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
 
 
 def run_pack(container: Path, elements: list[Path], output: Path, secondary: list[Path] | None = None,
              gap: float | None = None, seed: int | None = None, config: Path | None = None,
              report: Path | None = None, png: Path | None = None, count: int | None = None,
-             max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False) -> dict:
+             max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
+             checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png, write_packing_svg
@@ -140,7 +145,16 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
     t_start = time.perf_counter()
     inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
-    _check_outputs([output, report, png], inputs)
+    _check_outputs([output, report, png, checkpoint], inputs + ([resume] if resume else []))
+    if checkpoint_every < 1:
+        raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
+    resumed = None
+    if resume is not None:
+        from .checkpoint import load_checkpoint
+
+        resumed = load_checkpoint(resume)
+        if seed is None:  # the seed of the interrupted run
+            seed = int(next(iter(resumed.values()))["seed"])
     params = load_config(config) if config else Params()
     if gap is not None:
         if not gap > 0:
@@ -164,8 +178,20 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     cont = load_container(container, tolerance=tol)
     elems = load_elements(elements)
     secs = load_elements(secondary) if secondary else []
+    on_checkpoint = None
+    if checkpoint is not None or resume is not None:
+        from .checkpoint import fingerprint, load_checkpoint, save_checkpoint
+
+        files = [container, *_expand(elements), *_expand(secondary or [])]
+        fp = fingerprint(files, params.to_dict())
+        if resume is not None:
+            resumed = load_checkpoint(resume, fp)
+        if checkpoint is not None:
+            def on_checkpoint(states: dict) -> None:
+                save_checkpoint(checkpoint, {k: dict(v, seed=params.seed) for k, v in states.items()}, fp)
     with _Progress(progress) as prog, _StopFlag() as stop:
-        packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop)
+        packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
+                       on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every, resume=resumed)
     t_eval = time.perf_counter()
     metrics = evaluate(cont, packing.placed, g)
     checks = invariants(packing, metrics)
@@ -195,6 +221,18 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     if report is not None:
         _write_json_atomic(report, rep)
     return rep
+
+
+def _expand(paths: list[Path]) -> list[Path]:
+    """Files of a list of files and directories (as load_elements reads them), sorted."""
+    out = []
+    for p in paths:
+        p = Path(p)
+        if p.is_dir():
+            out.extend(sorted(f for f in p.iterdir() if f.suffix.lower() in (".svg", ".path", ".svgz")))
+        else:
+            out.append(p)
+    return out
 
 
 def invariants(packing, metrics: dict) -> dict:
@@ -262,6 +300,9 @@ def pack(
     count: Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")] = None,
     max_iterations: Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")] = None,
     debug_layers: Annotated[bool, typer.Option("--debug-layers", help="Add hidden skin layers to the SVG.")] = False,
+    checkpoint: Annotated[Optional[Path], typer.Option(help="Save the simulation state to this file periodically.")] = None,
+    checkpoint_every: Annotated[int, typer.Option(help="Iterations between checkpoints.")] = 500,
+    resume: Annotated[Optional[Path], typer.Option(help="Continue an interrupted run from its checkpoint (same inputs and options).")] = None,
     quiet: Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")] = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -270,7 +311,8 @@ def pack(
     _DEBUG = debug
     with _errors():
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
-                       count, max_iterations, progress=not quiet, debug_layers=debug_layers)
+                       count, max_iterations, progress=not quiet, debug_layers=debug_layers,
+                       checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:

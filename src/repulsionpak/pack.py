@@ -87,12 +87,20 @@ def prepare(container: Container, elements: Sequence[Element], params: Params,
 
 def pack(container: Container, elements: Sequence[Element], params: Params = Params(),
          secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
-         should_stop: Callable[[], bool] | None = None) -> Packing:
+         should_stop: Callable[[], bool] | None = None,
+         on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 500,
+         resume: dict | None = None) -> Packing:
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
     ``params.seed`` fixes every random choice. ``on_snapshot`` receives progress
     snapshots; ``should_stop()`` (or Ctrl-C) ends the current phase early and the result
     is marked partial.
+
+    ``on_checkpoint(states)`` receives ``{"primary": ..., "secondary": ...}`` simulator
+    states every ``checkpoint_every`` iterations and when a phase ends (see
+    :mod:`repulsionpak.checkpoint`); passing such a dict back as ``resume`` (with the same
+    inputs and parameters) continues the run and ends with the same packing as an
+    uninterrupted one.
     """
     params = params.validate()
     rng = np.random.default_rng(params.seed)
@@ -106,7 +114,21 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                gap=gap / frame.unit)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
-    res: RunResult = sim.run(on_snapshot, should_stop=should_stop)
+    saved = (resume or {}).get("primary")
+    if saved is not None:
+        sim.restore(saved)
+
+    def save_primary(s: Simulator, done: bool = False) -> None:
+        if on_checkpoint is not None:
+            on_checkpoint({"primary": dict(s.snapshot_state(), done=done, area=s.moving_area)})
+
+    if saved is not None and saved.get("done"):
+        res = RunResult(state.iteration, float(saved.get("area", 0.0)), sim.stopped_by, sim.dt)
+    else:
+        res = sim.run(on_snapshot, should_stop=should_stop, on_checkpoint=save_primary,
+                      checkpoint_every=checkpoint_every if on_checkpoint else 0)
+        if res.stopped_by != "interrupted":  # an interrupted run keeps its last periodic checkpoint
+            save_primary(sim, done=True)
     t2 = time.perf_counter()
     packing = Packing(container, gap, [], templates, model, state, frame, params,
                       iterations={"primary": res.iterations, "secondary": 0},
@@ -115,7 +137,11 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     if secondary and res.stopped_by != "interrupted":
         from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
 
-        add_secondary(packing, secondary, rng, on_snapshot=on_snapshot, should_stop=should_stop)
+        primary_state = dict(sim.snapshot_state(), done=True, area=res.area_fraction)
+        add_secondary(packing, secondary, rng, on_snapshot=on_snapshot, should_stop=should_stop,
+                      on_checkpoint=(None if on_checkpoint is None else
+                                     lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
+                      checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
     packing.placed = placed_art(packing.templates, packing.model, packing.state, frame)
     packing.seconds["render"] = time.perf_counter() - t3

@@ -150,14 +150,26 @@ class Params:
         """Raise :class:`ParameterError` on values that cannot work; return self."""
         if self.gap is not None and not (math.isfinite(self.gap) and self.gap > 0):
             raise ParameterError(f"gap must be a positive number, got {self.gap!r}")
+        if self.seed is not None and not 0 <= self.seed < 2**64:
+            raise ParameterError(f"seed must be an integer in [0, 2**64), got {self.seed!r}")
+        for section, cls in _SECTIONS.items():  # NaN / inf slip through the range checks
+            sub = getattr(self, section)
+            for f in fields(cls):
+                v = getattr(sub, f.name)
+                if isinstance(v, float) and not math.isfinite(v):
+                    raise ParameterError(f"{section}.{f.name} must be a finite number, got {v!r}")
         p, s, pl = self.preprocess, self.sim, self.placement
+        sec = self.secondary
         checks = [
             (p.mesh_spacing > 0, "preprocess.mesh_spacing must be > 0"),
             (p.skin_tolerance > 0, "preprocess.skin_tolerance must be > 0"),
             (0 < p.skin_offset <= 2, "preprocess.skin_offset must be in (0, 2] (× gap)"),
             (0 < p.min_angle <= 34, "preprocess.min_angle must be in (0, 34] degrees"),
             (0 < p.flatten_tolerance <= 0.25, "preprocess.flatten_tolerance must be in (0, 0.25]"),
+            (3 <= p.min_boundary_vertices <= 100_000, "preprocess.min_boundary_vertices must be in [3, 100000]"),
             (pl.count is None or pl.count >= 1, "placement.count must be >= 1"),
+            (pl.count is None or pl.count <= MAX_COUNT, f"placement.count must be <= {MAX_COUNT}"),
+            (pl.candidates_per_point >= 1, "placement.candidates_per_point must be >= 1"),
             (pl.element_size > 0, "placement.element_size must be > 0"),
             (0 < pl.initial_fraction < pl.target_fraction <= 1,
              "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),
@@ -171,8 +183,17 @@ class Params:
             (s.requery_every >= 1, "sim.requery_every must be >= 1"),
             (s.threads >= 0, "sim.threads must be >= 0 (0 = automatic)"),
             (s.max_iterations >= 1, "sim.max_iterations must be >= 1"),
-            (self.secondary.d_min > 0 and self.secondary.d_sep > 0, "secondary.d_min and d_sep must be > 0"),
-            (self.secondary.grid >= 64, "secondary.grid must be >= 64"),
+            (s.stop_window <= 1_000_000, "sim.stop_window must be <= 1000000"),
+            (min(s.min_iterations, s.settle_iterations, s.relax_passes) >= 0,
+             "sim.min_iterations, settle_iterations and relax_passes must be >= 0"),
+            (min(s.relax_fraction, s.stop_epsilon, s.boundary_inset, s.k_corner, s.outside_block,
+                 s.min_triangle_area) >= 0,
+             "sim.relax_fraction, stop_epsilon, boundary_inset, k_corner, outside_block and "
+             "min_triangle_area must be >= 0"),
+            (sec.d_min > 0 and sec.d_sep > 0, "secondary.d_min and d_sep must be > 0"),
+            (64 <= sec.grid <= 10_000, "secondary.grid must be in [64, 10000]"),
+            (sec.max_count is None or sec.max_count >= 0, "secondary.max_count must be >= 0"),
+            (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
         ]
         for ok, msg in checks:
             if not ok:
@@ -182,6 +203,9 @@ class Params:
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
 
+
+#: Largest number of primary elements accepted (memory and time grow with it).
+MAX_COUNT = 100_000
 
 _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
              "sim": SimParams, "secondary": SecondaryParams}
@@ -204,12 +228,16 @@ def _check_type(value, tp, where: str, source: str):
             return value
     elif base is float:
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return float(value)
+            try:
+                return float(value)
+            except OverflowError:
+                raise ConfigError(f"{source}: {where} is too large ({str(value)[:20]}...)") from None
     name = getattr(base, "__name__", str(base))
     raise ConfigError(f"{source}: {where} must be a {name}, got {value!r} ({type(value).__name__})")
 
 
 def _unknown(key: str, valid: list[str], where: str, source: str) -> ConfigError:
+    key = str(key)
     close = difflib.get_close_matches(key, valid, n=1, cutoff=0.5)
     hint = f"; did you mean '{close[0]}'?" if close else f"; valid keys: {', '.join(sorted(valid))}"
     return ConfigError(f"{source}: unknown key '{where}{key}'{hint}")
@@ -251,7 +279,7 @@ def load_config(path: str | Path, base: Params | None = None) -> Params:
     """Read a TOML file of parameters (sections ``[sim]``, ``[placement]`` ...)."""
     path = Path(path)
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = path.read_bytes().decode("utf-8-sig")
     except FileNotFoundError:
         raise ConfigError(f"{path}: no such config file") from None
     except IsADirectoryError:
@@ -259,11 +287,15 @@ def load_config(path: str | Path, base: Params | None = None) -> Params:
     except UnicodeDecodeError:
         raise ConfigError(f"{path}: not a text file (TOML must be UTF-8)") from None
     except OSError as exc:
-        raise ConfigError(f"{path}: cannot read ({exc.strerror})") from None
+        raise ConfigError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except ValueError as exc:  # e.g. a NUL byte in the path
+        raise ConfigError(f"{str(path)!r}: not a usable config path ({exc})") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: invalid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"{path}: invalid TOML: arrays or tables nested too deeply") from None
     return params_from_dict(data, source=str(path), base=base)
 
 

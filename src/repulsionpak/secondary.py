@@ -15,7 +15,7 @@ from .params import SecondaryParams
 from .placement import Placement
 from .preprocess import build_template, outline_of
 from .sim.model import build_model
-from .sim.runner import Simulator, Snapshot
+from .sim.runner import RunResult, Simulator, Snapshot
 from .types import Element
 
 
@@ -77,8 +77,12 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
 
 def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator,
                   on_snapshot: Callable[[Snapshot], None] | None = None,
-                  should_stop: Callable[[], bool] | None = None) -> int:
-    """Run the secondary phase on ``packing`` in place; returns the number of elements added."""
+                  should_stop: Callable[[], bool] | None = None,
+                  on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 0,
+                  saved: dict | None = None) -> int:
+    """Run the secondary phase on ``packing`` in place; returns the number of elements added.
+
+    ``on_checkpoint(state)`` / ``saved``: as in :func:`repulsionpak.pack.pack`, for this phase."""
     p = packing.params
     sp = p.secondary
     gap = packing.gap
@@ -113,7 +117,20 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
                                frozen=np.ones(m0.n_elements, bool), base=(m0, packing.state))
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
-    res = sim.run(on_snapshot, should_stop=should_stop)
+    if saved is not None:
+        sim.restore(saved)
+
+    def save(s: Simulator, done: bool = False) -> None:
+        if on_checkpoint is not None:
+            on_checkpoint(dict(s.snapshot_state(), done=done, area=s.moving_area))
+
+    if saved is not None and saved.get("done"):
+        res = RunResult(state.iteration, float(saved.get("area", 0.0)), sim.stopped_by, sim.dt)
+    else:
+        res = sim.run(on_snapshot, should_stop=should_stop, on_checkpoint=save,
+                      checkpoint_every=checkpoint_every if on_checkpoint else 0)
+        if res.stopped_by != "interrupted":  # an interrupted run keeps its last periodic checkpoint
+            save(sim, done=True)
     packing.templates = all_templates
     packing.model, packing.state = model, state
     packing.iterations["secondary"] = res.iterations

@@ -28,7 +28,14 @@ import shapely
 from ..errors import InputError
 from ..types import ArtPath, Container, Element, Style
 from . import svg_read
-from .svg_read import clean_points, finalize_region, rings_to_region, warn
+from .svg_read import (
+    clean_points,
+    count_self_crossing,
+    finalize_region,
+    rings_to_region,
+    warn,
+    warn_self_crossing,
+)
 
 __all__ = [
     "PALETTE",
@@ -212,6 +219,7 @@ def parse_pathfile(path: str | Path, data: bytes | str) -> PathFile:
             raise InputError(path, f"line {i}: {bad[:40]!r} is not a number") from None
         if not np.all(np.isfinite(pts)):
             raise InputError(path, f"line {i}: non-finite coordinate (NaN or infinity)")
+        svg_read.check_coordinates(path, pts, f" on line {i}")
         total += len(pts)
         if total > svg_read.MAX_POINTS:
             raise InputError(
@@ -330,6 +338,7 @@ def container_from_pathfile(
         diag = float(np.hypot(*span))
         tolerance = 1e-3 * diag if diag > 0 and math.isfinite(diag) else 1e-9
     outer, holes, arts = [], [], []
+    n_crossing = 0
     for rec in recs:
         pts = clean_points(rec.points.copy(), True, tolerance * 1e-6)
         if len(pts) >= 2 and float(np.hypot(*(pts[-1] - pts[0]))) <= tolerance:
@@ -337,6 +346,7 @@ def container_from_pathfile(
         if len(pts) < 3:
             continue
         geom = rings_to_region([pts], "nonzero", p)
+        n_crossing += count_self_crossing([pts])
         (holes if rec.path_type == HOLE else outer).append(geom)
         arts.append(ArtPath((pts,), (True,), styles.get(id(rec), _default_style())))
     if not outer:
@@ -348,5 +358,6 @@ def container_from_pathfile(
     if holes:
         region = region.difference(shapely.union_all(holes))
     region = finalize_region(p, region)
+    warn_self_crossing(p, n_crossing, region)
     arts.reverse()
     return Container(source=p.name, region=region, paths=tuple(arts), svg_root={})

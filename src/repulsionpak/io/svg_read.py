@@ -58,6 +58,13 @@ MAX_DEPTH = 200
 MAX_EXPANDED_NODES = 500_000
 #: Largest total length of path data (``d`` / ``points``) after inlining ``<use>``.
 MAX_PATH_DATA_CHARS = 64_000_000
+#: Largest absolute coordinate (file user units) accepted: beyond it areas and squared
+#: distances lose all precision or overflow (1e300 squared is infinite).
+MAX_COORD = 1e15
+#: A user-given flattening tolerance is capped at this multiple of the automatic one
+#: (1e-3 x bounding-box diagonal): a huge tolerance (e.g. from an absurd gap) would
+#: otherwise collapse arcs to chords and a circle to a line.
+MAX_TOLERANCE_FACTOR = 10.0
 
 SVG_NS = "http://www.w3.org/2000/svg"
 XLINK_NS = "http://www.w3.org/1999/xlink"
@@ -310,6 +317,44 @@ def finalize_region(path, region, what: str = "container") -> shapely.Geometry:
     return region
 
 
+def check_coordinates(path, values, what: str = "") -> None:
+    """InputError naming ``path`` if ``values`` hold NaN/inf or |v| > :data:`MAX_COORD`."""
+    a = np.asarray(values, dtype=float)
+    if a.size == 0:
+        return
+    if not np.all(np.isfinite(a)):
+        raise InputError(
+            path,
+            f"has non-finite coordinates (NaN or infinity){what}; check the path data and transforms",
+        )
+    big = float(np.abs(a).max())
+    if big > MAX_COORD:
+        raise InputError(
+            path,
+            f"has coordinates up to {big:.3g}{what}, beyond ±{MAX_COORD:.0e} user units; "
+            "scale the drawing down (sizes are relative, any scale packs the same)",
+        )
+
+
+def count_self_crossing(rings) -> int:
+    """Number of closed rings (K_i, 2) that cross or touch themselves."""
+    n = 0
+    for r in rings:
+        if len(r) >= 4 and not shapely.LinearRing(r).is_simple:
+            n += 1
+    return n
+
+
+def warn_self_crossing(path, n: int, region, what: str = "container") -> None:
+    if n:
+        parts = len(shapely.get_parts(region)) if not region.is_empty else 0
+        warn(
+            path,
+            f"{n} {what} outline(s) cross themselves (bow-tie); used the area the fill "
+            f"rule fills ({parts} region(s)); redraw the outline without crossings if that is not intended",
+        )
+
+
 # --------------------------------------------------------------------------- XML hardening
 
 
@@ -426,6 +471,44 @@ def _check_tree(path, root: ET.Element) -> None:
         return nodes, chars
 
     cost(root, 0)
+
+
+_BAD_PATH_CHARS = re.compile(r"[^MmZzLlHhVvCcSsQqTtAa0-9eE.,+\-\s]")
+_BAD_POINTS_CHARS = re.compile(r"[^0-9eE.,+\-\s]")
+
+
+def _check_attributes(path, root: ET.Element) -> None:
+    """Reject unparseable ``transform`` attributes (svgelements would crash on them with
+    an IndexError) and warn about path data with invalid characters (drawn, as browsers
+    do, up to the first error)."""
+    import svgelements as se
+
+    bad_data = None
+    for el in root.iter():
+        tf = el.get("transform")
+        if tf is not None and tf.strip():
+            try:
+                se.Matrix(tf)
+            except Exception:
+                raise InputError(
+                    path,
+                    f"<{_local(el.tag)}> has an invalid transform {tf[:80]!r}; "
+                    "fix or remove the transform attribute",
+                ) from None
+        if bad_data is None:
+            for attr, pattern in (("d", _BAD_PATH_CHARS), ("points", _BAD_POINTS_CHARS)):
+                v = el.get(attr)
+                m = pattern.search(v) if v else None
+                if m:
+                    bad_data = (_local(el.tag), attr, v[max(0, m.start() - 10) : m.start() + 20])
+                    break
+    if bad_data is not None:
+        tag, attr, near = bad_data
+        warn(
+            path,
+            f"<{tag}> {attr}=... has invalid data near {near!r}; "
+            "the shape is drawn up to the error (as browsers do)",
+        )
 
 
 _NON_RENDERED = {"symbol", "mask", "marker"}
@@ -685,6 +768,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
 
     root_xml = parse_xml_hardened(path, data)
     _check_tree(path, root_xml)
+    _check_attributes(path, root_xml)
     notes: set[str] = set()
     _sanitize(path, root_xml, notes)
     gradients = _gradient_colours(root_xml)
@@ -832,7 +916,8 @@ def shape_bounds(shapes: list[SvgShape]) -> np.ndarray | None:
         pts = [p for seg in sh.segments for p in _control_points(seg)]
         if not pts:
             continue
-        a = np.asarray(pts, dtype=float) @ sh.matrix[:2, :2].T + sh.matrix[:2, 2]
+        with np.errstate(all="ignore"):
+            a = np.asarray(pts, dtype=float) @ sh.matrix[:2, :2].T + sh.matrix[:2, 2]
         boxes.append(np.concatenate([a.min(axis=0), a.max(axis=0)]))
     if not boxes:
         return None
@@ -846,6 +931,17 @@ def default_tolerance(bounds) -> float:
         return 1e-9
     diag = float(np.hypot(bounds[2] - bounds[0], bounds[3] - bounds[1]))
     return 1e-3 * diag if diag > 0 and math.isfinite(diag) else 1e-9
+
+
+def flattening_tolerance(shapes: list[SvgShape], tolerance: float | None) -> float:
+    """The chord tolerance for ``shapes``: the automatic one (1e-3 x bounding-box
+    diagonal) when ``tolerance`` is None, else ``tolerance`` capped at
+    :data:`MAX_TOLERANCE_FACTOR` x the automatic one (a finer flattening than asked for
+    is always acceptable; a coarser one would collapse curves)."""
+    auto = default_tolerance(shape_bounds(shapes))
+    if tolerance is None:
+        return auto
+    return min(tolerance, MAX_TOLERANCE_FACTOR * auto) if auto > 1e-9 else tolerance
 
 
 def flatten_shape(
@@ -873,12 +969,9 @@ def flatten_shape(
             return
         local = np.concatenate(cur, axis=0)
         cur = None
-        pts = local @ L.T + t
-        if not np.all(np.isfinite(pts)):
-            raise InputError(
-                path,
-                "has non-finite coordinates (NaN or infinity); check the path data and transforms",
-            )
+        with np.errstate(all="ignore"):
+            pts = local @ L.T + t
+        check_coordinates(path, pts)
         pts = clean_points(pts, closed, eps)
         if len(pts) >= 2:
             out.append((pts, closed))
@@ -979,9 +1072,7 @@ def flatten_shape(
 def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
     doc = parse_svg_shapes(path, data)
     shapes = [s for s in doc.shapes if s.style.visible]
-    tol = (
-        tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
-    )
+    tol = flattening_tolerance(shapes, tolerance)
     budget = PointBudget(path)
     arts = []
     for sh in shapes:
@@ -1003,7 +1094,7 @@ def container_from_shapes(
 ) -> Container:
     """Build a Container from visible SVG shapes (closed subpaths only; holes subtracted)."""
     outer, holes, arts = [], [], []
-    n_open = 0
+    n_open = n_crossing = 0
     for sh in shapes:
         rings = []
         for pts, closed in flatten_shape(path, sh, tol, budget):
@@ -1018,6 +1109,7 @@ def container_from_shapes(
         if not rings:
             continue
         geom = rings_to_region(rings, sh.style.fill_rule, path)
+        n_crossing += count_self_crossing(rings)
         (holes if sh.hole else outer).append(geom)
         arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), sh.style))
     if n_open:
@@ -1046,6 +1138,7 @@ def container_from_shapes(
             )
         region = region.difference(hole_region)
     region = finalize_region(path, region)
+    warn_self_crossing(path, n_crossing, region)
     return Container(
         source=Path(str(path)).name,
         region=region,
@@ -1057,9 +1150,7 @@ def container_from_shapes(
 def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Container:
     doc = parse_svg_shapes(path, data)
     shapes = [s for s in doc.shapes if s.style.visible]
-    tol = (
-        tolerance if tolerance is not None else default_tolerance(shape_bounds(shapes))
-    )
+    tol = flattening_tolerance(shapes, tolerance)
     return container_from_shapes(path, shapes, tol, PointBudget(path), doc.svg_root)
 
 

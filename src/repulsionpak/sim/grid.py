@@ -136,15 +136,19 @@ class Grid:
         self.origin, self.extent = origin, extent
         self.segs = CellList(origin, extent, seg_cell, n_segments, 4)
         self.tris = CellList(origin, extent, tri_cell, n_triangles, 6)
-        self.tri_cell = tri_cell
+        self.base_tri_cell = self.tri_cell = tri_cell
 
     def fit_triangles(self, x, tris) -> None:
-        """Grow the triangle cells if a triangle got longer than a cell (meshes can grow
-        past their nominal size): a point-in-triangle test only looks one cell around."""
-        need = longest_edge(x, tris)
-        if need > self.tri_cell:
-            self.tri_cell = 1.3 * need
-            self.tris = CellList(self.origin, self.extent, self.tri_cell, len(tris), 6)
+        """Size the triangle cells to the current longest edge (meshes can grow past their
+        nominal size; a point-in-triangle test only looks one cell around): base·1.3^k
+        with the smallest k >= 0 that fits. A function of the current positions only, so
+        a resumed run uses the same cells as the uninterrupted one."""
+        need = 1.05 * longest_edge(x, tris)
+        k = max(0, int(np.ceil(np.log(max(need, 1e-300) / self.base_tri_cell) / np.log(1.3))))
+        cell = self.base_tri_cell * 1.3 ** k
+        if cell != self.tri_cell:
+            self.tri_cell = cell
+            self.tris = CellList(self.origin, self.extent, cell, len(tris), 6)
 
     def rebuild(self, x, seg_a, seg_b, seg_elem, tris, tri_elem):
         self.rebuild_segments(x, seg_a, seg_b, seg_elem)

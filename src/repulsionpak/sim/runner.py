@@ -102,6 +102,8 @@ class Simulator:
         # a vertex this close to a neighbouring skin gets the exact inside test every step
         self.near2 = (4.0 * params.velocity_cap * params.dt * params.dt * max(1, params.requery_every)) ** 2
         self.allow_growth = True
+        self.settle_left: int | None = None  # iterations left in the settle phase
+        self.stopped_by = "max_iterations"
         self._good: State | None = None
         self._recoveries = 0
 
@@ -176,11 +178,14 @@ class Simulator:
 
     def refresh_growth(self) -> None:
         """Recompute growth factors from the counters (after loading a state)."""
-        self.growth[:] = 1.0 + self.state.n_grow * self.params.k_growth * self.params.dt
+        # same expression as grow() so a restored run is bit-identical
+        self.growth[:] = 1.0 + self.state.n_grow * (self.params.k_growth * self.params.dt)
 
     # -- the loop --------------------------------------------------------------------
     def run(self, on_snapshot: Callable[[Snapshot], None] | None = None, every: int = 25,
-            should_stop: Callable[[], bool] | None = None) -> RunResult:
+            should_stop: Callable[[], bool] | None = None,
+            on_checkpoint: Callable[["Simulator"], None] | None = None,
+            checkpoint_every: int = 0) -> RunResult:
         """Iterate until the stopping rule of sec. 8 holds (or ``max_iterations``), then
         settle without growth for ``settle_iterations``.
 
@@ -189,6 +194,11 @@ class Simulator:
         < ``stop_epsilon`` (relative, so a phase of small secondary elements is judged by
         its own growth, not by the frozen primaries'). ``should_stop()`` returning True (or
         KeyboardInterrupt) ends the run early with ``stopped_by="interrupted"``.
+
+        ``on_checkpoint(self)`` is called every ``checkpoint_every`` iterations (rounded
+        up to a multiple of ``requery_every``, where the state is complete: the next step
+        starts with a full neighbour query), so a run resumed from it with
+        :meth:`restore` continues exactly as the uninterrupted one.
         """
         p, st = self.params, self.state
         self.refresh_growth()
@@ -196,10 +206,10 @@ class Simulator:
         numba.set_num_threads(self.threads())
         hist = st.area_history
         w = p.stop_window
-        stopped_by = "max_iterations"
-        settle_left = None
         a = hist[-1] if hist else 0.0
         rms = math.inf
+        if checkpoint_every > 0:
+            checkpoint_every = -(-checkpoint_every // p.requery_every) * p.requery_every
         self._good = st.copy()
         try:
             while True:
@@ -217,28 +227,54 @@ class Simulator:
                 if on_snapshot is not None and st.iteration % every == 0:
                     on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
                                          self.n_inside, st))
-                if should_stop is not None and should_stop():
-                    stopped_by = "interrupted"
-                    break
-                if settle_left is None:
+                if self.settle_left is None:
                     converged = st.iteration >= p.min_iterations and len(hist) > w and rms < p.stop_epsilon
                     if converged or st.iteration >= p.max_iterations:
-                        stopped_by = "converged" if converged else "max_iterations"
-                        settle_left = p.settle_iterations
+                        self.stopped_by = "converged" if converged else "max_iterations"
+                        self.settle_left = p.settle_iterations
                         self.begin_settle()
-                if settle_left is not None:
-                    if settle_left <= 0:
+                if self.settle_left is not None:
+                    if self.settle_left <= 0:
                         break
-                    settle_left -= 1
+                    self.settle_left -= 1
+                if on_checkpoint is not None and checkpoint_every and st.iteration % checkpoint_every == 0:
+                    on_checkpoint(self)
+                if should_stop is not None and should_stop():
+                    self.stopped_by = "interrupted"
+                    break
         except KeyboardInterrupt:
-            stopped_by = "interrupted"
+            self.stopped_by = "interrupted"
         finally:
             numba.set_num_threads(threads)
-        self.allow_growth = True
         if on_snapshot is not None:
             on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
                                  self.n_inside, st, done=True))
-        return RunResult(st.iteration, a, stopped_by, self.dt)
+        return RunResult(st.iteration, a, self.stopped_by, self.dt)
+
+    # -- checkpoints -------------------------------------------------------------------
+    def snapshot_state(self) -> dict:
+        """Everything that evolves during :meth:`run`, as plain arrays and numbers."""
+        st = self.state
+        return {"x": st.x.copy(), "v": st.v.copy(), "n_grow": st.n_grow.copy(),
+                "area_history": np.asarray(st.area_history, dtype=float),
+                "iteration": st.iteration, "dt": self.dt, "settle_left": self.settle_left,
+                "stopped_by": self.stopped_by, "phase": self.phase}
+
+    def restore(self, saved: dict) -> None:
+        """Continue from :meth:`snapshot_state` output (same model)."""
+        st = self.state
+        if saved["x"].shape != st.x.shape or saved["n_grow"].shape != st.n_grow.shape:
+            raise ValueError("the saved state does not match this model")
+        st.x[:] = saved["x"]
+        st.v[:] = saved["v"]
+        st.n_grow[:] = saved["n_grow"]
+        st.area_history[:] = [float(a) for a in saved["area_history"]]
+        st.iteration = int(saved["iteration"])
+        self.dt = float(saved["dt"])
+        self.settle_left = None if saved["settle_left"] is None else int(saved["settle_left"])
+        self.stopped_by = str(saved["stopped_by"])
+        self.refresh_growth()
+        self.allow_growth = self.settle_left is None
 
     # -- divergence --------------------------------------------------------------------
     def _check_exploded(self) -> None:
