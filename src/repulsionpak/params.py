@@ -125,9 +125,9 @@ class SecondaryParams:
     """Sec. 9: secondary elements."""
 
     d_min: float = _doc(
-        1.5, "× gap", "d_min: seeds need at least this distance to the nearest mesh or the "
+        1.0, "× gap", "d_min: seeds need at least this distance to the nearest mesh or the "
         "boundary (paper: 5–10 px on a 1000 px grid, about one gap).")
-    d_sep: float = _doc(2.5, "× gap", "d_sep: kept seeds are at least this far apart (paper: 10 px).")
+    d_sep: float = _doc(2.0, "× gap", "d_sep: kept seeds are at least this far apart (paper: 10 px).")
     grid: int = _doc(1000, "pixels", "Longer side of the distance-transform grid.")
     max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")
     initial_fraction: float = _doc(

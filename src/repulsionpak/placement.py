@@ -89,7 +89,11 @@ class Placement:
     template_index: np.ndarray  # (M,) int into the template list
     position: np.ndarray  # (M, 2)
     angle: np.ndarray  # (M,) radians
-    shrink: float  # common initial scale relative to the template (sec. 4 step 3)
+    shrink: float | np.ndarray  # initial scale relative to the template (sec. 4 step 3):
+    # one for all (primaries, relative sizes kept) or (M,) (secondaries, sized to their pocket)
+
+    def shrink_of(self, k: int) -> float:
+        return float(self.shrink if np.ndim(self.shrink) == 0 else self.shrink[k])
 
 
 def placed_vertices(t: Template, position: np.ndarray, angle: float, shrink: float) -> np.ndarray:

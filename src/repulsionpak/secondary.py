@@ -103,7 +103,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     order = rng.permutation(len(templates))
     assign = order[np.arange(len(seeds)) % len(templates)]
     radius = np.array([templates[i].radius for i in assign])
-    shrink = float(sp.initial_fraction * np.min(dist / radius))
+    shrink = sp.initial_fraction * dist / radius  # each starts at a share of its own pocket
     angles = rng.uniform(0, 2 * np.pi, len(seeds)) if p.placement.rotate else np.zeros(len(seeds))
     base_index = len(packing.templates)
     placement = Placement(assign + base_index, seeds, angles, shrink)

@@ -243,12 +243,11 @@ def _styles(pf: PathFile, path) -> dict[int, Style]:
     """Style of every type-0 record (keyed by id(record)) from the colour lines."""
     out: dict[int, Style] = {}
     short = False
-    for region in range(pf.num_regions):
-        bounds = [
-            rec
-            for rec in pf.records
-            if rec.region == region and rec.path_type == BOUNDARY
-        ]
+    by_region: dict[int, list[PathRecord]] = {}
+    for rec in pf.records:  # only regions that have records (num_regions may be huge)
+        if rec.path_type == BOUNDARY:
+            by_region.setdefault(rec.region, []).append(rec)
+    for region, bounds in sorted(by_region.items()):
         has_lines = region in pf.stroke_colours or region in pf.fill_colours
         strokes = pf.stroke_colours.get(region)
         fills = pf.fill_colours.get(region)

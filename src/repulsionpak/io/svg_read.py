@@ -234,6 +234,33 @@ class RegionTooComplex(ValueError):
     """Raised by :func:`rings_to_region` when the outline has too many self-intersections."""
 
 
+def _count_crossings(rings: list[np.ndarray], limit: int) -> int:
+    """Number of intersecting pairs of non-adjacent edges of ``rings``, counted until it
+    exceeds ``limit`` (then the partial count is returned). O(n log n + limit): bounds
+    the time spent on scribbles before the (quadratic) noding of their linework."""
+    a = np.concatenate(rings, axis=0)
+    b = np.concatenate([np.roll(r, -1, axis=0) for r in rings], axis=0)
+    ring_id = np.concatenate([np.full(len(r), k) for k, r in enumerate(rings)])
+    starts = np.cumsum([0] + [len(r) for r in rings])[:-1]
+    first, last = starts[ring_id], starts[ring_id] + np.array([len(r) for r in rings])[ring_id] - 1
+    with np.errstate(all="ignore"):
+        segs = shapely.linestrings(np.stack([a, b], axis=1))
+    tree = shapely.STRtree(segs)
+    count, chunk = 0, 256
+    for s in range(0, len(segs), chunk):
+        i, j = tree.query(segs[s : s + chunk], predicate="intersects")
+        i = i + s
+        keep = i < j
+        i, j = i[keep], j[keep]
+        adjacent = (ring_id[i] == ring_id[j]) & (
+            (j - i == 1) | ((i == first[i]) & (j == last[i]))
+        )
+        count += int(np.count_nonzero(~adjacent))
+        if count > limit:
+            break
+    return count
+
+
 def rings_to_region(
     rings: list[np.ndarray], fill_rule: str = "nonzero", path=None
 ) -> shapely.Geometry:
@@ -255,6 +282,14 @@ def rings_to_region(
         poly = shapely.Polygon(rings[0])
         if poly.is_valid:
             return poly if poly.area > 0 else shapely.Polygon()
+    n_edges = sum(len(r) for r in rings)
+    if n_edges > 500:  # below, even a scribble nodes in well under a second
+        crossings = _count_crossings(rings, MAX_REGION_FACES)
+        if crossings > MAX_REGION_FACES:
+            msg = f"an outline intersects itself too often (more than {MAX_REGION_FACES} crossings); simplify it"
+            if path is not None:
+                raise InputError(path, msg)
+            raise RegionTooComplex(msg)
     lines = [shapely.LineString(np.vstack([r, r[:1]])) for r in rings]
     noded = shapely.union_all(lines)
     faces = [
@@ -262,7 +297,6 @@ def rings_to_region(
         for f in shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
         if f.area > 0
     ]
-    n_edges = sum(len(r) for r in rings)
     if len(faces) > MAX_REGION_FACES or len(faces) * n_edges > MAX_REGION_WORK:
         msg = (
             f"an outline intersects itself too often ({len(faces)} faces); simplify it"

@@ -184,7 +184,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     for k, ti in enumerate(placement.template_index):
         t = templates[ti]
         e = m0 + k
-        pts = placed_vertices(t, placement.position[k], placement.angle[k], placement.shrink) / frame.unit
+        pts = placed_vertices(t, placement.position[k], placement.angle[k], placement.shrink_of(k)) / frame.unit
         xs.append(pts)
         vert_elem.append(np.full(len(pts), e, np.int32))
         sk = np.zeros(len(pts), bool)

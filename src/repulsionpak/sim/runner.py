@@ -189,10 +189,12 @@ class Simulator:
         """Iterate until the stopping rule of sec. 8 holds (or ``max_iterations``), then
         settle without growth for ``settle_iterations``.
 
-        Stopping rule: RMS of the per-iteration change of the area fraction of the moving
-        meshes over the last ``stop_window`` iterations, relative to that area fraction,
-        < ``stop_epsilon`` (relative, so a phase of small secondary elements is judged by
-        its own growth, not by the frozen primaries'). ``should_stop()`` returning True (or
+        Stopping rule (sec. 8): the RMS of the per-iteration change of the area fraction of
+        the moving meshes over the last ``stop_window`` iterations, relative to that area
+        fraction, < ``stop_epsilon`` — or the net change over the window (per iteration,
+        relative) below it: meshes that only jitter against their neighbours have stopped
+        consuming space even if the RMS of their jitter stays up. Relative, so a phase of
+        small secondary elements is judged by its own growth, not by the frozen primaries'. ``should_stop()`` returning True (or
         KeyboardInterrupt) ends the run early with ``stopped_by="interrupted"``.
 
         ``on_checkpoint(self)`` is called every ``checkpoint_every`` iterations (rounded
@@ -207,7 +209,7 @@ class Simulator:
         hist = st.area_history
         w = p.stop_window
         a = hist[-1] if hist else 0.0
-        rms = math.inf
+        rms = trend = math.inf
         if checkpoint_every > 0:
             checkpoint_every = -(-checkpoint_every // p.requery_every) * p.requery_every
         self._good = st.copy()
@@ -221,6 +223,7 @@ class Simulator:
                 if len(hist) > w:
                     d = np.diff(np.asarray(hist[-(w + 1):]))
                     rms = float(np.sqrt(np.mean(d * d))) / max(self.moving_area, 1e-12)
+                    trend = abs(hist[-1] - hist[-(w + 1)]) / (w * max(self.moving_area, 1e-12))
                 if st.iteration % 200 == 0:
                     self._check_exploded()
                     self._good = st.copy()
@@ -228,7 +231,8 @@ class Simulator:
                     on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
                                          self.n_inside, st))
                 if self.settle_left is None:
-                    converged = st.iteration >= p.min_iterations and len(hist) > w and rms < p.stop_epsilon
+                    converged = (st.iteration >= p.min_iterations and len(hist) > w
+                                 and min(rms, 2.0 * trend) < p.stop_epsilon)
                     if converged or st.iteration >= p.max_iterations:
                         self.stopped_by = "converged" if converged else "max_iterations"
                         self.settle_left = p.settle_iterations
