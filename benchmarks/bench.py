@@ -39,8 +39,9 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def bench_iteration(targets=(1500, 12000, 50000, 100000), steps=50) -> None:
-    """ms per simulation iteration on square containers filled with the example library."""
+def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=400, steps=100) -> None:
+    """ms per simulation iteration on square containers filled with the example library,
+    measured after ``warmup`` iterations (elements grown, neighbours in contact)."""
     import dataclasses
 
     from repulsionpak import examples
@@ -52,8 +53,8 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), steps=50) -> None:
     from repulsionpak.types import Container
 
     elements = load_elements(examples.element_files())
-    print("| vertices | elements | ms/iteration | peak RSS (MB) |")
-    print("| ---: | ---: | ---: | ---: |")
+    print("| vertices | elements | threads | ms/iteration | peak RSS so far (MB) |")
+    print("| ---: | ---: | ---: | ---: | ---: |")
     for target in targets:
         # about 75 vertices per element at gap 5 with the default element size
         count = max(4, int(target / 75))
@@ -71,15 +72,17 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), steps=50) -> None:
                                    cell_size=max(params.sim.cell_size * size, 3 * gap / frame.unit),
                                    gap=gap / frame.unit)
         sim = Simulator(model, state, params.sim)
-        for _ in range(5):
+        import numba
+
+        numba.set_num_threads(sim.threads())
+        for _ in range(warmup):  # grow them a while so neighbours interact, then time
             sim.step()
-        # grow them a while so the scene is dense, then time
         t0 = time.perf_counter()
         for _ in range(steps):
             sim.step()
         ms = (time.perf_counter() - t0) / steps * 1e3
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        print(f"| {model.n_vertices} | {model.n_elements} | {ms:.2f} | {rss:.0f} |", flush=True)
+        print(f"| {model.n_vertices} | {model.n_elements} | {sim.threads()} | {ms:.2f} | {rss:.0f} |", flush=True)
 
 
 def bench_preprocess() -> None:

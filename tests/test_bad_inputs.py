@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import random
+import re
 import shutil
 import subprocess
 import sys
@@ -140,6 +141,7 @@ def _check_one_error_line(result, *fragments: str) -> str:
     return lines[0]
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning")
 @pytest.mark.parametrize("case", CASES, ids=[c["id"] for c in CASES])
 def test_cli_reports_one_error_line_and_writes_nothing(case, tmp_path):
     path = _materialize(case, tmp_path)
@@ -218,6 +220,21 @@ def test_cli_unwritable_output(tmp_path, where):
     assert not (tmp_path / "no").exists()
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_cli_bad_secondary_and_empty_element_directory(tmp_path):
+    out = tmp_path / "o.svg"
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "--secondary",
+                                   str(BAD / "text_only.svg"), "-o", str(out), *TINY])
+    assert res.exit_code == 2, res.stderr
+    _check_one_error_line(res, "text_only.svg", "has no visible geometry")
+    empty = tmp_path / "no_elements"
+    empty.mkdir()
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(empty), "-o", str(out), *TINY])
+    assert res.exit_code == 2, res.stderr
+    _check_one_error_line(res, "no_elements", "contains no .svg or .path element file")
+    assert not out.exists()
+
+
 def test_cli_evaluate_bad_inputs(tmp_path):
     for bad, frag in [(BAD / "not_xml.svg", "not well-formed XML"),
                       (tmp_path / "missing.svg", "not found"),
@@ -254,6 +271,7 @@ def test_element_much_larger_than_the_container_packs(tmp_path):
     assert out.stat().st_size > 500
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning")
 def test_bowtie_container_is_repaired_with_a_warning(tmp_path):
     """A self-crossing outline is filled as SVG does (nonzero: both lobes), with a warning."""
     bow = BAD / "container_bowtie.svg"
@@ -328,9 +346,6 @@ def test_process_error_line_and_debug_traceback(tmp_path):
     assert not out.exists()
 
 
-@pytest.mark.xfail(strict=True, reason="cli: warnings are printed in Python's default format "
-                   "(source path, line number and code line); they should be one "
-                   "'repulsionpak: warning: ...' line each")
 def test_process_warnings_are_one_line_each(tmp_path):
     res = _run(["pack", str(CIRCLE), str(BAD / "text_only.svg"), "-o", str(tmp_path / "o.svg"),
                 *TINY], tmp_path)
@@ -340,12 +355,34 @@ def test_process_warnings_are_one_line_each(tmp_path):
     assert sum(ln.startswith("repulsionpak: error:") for ln in lines) == 1
 
 
-@pytest.mark.xfail(strict=True, reason="cli: option values that do not parse (e.g. --gap five) "
-                   "get Click's multi-line usage box and exit 2 (documented as 'bad input "
-                   "file'); should be one 'repulsionpak: error:' line and exit 3")
 def test_process_unparsable_option_value(tmp_path):
     res = _run(["pack", str(CIRCLE), str(APPLE), "-o", str(tmp_path / "o.svg"), "--gap", "five"],
                tmp_path)
     assert res.returncode == 3, res.stderr
     lines = res.stderr.splitlines()
     assert len(lines) == 1 and lines[0].startswith("repulsionpak: error:") and "--gap" in lines[0]
+
+
+class _Captured(Exception):
+    pass
+
+
+def test_triangle_area_switch_has_no_exponent(monkeypatch):
+    """Checked without running Triangle: the real call would exhaust the memory."""
+    import numpy as np
+    import triangle
+
+    from repulsionpak.geometry.mesh import triangulate_polygon
+
+    seen: list[str] = []
+
+    def capture(data, opts):
+        seen.append(opts)
+        raise _Captured
+
+    monkeypatch.setattr(triangle, "triangulate", capture)
+    th = np.linspace(0, 2 * np.pi, 60, endpoint=False)
+    ring = np.c_[np.cos(th), np.sin(th)] * 1e8
+    with pytest.raises(_Captured):
+        triangulate_polygon(ring, max_area=1e14)
+    assert re.search(r"a[0-9.]+[eE][+-]?[0-9]", seen[0]) is None, seen[0]

@@ -436,12 +436,31 @@ def params_cmd() -> None:
         typer.echo(f"{key:34s} {default!s:>10s}  [{unit}]  {doc}")
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    typer.echo(f"repulsionpak: warning: {message}", err=True)
+
+
 def main() -> None:
+    """Console entry point: one line per warning or error, the documented exit codes."""
+    import warnings
+
+    from typer._click.exceptions import ClickException, UsageError  # noqa: PLC0415
+
+    warnings.showwarning = _show_warning
     try:
-        app()
+        rv = app(standalone_mode=False)
     except KeyboardInterrupt:
         typer.echo("repulsionpak: interrupted", err=True)
         sys.exit(130)
+    except UsageError as exc:  # unknown option, unparsable value: a bad parameter
+        if type(exc).__name__ == "NoArgsIsHelpError":  # help was shown
+            sys.exit(0)
+        typer.echo(f"repulsionpak: error: {exc.format_message()}", err=True)
+        sys.exit(3)
+    except ClickException as exc:
+        exc.show()
+        sys.exit(exc.exit_code)
+    sys.exit(rv if isinstance(rv, int) else 0)
 
 
 if __name__ == "__main__":

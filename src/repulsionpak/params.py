@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import operator
 import tomllib
 import typing
 from dataclasses import dataclass, field, fields
@@ -150,8 +151,13 @@ class Params:
         """Raise :class:`ParameterError` on values that cannot work; return self."""
         if self.gap is not None and not (math.isfinite(self.gap) and self.gap > 0):
             raise ParameterError(f"gap must be a positive number, got {self.gap!r}")
-        if self.seed is not None and not 0 <= self.seed < 2**64:
-            raise ParameterError(f"seed must be an integer in [0, 2**64), got {self.seed!r}")
+        if self.seed is not None:
+            try:
+                seed_ok = 0 <= operator.index(self.seed) < 2**64
+            except TypeError:
+                seed_ok = False
+            if not seed_ok:
+                raise ParameterError(f"seed must be an integer in [0, 2**64), got {self.seed!r}")
         for section, cls in _SECTIONS.items():  # NaN / inf slip through the range checks
             sub = getattr(self, section)
             for f in fields(cls):

@@ -27,16 +27,22 @@ def triangulate_polygon(boundary: np.ndarray, max_area: float | None = None,
     boundary = np.asarray(boundary, dtype=float)
     k = len(boundary)
     segs = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
+    # triangulate in normalised coordinates: Triangle parses the area switch as plain
+    # digits, so "a1.3e+14" would silently become 1.3 (and refine until memory runs out)
+    centre = boundary.mean(axis=0)
+    size = float(np.ptp(boundary, axis=0).max()) or 1.0
+    unit = (boundary - centre) / size
     opts = "pQY"  # PSLG, quiet, no Steiner points on the boundary
     if interior:
         opts += f"q{min_angle:g}"
         if max_area is not None:
-            opts += f"a{max_area:.10g}"
-    out = tr.triangulate({"vertices": boundary, "segments": segs}, opts)
-    verts = np.asarray(out["vertices"], dtype=float)
+            opts += f"a{max(max_area / size ** 2, 1e-10):.12f}"
+    out = tr.triangulate({"vertices": unit, "segments": segs}, opts)
+    verts = np.asarray(out["vertices"], dtype=float) * size + centre
     tris = np.asarray(out["triangles"], dtype=np.int32)
-    if not np.allclose(verts[:k], boundary):
+    if not np.allclose(verts[:k], boundary, rtol=1e-9, atol=1e-9 * size):
         raise RuntimeError("triangulation reordered the boundary vertices")
+    verts[:k] = boundary  # exactly the input boundary
     # keep only triangles with positive area; orient counter-clockwise
     a = verts[tris]
     cross = (a[:, 1, 0] - a[:, 0, 0]) * (a[:, 2, 1] - a[:, 0, 1]) - (a[:, 1, 1] - a[:, 0, 1]) * (a[:, 2, 0] - a[:, 0, 0])
