@@ -76,7 +76,8 @@ def run_boundary(x, active, fld, k_b, F):
 def run_grow(inside, outside, vstart, nskin, moving, n_grow, growth, k, allow):
     return _call_by_name(grow, {
         "inside": inside, "outside": outside, "elem_vstart": vstart, "elem_nskin": nskin,
-        "moving": moving, "n_grow": n_grow, "growth": growth, "k_g_dt": k, "allow": allow})
+        "moving": moving, "n_grow": n_grow, "growth": growth, "k_g_dt": k, "allow": allow,
+        "max_growth": np.full(len(n_grow), np.inf)})
 
 
 def make_model(templates, placement, frame, region, cell_size, field_h):
@@ -608,3 +609,18 @@ def test_relax_untangles_a_vertex_crossing_a_long_edge():
     x, springs, ptr, nbr = hairpin_ring()
     relax(x, springs, ptr, nbr, passes=3)
     assert Polygon(x).is_valid
+
+
+def test_grow_stops_at_the_nominal_size_cap():
+    inside = np.zeros(4, np.bool_)
+    outside = np.zeros(4, np.bool_)
+    vstart = np.array([0, 2, 4], np.int32)
+    nskin = np.array([2, 2], np.int32)
+    moving = np.ones(2, np.bool_)
+    n_grow = np.array([9, 3], np.int64)
+    growth = 1.0 + n_grow * 0.1
+    # element 0 is at growth 1.9: one more step would pass its cap of 1.95
+    grew = grow(inside, outside, vstart, nskin, moving, n_grow, growth, 0.1, True, np.array([1.95, 1.95]))
+    assert grew == 1
+    assert n_grow.tolist() == [9, 4]
+    assert growth[1] == pytest.approx(1.4)

@@ -98,6 +98,9 @@ class SimParams:
     outside_block: float = _doc(
         0.25, "× gap", "A skin vertex this far outside the container blocks its element's growth "
         "(beyond the paper: keeps growth pressure from pushing border elements out).")
+    max_size: float = _doc(
+        1.3, "× nominal size", "Elements stop growing at this multiple of the size their skin was "
+        "built for (beyond the paper: keeps relative sizes and the gap).")
     requery_every: int = _doc(
         8, "iterations", "Full neighbour query every this many iterations; in between the closest "
         "points follow the neighbours' skins locally (1 = the paper's full query every step).")

@@ -25,13 +25,15 @@ def euler_step(x, v, F, active_all, dt, vmax):
 
 
 @njit(cache=True)
-def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_dt, allow):
+def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_dt, allow, max_growth):
     """Sec. 6: every moving element with no skin vertex inside another mesh grows by one
     step; growth factor = 1 + n_M·k_g·Δt. Returns the number of elements that grew.
 
     Beyond the paper, a skin vertex outside the container (``outside``) also makes its
     element wait: growth pressure would push border elements through the penalty
-    boundary force.
+    boundary force; and no element grows past ``max_growth`` (its nominal size times a
+    margin), so elements that found room early do not dwarf their twins that got stuck
+    (relative sizes are kept, sec. 6) and skins keep the width they were built with.
     """
     grew = 0
     if not allow:
@@ -44,7 +46,7 @@ def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_d
             if inside[i] or outside[i]:
                 blocked = True
                 break
-        if blocked:
+        if blocked or 1.0 + (n_grow[e] + 1) * k_g_dt > max_growth[e]:
             continue
         n_grow[e] += 1
         grew += 1

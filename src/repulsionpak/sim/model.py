@@ -87,6 +87,7 @@ class Model:
     vnbr: np.ndarray  # (K2,)
     frozen: np.ndarray  # (M,) bool: vertices of frozen elements never move
     template_index: np.ndarray  # (M,) int32 into the template list
+    max_growth: np.ndarray  # (M,) growth factor at which an element reaches its nominal size
     kind: list[str]  # (M,) "primary" | "secondary"
     field: Field  # container signed distance
     container_area: float
@@ -164,6 +165,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     secondary phase to append new elements to frozen primaries.
     """
     xs, vert_elem, skin, springs, rest0, s_elem, s_edge, tris, t_elem = [], [], [], [], [], [], [], [], []
+    nominal = list(base[0].max_growth) if base is not None else []
     starts, nskin = [0], []
     m0 = 0
     if base is not None:
@@ -202,6 +204,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         n += len(pts)
         starts.append(n)
         nskin.append(t.n_skin)
+        nominal.append(1.0 / placement.shrink_of(k))
     x = np.ascontiguousarray(np.concatenate(xs), dtype=np.float64)
     N = len(x)
     springs_a = np.ascontiguousarray(np.concatenate(springs), dtype=np.int32)
@@ -242,7 +245,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         tri_elem=np.ascontiguousarray(np.concatenate(t_elem), dtype=np.int32),
         tri_rest=np.ascontiguousarray(tri_rest),
         vtri_ptr=vtri_ptr, vtri=vtri, vnbr_ptr=vnbr_ptr, vnbr=vnbr,
-        frozen=frozen_all, template_index=tindex, kind=kinds_all, field=fld,
+        frozen=frozen_all, template_index=tindex, max_growth=np.asarray(nominal, dtype=float), kind=kinds_all, field=fld,
         container_area=float(region_sim.area), gap=float(gap),
         corners=reflex_corners(region_sim), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
         grid_origin=(float(minx - cell_size), float(miny - cell_size)),

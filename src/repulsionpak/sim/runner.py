@@ -99,6 +99,7 @@ class Simulator:
         self.sp_start = sp_start
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
         self.dt = params.dt
+        self.max_growth = m.max_growth * params.max_size
         # a vertex this close to a neighbouring skin gets the exact inside test every step
         self.near2 = (4.0 * params.velocity_cap * params.dt * params.dt * max(1, params.requery_every)) ** 2
         self.allow_growth = True
@@ -148,7 +149,7 @@ class Simulator:
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
-             self.growth, p.k_growth * p.dt, self.allow_growth)
+             self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:
             relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_start,
                                      self.sp_nedge, m.springs, m.vnbr_ptr, m.vnbr,
