@@ -351,11 +351,29 @@ def test_boundary_force_only_touches_active_vertices(square_field):
 # contact query
 
 
-def run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg=None):
-    """contact_query with the cell lists of ``g`` (a :class:`Grid`), arguments by name."""
+def ring_links(seg_a, seg_b):
+    """next/prev segment of every segment of closed rings given by their endpoints."""
+    by_start = {int(a): k for k, a in enumerate(seg_a)}
+    nxt = np.array([by_start[int(b)] for b in seg_b], np.int64)
+    prv = np.empty_like(nxt)
+    prv[nxt] = np.arange(len(nxt))
+    return nxt, prv
+
+
+def run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg=None,
+                      seg_a=None, seg_b=None, chunks=None):
+    """contact_query with the cell lists of ``g`` (a :class:`Grid`), arguments by name.
+
+    ``chunks`` = (chunk_first, chunk_count, seg_a, seg_b, seg_next, seg_prev); by default
+    every segment (``seg_a``/``seg_b``) is its own chunk."""
     n = len(x)
     if nb_seg is None:
         nb_seg = np.zeros((n, nb_q.shape[1]), np.int64)
+    if chunks is None:
+        nxt, prv = ring_links(seg_a, seg_b)
+        chunks = (np.arange(len(seg_a), dtype=np.int64), np.ones(len(seg_a), np.int64),
+                  np.asarray(seg_a, np.int64), np.asarray(seg_b, np.int64), nxt, prv)
+    chunk_first, chunk_count, sa, sb, snext, sprev = chunks
     sox, soy, sinv, sgx, sgy = g.segs.params
     tox, toy, tinv, tgx, tgy = g.tris.params
     _call_by_name(contact_query, {
@@ -365,7 +383,8 @@ def run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2,
         "tri_xy": g.tris.xy, "tri_elem": g.tris.elem, "tri_start": g.tris.start,
         "tox": tox, "toy": toy, "tinv": tinv, "tgx": tgx, "tgy": tgy,
         "inside": inside, "nb_count": nb_count, "nb_elem": nb_elem, "nb_d2": nb_d2,
-        "nb_q": nb_q, "nb_seg": nb_seg})
+        "nb_q": nb_q, "nb_seg": nb_seg, "chunk_first": chunk_first, "chunk_count": chunk_count,
+        "seg_a": sa, "seg_b": sb, "seg_next": snext, "seg_prev": sprev})
 
 
 def query(x, vert_elem, seg_a, seg_b, tris, tri_elem, active, cell=20.0, tri_cell=15.0,
@@ -379,7 +398,8 @@ def query(x, vert_elem, seg_a, seg_b, tris, tri_elem, active, cell=20.0, tri_cel
     nb_elem = np.full((n, MAX_NEIGHBOURS), -1, np.int32)
     nb_d2 = np.zeros((n, MAX_NEIGHBOURS))
     nb_q = np.zeros((n, MAX_NEIGHBOURS, 2))
-    run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2, nb_q)
+    run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2, nb_q,
+                      seg_a=seg_a, seg_b=seg_b)
     return inside, nb_count, nb_elem, nb_d2, nb_q
 
 
@@ -436,9 +456,11 @@ def test_contact_query_on_built_model_matches_shapely(template):
     sim = Simulator(model, state, SimParams())
     x = state.x
     g = sim.grid
-    g.rebuild(x, sim.seg_a, sim.seg_b, sim.seg_elem, model.tris, model.tri_elem)
+    g.rebuild(x, sim.chunk_a, sim.chunk_b, sim.chunk_elem, model.tris, model.tri_elem)
     run_contact_query(x, sim.active_skin, model.vert_elem, g, sim.inside, sim.nb_count,
-                      sim.nb_elem, sim.nb_d2, sim.nb_q, getattr(sim, "nb_seg", None))
+                      sim.nb_elem, sim.nb_d2, sim.nb_q, sim.nb_seg,
+                      chunks=(sim.chunk_first, sim.chunk_count, sim.seg_a, sim.seg_b,
+                              sim.seg_next, sim.seg_prev))
     skins = [Polygon(x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]]) for e in range(2)]
     skin_idx = np.flatnonzero(model.is_skin)
     truth = np.array([skins[1 - model.vert_elem[i]].contains(Point(x[i])) for i in skin_idx])
@@ -624,3 +646,33 @@ def test_grow_stops_at_the_nominal_size_cap():
     assert grew == 1
     assert n_grow.tolist() == [9, 4]
     assert growth[1] == pytest.approx(1.4)
+
+
+def test_contact_update_tracks_the_full_query(template):
+    """Between full queries the walked closest points and inside flags match what a full
+    query would find, for small motions."""
+    from repulsionpak.sim.forces import contact_update
+
+    model, state = two_square_model(template, (40, 40), (50, 47), angle1=0.4)
+    sim = Simulator(model, state, SimParams())
+    x = state.x
+    chunks = (sim.chunk_first, sim.chunk_count, sim.seg_a, sim.seg_b, sim.seg_next, sim.seg_prev)
+
+    def full(xx):
+        g = sim.grid
+        g.rebuild(xx, sim.chunk_a, sim.chunk_b, sim.chunk_elem, model.tris, model.tri_elem)
+        out = (np.zeros(len(xx), np.bool_), np.zeros(len(xx), np.int64), np.zeros((len(xx), 24), np.int32),
+               np.zeros((len(xx), 24)), np.zeros((len(xx), 24, 2)), np.zeros((len(xx), 24), np.int64))
+        run_contact_query(xx, sim.active_skin, model.vert_elem, g, *out, chunks=chunks)
+        return out
+
+    inside, cnt, elem, d2, q, seg = full(x)
+    rng = np.random.default_rng(0)
+    x2 = x + rng.normal(scale=0.05, size=x.shape)
+    contact_update(x2, sim.active_skin, model.vert_elem, sim.seg_a, sim.seg_b, sim.seg_next, sim.seg_prev,
+                   model.tris, model.vtri_ptr, model.vtri, 4.0, np.inf, inside, cnt, d2, q, seg)
+    inside_f, cnt_f, elem_f, d2_f, q_f, _ = full(x2)
+    skin = sim.active_skin
+    np.testing.assert_array_equal(inside[skin], inside_f[skin])
+    has = cnt[skin] > 0
+    np.testing.assert_allclose(d2[skin[has], 0], d2_f[skin[has], 0], rtol=1e-9, atol=1e-9)

@@ -111,6 +111,9 @@ class SimParams:
     parallel_threshold: int = _doc(
         20000, "vertices", "With threads = 0, scenes with fewer vertices run on one thread "
         "(measured faster on 2 cores at 3k vertices).")
+    far_update: float = _doc(
+        2.0, "× gap", "Between full queries, closest points on neighbours farther than this are "
+        "not refreshed (their repulsion is weak and changes slowly).")
     relax_passes: int = _doc(2, "-", "Self-intersection relaxation cycles per step (sec. 7: 2–3).")
     relax_fraction: float = _doc(0.5, "× mean edge", "Minimum distance of non-neighbouring vertices.")
     stop_window: int = _doc(100, "iterations", "w, sliding window of the stopping rule (sec. 8).")

@@ -25,19 +25,44 @@ def _inside_triangle(px, py, ax, ay, bx, by, cx, cy):
     return not (neg and pos)
 
 
+@njit(cache=True, inline="always")
+def _closest_on_segment(x, a, b, px, py):
+    ax = x[a, 0]
+    ay = x[a, 1]
+    abx = x[b, 0] - ax
+    aby = x[b, 1] - ay
+    l2 = abx * abx + aby * aby
+    t = 0.0
+    if l2 > 0.0:
+        t = ((px - ax) * abx + (py - ay) * aby) / l2
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+    qx = ax + t * abx
+    qy = ay + t * aby
+    return (px - qx) * (px - qx) + (py - qy) * (py - qy), qx, qy
+
+
 @njit(cache=True, parallel=True)
 def contact_query(x, active, vert_elem,
                   seg_xy, seg_elem, seg_start, seg_order, sox, soy, sinv, sgx, sgy,
                   tri_xy, tri_elem, tri_start, tox, toy, tinv, tgx, tgy,
+                  chunk_first, chunk_count, seg_a, seg_b, seg_next, seg_prev,
                   inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
     """For each vertex in ``active`` (skin vertices of moving elements):
 
     * ``inside[i]``: the vertex lies in a triangle of another element (3×3 window of the
       triangle cells);
     * ``nb_q[i, :nb_count[i]]``: the closest point on the skin of each other element
-      having a skin segment in the 3×3 window of the segment cells (``nb_elem``, ``nb_d2``
-      and the segment id ``nb_seg`` alongside). At most ``nb_q.shape[1]`` neighbours are
-      kept (the closest win). :func:`contact_update` refreshes these between full queries.
+      having skin in the 3×3 window of the segment cells (``nb_elem``, ``nb_d2`` and the
+      segment id ``nb_seg`` alongside). At most ``nb_q.shape[1]`` neighbours are kept
+      (the closest win). :func:`contact_update` refreshes these between full queries.
+
+    The segment cells hold *chunks*: chords over ``chunk_count`` consecutive skin
+    segments starting at segment ``chunk_first``. The nearest chunk of each neighbour is
+    found first, then the exact closest point by walking along that neighbour's skin
+    from the matching segment (a few times fewer distance tests than all segments).
     """
     K = nb_q.shape[1]
     for k in prange(active.shape[0]):
@@ -63,101 +88,106 @@ def contact_query(x, active, vert_elem,
                         break
         inside[i] = hit
         cnt = 0
-        if True:
-            cx, cy = cell_of(px, py, sox, soy, sinv, sgx, sgy)
-            for yy in range(max(cy - 1, 0), min(cy + 2, sgy)):
-                for xx in range(max(cx - 1, 0), min(cx + 2, sgx)):
-                    c = yy * sgx + xx
-                    last = -1
-                    slot = -1
-                    for m in range(seg_start[c], seg_start[c + 1]):
-                        f = seg_elem[m]
-                        if f == e:
-                            continue
-                        ax = seg_xy[m, 0]
-                        ay = seg_xy[m, 1]
-                        abx = seg_xy[m, 2] - ax
-                        aby = seg_xy[m, 3] - ay
-                        l2 = abx * abx + aby * aby
-                        t = 0.0
-                        if l2 > 0.0:
-                            t = ((px - ax) * abx + (py - ay) * aby) / l2
-                            if t < 0.0:
-                                t = 0.0
-                            elif t > 1.0:
-                                t = 1.0
-                        qx = ax + t * abx
-                        qy = ay + t * aby
-                        d2 = (px - qx) * (px - qx) + (py - qy) * (py - qy)
-                        if f != last:  # items of one element are contiguous in a cell
-                            last = f
-                            slot = -1
-                            for j in range(cnt):
-                                if nb_elem[i, j] == f:
-                                    slot = j
-                                    break
-                            if slot < 0:
-                                if cnt < K:
-                                    slot = cnt
-                                    cnt += 1
-                                else:  # full: reuse the farthest slot
-                                    slot = 0
-                                    for j in range(1, K):
-                                        if nb_d2[i, j] > nb_d2[i, slot]:
-                                            slot = j
-                                    if d2 >= nb_d2[i, slot]:
-                                        slot = -2  # ignore this element in this cell
-                                        continue
-                                nb_elem[i, slot] = f
-                                nb_d2[i, slot] = np.inf
-                        if slot == -2:
-                            continue
-                        if d2 < nb_d2[i, slot]:
-                            nb_d2[i, slot] = d2
-                            nb_q[i, slot, 0] = qx
-                            nb_q[i, slot, 1] = qy
-                            nb_seg[i, slot] = seg_order[m]
+        cx, cy = cell_of(px, py, sox, soy, sinv, sgx, sgy)
+        for yy in range(max(cy - 1, 0), min(cy + 2, sgy)):
+            for xx in range(max(cx - 1, 0), min(cx + 2, sgx)):
+                c = yy * sgx + xx
+                last = -1
+                slot = -1
+                for m in range(seg_start[c], seg_start[c + 1]):
+                    f = seg_elem[m]
+                    if f == e:
+                        continue
+                    ax = seg_xy[m, 0]
+                    ay = seg_xy[m, 1]
+                    abx = seg_xy[m, 2] - ax
+                    aby = seg_xy[m, 3] - ay
+                    l2 = abx * abx + aby * aby
+                    t = 0.0
+                    if l2 > 0.0:
+                        t = ((px - ax) * abx + (py - ay) * aby) / l2
+                        if t < 0.0:
+                            t = 0.0
+                        elif t > 1.0:
+                            t = 1.0
+                    qx = ax + t * abx
+                    qy = ay + t * aby
+                    d2 = (px - qx) * (px - qx) + (py - qy) * (py - qy)
+                    if f != last:  # items of one element are contiguous in a cell
+                        last = f
+                        slot = -1
+                        for j in range(cnt):
+                            if nb_elem[i, j] == f:
+                                slot = j
+                                break
+                        if slot < 0:
+                            if cnt < K:
+                                slot = cnt
+                                cnt += 1
+                            else:  # full: reuse the farthest slot
+                                slot = 0
+                                for j in range(1, K):
+                                    if nb_d2[i, j] > nb_d2[i, slot]:
+                                        slot = j
+                                if d2 >= nb_d2[i, slot]:
+                                    slot = -2  # ignore this element in this cell
+                                    continue
+                            nb_elem[i, slot] = f
+                            nb_d2[i, slot] = np.inf
+                    if slot == -2:
+                        continue
+                    if d2 < nb_d2[i, slot]:
+                        ch = seg_order[m]
+                        nb_d2[i, slot] = d2
+                        nb_seg[i, slot] = chunk_first[ch] + min(int(t * chunk_count[ch]), chunk_count[ch] - 1)
+        # exact closest points: walk along each neighbour's skin from the chunk's segment
+        for j in range(cnt):
+            s = nb_seg[i, j]
+            best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
+            for _ in range(64):
+                moved = False
+                n = seg_next[s]
+                d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+                if d2 < best:
+                    best, qx, qy, s, moved = d2, ax, ay, n, True
+                else:
+                    n = seg_prev[s]
+                    d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+                    if d2 < best:
+                        best, qx, qy, s, moved = d2, ax, ay, n, True
+                if not moved:
+                    break
+            nb_seg[i, j] = s
+            nb_d2[i, j] = best
+            nb_q[i, j, 0] = qx
+            nb_q[i, j, 1] = qy
         nb_count[i] = cnt
 
 
-@njit(cache=True, inline="always")
-def _closest_on_segment(x, a, b, px, py):
-    ax = x[a, 0]
-    ay = x[a, 1]
-    abx = x[b, 0] - ax
-    aby = x[b, 1] - ay
-    l2 = abx * abx + aby * aby
-    t = 0.0
-    if l2 > 0.0:
-        t = ((px - ax) * abx + (py - ay) * aby) / l2
-        if t < 0.0:
-            t = 0.0
-        elif t > 1.0:
-            t = 1.0
-    qx = ax + t * abx
-    qy = ay + t * aby
-    return (px - qx) * (px - qx) + (py - qy) * (py - qy), qx, qy
-
-
 @njit(cache=True, parallel=True)
-def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev,
-                   tri_xy, tri_elem, tri_start, tox, toy, tinv, tgx, tgy, near2,
-                   inside, nb_count, nb_d2, nb_q, nb_seg):
+def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris, vtri_ptr, vtri,
+                   near2, far2, inside, nb_count, nb_d2, nb_q, nb_seg):
     """Cheap refresh of :func:`contact_query`'s results between full queries.
 
     Every stored closest point follows its neighbour's skin by walking from the stored
     segment to the adjacent one while that is closer (vertices move at most
-    velocity_cap·Δt per step, so a few hops suffice). The point-in-mesh test is redone
-    only for vertices that were inside or whose nearest neighbouring skin is closer than
-    sqrt(near2): a vertex cannot get inside a mesh without crossing its skin.
+    velocity_cap·Δt per step, so a few hops suffice); neighbours farther than sqrt(far2)
+    keep the point of the last full query (their weak repulsion barely changes in a few
+    steps). The point-in-mesh test is redone
+    only against neighbours whose skin is closer than sqrt(near2) (or any neighbour, for
+    a vertex that was inside), and only against the triangles incident to the ends of
+    the closest skin segment: between full queries a vertex moves far less than a
+    triangle, so it can only enter (or stay in) a mesh there.
     """
     for k in prange(active.shape[0]):
         i = active[k]
-        e = vert_elem[i]
         px = x[i, 0]
         py = x[i, 1]
-        dmin = np.inf
+        was_inside = inside[i]
+        hit = False
         for j in range(nb_count[i]):
+            if nb_d2[i, j] > far2:
+                continue
             s = nb_seg[i, j]
             best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
             for _ in range(16):
@@ -177,26 +207,20 @@ def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev,
             nb_d2[i, j] = best
             nb_q[i, j, 0] = qx
             nb_q[i, j, 1] = qy
-            if best < dmin:
-                dmin = best
-        if not inside[i] and dmin >= near2:
-            continue
-        cx, cy = cell_of(px, py, tox, toy, tinv, tgx, tgy)
-        hit = False
-        for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
-            if hit:
-                break
-            for xx in range(max(cx - 1, 0), min(cx + 2, tgx)):
-                if hit:
-                    break
-                c = yy * tgx + xx
-                for m in range(tri_start[c], tri_start[c + 1]):
-                    if tri_elem[m] == e:
-                        continue
-                    if _inside_triangle(px, py, tri_xy[m, 0], tri_xy[m, 1], tri_xy[m, 2],
-                                        tri_xy[m, 3], tri_xy[m, 4], tri_xy[m, 5]):
+            if hit or (best >= near2 and not was_inside):
+                continue
+            for end in range(2):
+                v = seg_a[s] if end == 0 else seg_b[s]
+                for m in range(vtri_ptr[v], vtri_ptr[v + 1]):
+                    t = vtri[m]
+                    a = tris[t, 0]
+                    b = tris[t, 1]
+                    c = tris[t, 2]
+                    if _inside_triangle(px, py, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1]):
                         hit = True
                         break
+                if hit:
+                    break
         inside[i] = hit
 
 

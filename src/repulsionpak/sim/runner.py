@@ -25,6 +25,7 @@ from .model import Model, State
 from .selfintersect import relax_self_intersections
 
 MAX_NEIGHBOURS = 24
+CHUNK = 4  # skin segments per chunk in the full neighbour query
 
 
 @dataclass(frozen=True)
@@ -83,7 +84,25 @@ class Simulator:
             base += n
         self.seg_next = np.concatenate(nxt).astype(np.int64)
         self.seg_prev = np.concatenate(prv).astype(np.int64)
-        self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.seg_a), len(m.tris))
+        # chunks of CHUNK consecutive skin segments, for the coarse full-query scan
+        ca, cb, ce, cf, cc = [], [], [], [], []
+        base = 0
+        for e in range(M):
+            s, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
+            for j in range(0, n, CHUNK):
+                cnt = min(CHUNK, n - j)
+                ca.append(s + j)
+                cb.append(s + (j + cnt) % n)
+                ce.append(e)
+                cf.append(base + j)
+                cc.append(cnt)
+            base += n
+        self.chunk_a = np.asarray(ca, np.int64)
+        self.chunk_b = np.asarray(cb, np.int64)
+        self.chunk_elem = np.asarray(ce, np.int32)
+        self.chunk_first = np.asarray(cf, np.int64)
+        self.chunk_count = np.asarray(cc, np.int64)
+        self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.chunk_a), len(m.tris))
         self.F = np.zeros((N, 2))
         self.inside = np.zeros(N, np.bool_)
         self.outside = np.zeros(N, np.bool_)
@@ -100,6 +119,7 @@ class Simulator:
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
         self.dt = params.dt
         self.max_growth = m.max_growth * params.max_size
+        self.far2 = (params.far_update * m.gap) ** 2
         # a vertex this close to a neighbouring skin gets the exact inside test every step
         self.near2 = (4.0 * params.velocity_cap * params.dt * params.dt * max(1, params.requery_every)) ** 2
         self.allow_growth = True
@@ -114,19 +134,22 @@ class Simulator:
         m, st, p = self.model, self.state, self.params
         x, F = st.x, self.F
         g = self.grid
-        if st.iteration % p.requery_every == 0:
+        full = st.iteration % p.requery_every == 0
+        if full:
             g.fit_triangles(x, m.tris)
-        g.rebuild_triangles(x, m.tris, m.tri_elem)
-        if st.iteration % p.requery_every == 0:
-            g.rebuild_segments(x, self.seg_a, self.seg_b, self.seg_elem)
+        if full or len(m.corners):
+            g.rebuild_triangles(x, m.tris, m.tri_elem)
+        if full:
+            g.rebuild_segments(x, self.chunk_a, self.chunk_b, self.chunk_elem)
             contact_query(x, self.active_skin, m.vert_elem,
                           g.segs.xy, g.segs.elem, g.segs.start, g.segs.order, *g.segs.params,
                           g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params,
+                          self.chunk_first, self.chunk_count, self.seg_a, self.seg_b,
+                          self.seg_next, self.seg_prev,
                           self.inside, self.nb_count, self.nb_elem, self.nb_d2, self.nb_q, self.nb_seg)
         else:
             contact_update(x, self.active_skin, m.vert_elem, self.seg_a, self.seg_b,
-                           self.seg_next, self.seg_prev,
-                           g.tris.xy, g.tris.elem, g.tris.start, *g.tris.params, self.near2,
+                           self.seg_next, self.seg_prev, m.tris, m.vtri_ptr, m.vtri, self.near2, self.far2,
                            self.inside, self.nb_count, self.nb_d2, self.nb_q, self.nb_seg)
         F[:] = 0.0
         # F = F_r + F_e + F_b + F_o  (Eq. 1)
