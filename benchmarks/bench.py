@@ -39,7 +39,7 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=400, steps=100) -> None:
+def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100) -> None:
     """ms per simulation iteration on square containers filled with the example library,
     measured after ``warmup`` iterations (elements grown, neighbours in contact)."""
     import dataclasses

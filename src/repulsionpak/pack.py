@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
@@ -149,4 +149,4 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     return packing
 
 
-__all__ = ["Packing", "pack", "prepare", "default_gap", "replace"]
+__all__ = ["Packing", "pack", "prepare", "default_gap"]

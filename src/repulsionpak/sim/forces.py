@@ -44,6 +44,23 @@ def _closest_on_segment(x, a, b, px, py):
     return (px - qx) * (px - qx) + (py - qy) * (py - qy), qx, qy
 
 
+@njit(cache=True, inline="always")
+def _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
+    """From skin segment ``s``, step to the next or previous segment of the same ring while
+    that one is closer to (px, py). Returns (d², qx, qy, segment) of the local minimum."""
+    best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
+    for _ in range(max_hops):
+        n = seg_next[s]
+        d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+        if d2 >= best:
+            n = seg_prev[s]
+            d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+            if d2 >= best:
+                break
+        best, qx, qy, s = d2, ax, ay, n
+    return best, qx, qy, s
+
+
 @njit(cache=True, parallel=True)
 def contact_query(x, active, vert_elem,
                   seg_xy, seg_elem, seg_start, seg_order, sox, soy, sinv, sgx, sgy,
@@ -142,21 +159,7 @@ def contact_query(x, active, vert_elem,
                         nb_seg[i, slot] = chunk_first[ch] + min(int(t * chunk_count[ch]), chunk_count[ch] - 1)
         # exact closest points: walk along each neighbour's skin from the chunk's segment
         for j in range(cnt):
-            s = nb_seg[i, j]
-            best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
-            for _ in range(64):
-                moved = False
-                n = seg_next[s]
-                d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-                if d2 < best:
-                    best, qx, qy, s, moved = d2, ax, ay, n, True
-                else:
-                    n = seg_prev[s]
-                    d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-                    if d2 < best:
-                        best, qx, qy, s, moved = d2, ax, ay, n, True
-                if not moved:
-                    break
+            best, qx, qy, s = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, nb_seg[i, j], px, py, 64)
             nb_seg[i, j] = s
             nb_d2[i, j] = best
             nb_q[i, j, 0] = qx
@@ -188,21 +191,7 @@ def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris,
         for j in range(nb_count[i]):
             if nb_d2[i, j] > far2:
                 continue
-            s = nb_seg[i, j]
-            best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
-            for _ in range(16):
-                moved = False
-                n = seg_next[s]
-                d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-                if d2 < best:
-                    best, qx, qy, s, moved = d2, ax, ay, n, True
-                else:
-                    n = seg_prev[s]
-                    d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-                    if d2 < best:
-                        best, qx, qy, s, moved = d2, ax, ay, n, True
-                if not moved:
-                    break
+            best, qx, qy, s = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, nb_seg[i, j], px, py, 16)
             nb_seg[i, j] = s
             nb_d2[i, j] = best
             nb_q[i, j, 0] = qx
