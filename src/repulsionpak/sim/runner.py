@@ -50,6 +50,27 @@ class RunResult:
     dt: float
 
 
+def skin_topology(m: Model) -> tuple[np.ndarray, ...]:
+    """Skin segments (a, b, element, next, previous) and chunks (a, b, element, first
+    segment, segment count) of all meshes, as flat arrays. Segment k of a mesh runs from
+    its skin vertex k to k+1; the segments of one mesh are consecutive."""
+    seg, chunk = [], []
+    base = 0
+    for e in range(m.n_elements):
+        s, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
+        k = np.arange(n)
+        seg.append(np.column_stack([s + k, s + (k + 1) % n, np.full(n, e), base + (k + 1) % n,
+                                    base + (k - 1) % n]))
+        j = np.arange(0, n, CHUNK)
+        cnt = np.minimum(CHUNK, n - j)
+        chunk.append(np.column_stack([s + j, s + (j + cnt) % n, np.full(len(j), e), base + j, cnt]))
+        base += n
+    seg, chunk = np.concatenate(seg).astype(np.int64), np.concatenate(chunk).astype(np.int64)
+    return (seg[:, 0].copy(), seg[:, 1].copy(), seg[:, 2].astype(np.int32), seg[:, 3].copy(),
+            seg[:, 4].copy(), chunk[:, 0].copy(), chunk[:, 1].copy(), chunk[:, 2].astype(np.int32),
+            chunk[:, 3].copy(), chunk[:, 4].copy())
+
+
 class Simulator:
     """Advance a packing. ``phase`` is a label ("primary"/"secondary") for snapshots."""
 
@@ -62,46 +83,10 @@ class Simulator:
         vmask = moving[m.vert_elem]
         self.active_all = np.flatnonzero(vmask).astype(np.int64)
         self.active_skin = np.flatnonzero(vmask & m.is_skin).astype(np.int64)
-        # skin segments of every element (also frozen ones: they repel)
-        seg_a, seg_b, seg_e = [], [], []
-        for e in range(M):
-            s, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
-            idx = np.arange(s, s + n)
-            seg_a.append(idx)
-            seg_b.append(np.roll(idx, -1))
-            seg_e.append(np.full(n, e))
-        self.seg_a = np.concatenate(seg_a).astype(np.int64)
-        self.seg_b = np.concatenate(seg_b).astype(np.int64)
-        self.seg_elem = np.concatenate(seg_e).astype(np.int32)
-        # ring neighbours of every segment (segments of an element are consecutive)
-        nxt, prv = [], []
-        base = 0
-        for e in range(M):
-            n = int(m.elem_nskin[e])
-            idx = np.arange(n)
-            nxt.append(base + (idx + 1) % n)
-            prv.append(base + (idx - 1) % n)
-            base += n
-        self.seg_next = np.concatenate(nxt).astype(np.int64)
-        self.seg_prev = np.concatenate(prv).astype(np.int64)
-        # chunks of CHUNK consecutive skin segments, for the coarse full-query scan
-        ca, cb, ce, cf, cc = [], [], [], [], []
-        base = 0
-        for e in range(M):
-            s, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
-            for j in range(0, n, CHUNK):
-                cnt = min(CHUNK, n - j)
-                ca.append(s + j)
-                cb.append(s + (j + cnt) % n)
-                ce.append(e)
-                cf.append(base + j)
-                cc.append(cnt)
-            base += n
-        self.chunk_a = np.asarray(ca, np.int64)
-        self.chunk_b = np.asarray(cb, np.int64)
-        self.chunk_elem = np.asarray(ce, np.int32)
-        self.chunk_first = np.asarray(cf, np.int64)
-        self.chunk_count = np.asarray(cc, np.int64)
+        # skin segments of every element (also frozen ones: they repel), their ring
+        # neighbours, and chunks of CHUNK consecutive segments for the full-query scan
+        (self.seg_a, self.seg_b, self.seg_elem, self.seg_next, self.seg_prev, self.chunk_a,
+         self.chunk_b, self.chunk_elem, self.chunk_first, self.chunk_count) = skin_topology(m)
         self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.chunk_a), len(m.tris))
         self.F = np.zeros((N, 2))
         self.inside = np.zeros(N, np.bool_)
@@ -120,7 +105,7 @@ class Simulator:
         self.dt = params.dt
         self.max_growth = m.max_growth * params.max_size
         self.far2 = (params.far_update * m.gap) ** 2
-        # a vertex this close to a neighbouring skin gets the exact inside test every step
+        # a vertex this close to a neighbouring skin gets a point-in-mesh test every step
         self.near2 = (4.0 * params.velocity_cap * params.dt * params.dt * max(1, params.requery_every)) ** 2
         self.allow_growth = True
         self.settle_left: int | None = None  # iterations left in the settle phase
