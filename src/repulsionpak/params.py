@@ -118,7 +118,7 @@ class SimParams:
     relax_fraction: float = _doc(0.5, "× mean edge", "Minimum distance of non-neighbouring vertices.")
     stop_window: int = _doc(100, "iterations", "w, sliding window of the stopping rule (sec. 8).")
     stop_epsilon: float = _doc(
-        3e-5, "relative / iteration", "ε: stop when the RMS of the per-iteration change of the "
+        2e-5, "relative / iteration", "ε: stop when the RMS of the per-iteration change of the "
         "moving meshes' area fraction over the window, divided by that area fraction, falls below "
         "this (the paper samples once per second with ε = 0.01; we sample every iteration).")
     min_iterations: int = _doc(300, "iterations", "Never stop before this many iterations.")

@@ -115,6 +115,9 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
                                cell_size=m0.cell_size, gap=m0.gap,
                                kinds=["secondary"] * len(seeds),
                                frozen=np.ones(m0.n_elements, bool), base=(m0, packing.state))
+    # a secondary's nominal size is its pocket (it starts at initial_fraction of it), not
+    # the template's: big pockets get big secondaries
+    model.max_growth[m0.n_elements:] = 1.0 / sp.initial_fraction
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
     if saved is not None:
