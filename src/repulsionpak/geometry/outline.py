@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numba import njit
 import shapely
 from shapely.geometry import LinearRing, LineString, MultiPolygon, Point, Polygon, box  # noqa: F401
 
@@ -261,6 +262,42 @@ def resample_closed(ring: np.ndarray, spacing: float, min_points: int = 8) -> np
     return np.column_stack([x, y])
 
 
+@njit(cache=True)
+def _greedy_chords(pts, arc, spacing, tolerance):
+    """Indices of the samples kept by :func:`resample_adaptive`: from each kept sample, go
+    as far along the dense closed polyline ``pts`` (last = first) as the arc length
+    allows while every skipped point stays within ``tolerance`` of the chord segment."""
+    n = pts.shape[0] - 1
+    keep = [0]
+    i = 0
+    while True:
+        best = i + 1
+        j = i + 1
+        while j <= n and arc[j] - arc[i] <= spacing:
+            ax, ay = pts[i, 0], pts[i, 1]
+            abx, aby = pts[j, 0] - ax, pts[j, 1] - ay
+            l2 = abx * abx + aby * aby
+            ok = True
+            if l2 > 0.0:
+                for m in range(i + 1, j):
+                    t = ((pts[m, 0] - ax) * abx + (pts[m, 1] - ay) * aby) / l2
+                    t = min(max(t, 0.0), 1.0)
+                    dx = pts[m, 0] - (ax + t * abx)
+                    dy = pts[m, 1] - (ay + t * aby)
+                    if dx * dx + dy * dy > tolerance * tolerance:
+                        ok = False
+                        break
+            if not ok:
+                break
+            best = j
+            j += 1
+        if best >= n:
+            break
+        keep.append(best)
+        i = best
+    return np.array(keep, dtype=np.int64)
+
+
 def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_points: int = 8) -> np.ndarray:
     """Resample a closed polyline with samples at most ``spacing`` apart (by arc length)
     whose chords stay within ``tolerance`` of the original curve.
@@ -282,30 +319,8 @@ def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_po
     m = max(int(np.ceil(perimeter / step)), 4 * min_points)
     t = np.linspace(0.0, perimeter, m, endpoint=False)
     dense = np.column_stack([np.interp(t, cum, closed[:, 0]), np.interp(t, cum, closed[:, 1])])
-    n = len(dense)
-    dense2 = np.vstack([dense, dense[:1]])
-    t2 = np.concatenate([t, [perimeter]])
-    keep = [0]
-    i = 0
-    while True:
-        j = i + 1
-        best = j
-        while j <= n and t2[j] - t2[i] <= spacing * (1 + 1e-9):
-            a, b = dense2[i], dense2[j]
-            ab = b - a
-            L = np.hypot(*ab)
-            mid = dense2[i + 1:j]
-            if len(mid) and L > 0:  # distance of the skipped points to the chord *segment*
-                t = np.clip(((mid - a) @ ab) / (L * L), 0.0, 1.0)
-                dev = np.hypot(*(mid - (a + t[:, None] * ab)).T)
-                if dev.max() > tolerance:
-                    break
-            best = j
-            j += 1
-        if best >= n:
-            break
-        keep.append(best)
-        i = best
+    keep = _greedy_chords(np.vstack([dense, dense[:1]]), np.concatenate([t, [perimeter]]),
+                          spacing * (1 + 1e-9), tolerance)
     out = dense[keep]
     if len(out) < min_points:
         return resample_closed(ring, perimeter / min_points, min_points)
