@@ -164,6 +164,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         params = dataclasses.replace(params, seed=seed)
     if params.seed is None:
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
+    for option, value, low in (("--count", count, 1), ("--max-iterations", max_iterations, 1), ("--seed", seed, 0)):
+        if value is not None and value < low:  # name the option, not the config key
+            raise ParameterError(f"{option} must be >= {low}, got {value}")
     if count is not None:
         params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
     if max_iterations is not None:
