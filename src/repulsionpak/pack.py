@@ -15,7 +15,7 @@ from .placement import Placement, assign_elements, estimate_count, final_scale, 
 from .preprocess import Outline, Template, build_template, outline_of
 from .render import placed_art, skin_polygons
 from .sim.model import Model, SimFrame, State, build_model
-from .sim.runner import RunResult, Simulator, Snapshot
+from .sim.runner import Simulator, Snapshot
 from .types import Container, Element, PlacedArt
 
 
@@ -114,21 +114,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                gap=gap / frame.unit)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
-    saved = (resume or {}).get("primary")
-    if saved is not None:
-        sim.restore(saved)
-
-    def save_primary(s: Simulator, done: bool = False) -> None:
-        if on_checkpoint is not None:
-            on_checkpoint({"primary": dict(s.snapshot_state(), done=done, area=s.moving_area)})
-
-    if saved is not None and saved.get("done"):
-        res = RunResult(state.iteration, float(saved.get("area", 0.0)), sim.stopped_by, sim.dt)
-    else:
-        res = sim.run(on_snapshot, should_stop=should_stop, on_checkpoint=save_primary,
-                      checkpoint_every=checkpoint_every if on_checkpoint else 0)
-        if res.stopped_by != "interrupted":  # an interrupted run keeps its last periodic checkpoint
-            save_primary(sim, done=True)
+    res = sim.run_resumable((resume or {}).get("primary"),
+                            None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
+                            checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop)
     t2 = time.perf_counter()
     packing = Packing(container, gap, [], templates, model, state, frame, params,
                       iterations={"primary": res.iterations, "secondary": 0},
@@ -137,7 +125,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     if secondary and res.stopped_by != "interrupted":
         from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
 
-        primary_state = dict(sim.snapshot_state(), done=True, area=res.area_fraction)
+        primary_state = dict(sim.snapshot_state(), done=True, area=res.area_fraction)  # frozen from now on
         add_secondary(packing, secondary, rng, on_snapshot=on_snapshot, should_stop=should_stop,
                       on_checkpoint=(None if on_checkpoint is None else
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),

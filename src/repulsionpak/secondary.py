@@ -15,7 +15,7 @@ from .params import SecondaryParams
 from .placement import Placement
 from .preprocess import build_template, outline_of
 from .sim.model import build_model
-from .sim.runner import RunResult, Simulator, Snapshot
+from .sim.runner import Simulator, Snapshot
 from .types import Element
 
 
@@ -120,20 +120,8 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     model.max_growth[m0.n_elements:] = 1.0 / sp.initial_fraction
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
-    if saved is not None:
-        sim.restore(saved)
-
-    def save(s: Simulator, done: bool = False) -> None:
-        if on_checkpoint is not None:
-            on_checkpoint(dict(s.snapshot_state(), done=done, area=s.moving_area))
-
-    if saved is not None and saved.get("done"):
-        res = RunResult(state.iteration, float(saved.get("area", 0.0)), sim.stopped_by, sim.dt)
-    else:
-        res = sim.run(on_snapshot, should_stop=should_stop, on_checkpoint=save,
-                      checkpoint_every=checkpoint_every if on_checkpoint else 0)
-        if res.stopped_by != "interrupted":  # an interrupted run keeps its last periodic checkpoint
-            save(sim, done=True)
+    res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
+                            should_stop=should_stop)
     packing.templates = all_templates
     packing.model, packing.state = model, state
     packing.iterations["secondary"] = res.iterations

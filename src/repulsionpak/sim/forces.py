@@ -26,11 +26,10 @@ def _inside_triangle(px, py, ax, ay, bx, by, cx, cy):
 
 
 @njit(cache=True, inline="always")
-def _closest_on_segment(x, a, b, px, py):
-    ax = x[a, 0]
-    ay = x[a, 1]
-    abx = x[b, 0] - ax
-    aby = x[b, 1] - ay
+def _closest_on_coords(ax, ay, bx, by, px, py):
+    """Closest point of segment (a, b) to p: (d², qx, qy, t) with t in [0, 1]."""
+    abx = bx - ax
+    aby = by - ay
     l2 = abx * abx + aby * aby
     t = 0.0
     if l2 > 0.0:
@@ -41,7 +40,13 @@ def _closest_on_segment(x, a, b, px, py):
             t = 1.0
     qx = ax + t * abx
     qy = ay + t * aby
-    return (px - qx) * (px - qx) + (py - qy) * (py - qy), qx, qy
+    return (px - qx) * (px - qx) + (py - qy) * (py - qy), qx, qy, t
+
+
+@njit(cache=True, inline="always")
+def _closest_on_segment(x, a, b, px, py):
+    d2, qx, qy, t = _closest_on_coords(x[a, 0], x[a, 1], x[b, 0], x[b, 1], px, py)
+    return d2, qx, qy
 
 
 @njit(cache=True, inline="always")
@@ -115,21 +120,8 @@ def contact_query(x, active, vert_elem,
                     f = seg_elem[m]
                     if f == e:
                         continue
-                    ax = seg_xy[m, 0]
-                    ay = seg_xy[m, 1]
-                    abx = seg_xy[m, 2] - ax
-                    aby = seg_xy[m, 3] - ay
-                    l2 = abx * abx + aby * aby
-                    t = 0.0
-                    if l2 > 0.0:
-                        t = ((px - ax) * abx + (py - ay) * aby) / l2
-                        if t < 0.0:
-                            t = 0.0
-                        elif t > 1.0:
-                            t = 1.0
-                    qx = ax + t * abx
-                    qy = ay + t * aby
-                    d2 = (px - qx) * (px - qx) + (py - qy) * (py - qy)
+                    d2, qx, qy, t = _closest_on_coords(seg_xy[m, 0], seg_xy[m, 1], seg_xy[m, 2],
+                                                       seg_xy[m, 3], px, py)
                     if f != last:  # items of one element are contiguous in a cell
                         last = f
                         slot = -1

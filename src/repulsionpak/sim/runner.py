@@ -264,6 +264,29 @@ class Simulator:
                                  self.n_inside, st, done=True))
         return RunResult(st.iteration, a, self.stopped_by, self.dt)
 
+    def run_resumable(self, saved: dict | None, on_checkpoint: Callable[[dict], None] | None,
+                      checkpoint_every: int, **run_kw) -> RunResult:
+        """:meth:`run`, continuing from ``saved`` (a checkpointed phase state) if given.
+
+        ``on_checkpoint(state)`` receives :meth:`snapshot_state` plus ``done`` and
+        ``area`` periodically and once when the phase ends (not when it is interrupted:
+        the last periodic checkpoint is the one to resume from)."""
+        if saved is not None:
+            self.restore(saved)
+            if saved.get("done"):
+                return RunResult(self.state.iteration, float(saved.get("area", 0.0)),
+                                 self.stopped_by, self.dt)
+
+        def save(s: "Simulator", done: bool = False) -> None:
+            if on_checkpoint is not None:
+                on_checkpoint(dict(s.snapshot_state(), done=done, area=s.moving_area))
+
+        res = self.run(on_checkpoint=save, checkpoint_every=checkpoint_every if on_checkpoint else 0,
+                       **run_kw)
+        if res.stopped_by != "interrupted":
+            save(self, done=True)
+        return res
+
     # -- checkpoints -------------------------------------------------------------------
     def snapshot_state(self) -> dict:
         """Everything that evolves during :meth:`run`, as plain arrays and numbers."""
