@@ -53,8 +53,9 @@ class Packing:
 
 
 def default_gap(container: Container) -> float:
+    """1% of the container's larger side, to 4 significant digits (a readable data-gap)."""
     minx, miny, maxx, maxy = container.bounds
-    return 0.01 * max(maxx - minx, maxy - miny)
+    return float(f"{0.01 * max(maxx - minx, maxy - miny):.4g}")
 
 
 def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float:
