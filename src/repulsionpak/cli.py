@@ -174,11 +174,12 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     params.validate()
     from .pack import default_gap
 
-    cont = load_container(container)
+    # one read: with a given gap, curves are flattened to gap/4; otherwise the reader's
+    # default (1e-3 of the diagonal) is already finer than a quarter of the default gap
+    tol = None if params.gap is None else params.preprocess.flatten_tolerance * params.gap
+    cont = load_container(container, tolerance=tol)
     g = params.gap if params.gap is not None else default_gap(cont)
     params = dataclasses.replace(params, gap=g)
-    tol = params.preprocess.flatten_tolerance * g
-    cont = load_container(container, tolerance=tol)
     elems = load_elements(elements)
     secs = load_elements(secondary) if secondary else []
     on_checkpoint = None

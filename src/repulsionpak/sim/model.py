@@ -230,7 +230,8 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
                              np.asarray(placement.template_index, np.int32)]).astype(np.int32)
     minx, miny, maxx, maxy = region_sim.bounds
     margin = 0.25 * max(maxx - minx, maxy - miny)
-    fld = container_field(region_sim, gap / 3.0, margin)
+    # the container does not change between phases: reuse the base model's field
+    fld = base[0].field if base is not None else container_field(region_sim, gap / 3.0, margin)
     longest = max(float(np.max(np.linalg.norm(t.verts[t.springs[:t.n_edges, 0]] - t.verts[t.springs[:t.n_edges, 1]], axis=1)))
                   for t in templates) / frame.unit
     tri_cell = min(1.3 * longest, cell_size)
@@ -254,7 +255,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         vtri_ptr=vtri_ptr, vtri=vtri, vnbr_ptr=vnbr_ptr, vnbr=vnbr,
         frozen=frozen_all, template_index=tindex, max_growth=np.asarray(nominal, dtype=float), kind=kinds_all, field=fld,
         container_area=float(region_sim.area), gap=float(gap),
-        corners=reflex_corners(region_sim), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
+        corners=base[0].corners if base is not None else reflex_corners(region_sim), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
         grid_origin=(float(minx - cell_size), float(miny - cell_size)),
         grid_extent=(float(maxx - minx + 2 * cell_size), float(maxy - miny + 2 * cell_size)),
     )
