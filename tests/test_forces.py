@@ -548,8 +548,20 @@ def test_grow_blocked_by_skin_vertex_outside_container():
 def test_skin_areas_shoelace():
     x = np.array([[0, 0], [4, 0], [4, 3], [0, 3], [1, 1], [10, 10], [12, 10], [10, 13]], float)
     out = np.zeros(2)
-    skin_areas(x, np.array([0, 5, 8], np.int32), np.array([4, 3], np.int32), out)
+    total, moving = skin_areas(x, np.array([0, 5, 8], np.int32), np.array([4, 3], np.int32),
+                               np.array([False, True]), out)
     np.testing.assert_allclose(out, [12.0, 3.0])
+    assert (total, moving) == pytest.approx((15.0, 3.0))
+
+
+def test_window_change_matches_numpy():
+    from repulsionpak.sim.integrate import window_change
+
+    h = np.cumsum(np.random.default_rng(3).normal(size=50))
+    rms, trend = window_change(h, 40, 10)
+    d = np.diff(h[29:40])
+    assert rms == pytest.approx(np.sqrt(np.mean(d * d)))
+    assert trend == pytest.approx(abs(h[39] - h[29]) / 10)
 
 
 # --------------------------------------------------------------------------------------
@@ -569,7 +581,8 @@ def relax(x, springs, ptr, nbr, moving=True, fraction=0.5, passes=1):
     n = len(x)
     return relax_self_intersections(x, np.array([0, n], np.int32), np.array([n], np.int32),
                                     np.array([moving]), np.array([0], np.int64),
-                                    np.array([len(springs)], np.int64), springs, ptr, nbr, passes, fraction)
+                                    np.array([len(springs)], np.int64), springs, ptr, nbr, passes, fraction,
+                                    np.arange(n, dtype=np.int64))
 
 
 def test_relax_separates_close_non_neighbours():
@@ -689,3 +702,44 @@ def test_contact_update_tracks_the_full_query(template):
     np.testing.assert_array_equal(inside[skin], inside_f[skin])
     has = cnt[skin] > 0
     np.testing.assert_allclose(d2[skin[has], 0], d2_f[skin[has], 0], rtol=1e-9, atol=1e-9)
+
+
+# --------------------------------------------------------------------------------------
+# reflex container corners
+
+
+def _strip_of_triangles(n: int = 12):
+    """A strip of 2n triangles over [0, n] × [0, 1] (one element)."""
+    xs = np.arange(n + 1, dtype=float)
+    x = np.concatenate([np.column_stack([xs, np.zeros(n + 1)]), np.column_stack([xs, np.ones(n + 1)])])
+    tris = []
+    for k in range(n):
+        a, b, c, d = k, k + 1, n + 1 + k + 1, n + 1 + k
+        tris += [[a, b, c], [a, c, d]]
+    return x, np.array(tris, np.int64)
+
+
+def test_corner_force_pushes_the_triangle_holding_the_corner_and_only_it():
+    from repulsionpak.sim.forces import corner_candidates, corner_force
+
+    x, tris = _strip_of_triangles()
+    tri_elem = np.zeros(len(tris), np.int32)
+    g = Grid((-2.0, -2.0), (16.0, 5.0), 4.0, 1.5, 1, len(tris))
+    g.rebuild_triangles(x, tris, tri_elem)
+    corners = np.array([[3.7, 0.2], [20.0, 20.0]])  # inside triangle 6; far away
+    ptr = np.zeros(3, np.int64)
+    cand = np.zeros(2, np.int64)  # too small: the kernel says how much it needs
+    need = corner_candidates(corners, g.tris.order, g.tris.start, *g.tris.params, ptr, cand)
+    assert need > 2
+    cand = np.zeros(need, np.int64)
+    assert corner_candidates(corners, g.tris.order, g.tris.start, *g.tris.params, ptr, cand) == need
+    assert 6 in cand[ptr[0]:ptr[1]] and ptr[2] == ptr[1]  # the far corner has no candidates
+    F = np.zeros_like(x)
+    corner_force(x, corners, ptr, cand, tris, tri_elem, np.array([True]), 10.0, F)
+    pushed = np.flatnonzero(np.abs(F).sum(1))
+    assert sorted(pushed) == sorted(tris[6])
+    for v in tris[6]:  # away from the corner, k·(v − c)
+        np.testing.assert_allclose(F[v], 10.0 * (x[v] - corners[0]))
+    F[:] = 0.0  # a frozen element is not pushed
+    corner_force(x, corners, ptr, cand, tris, tri_elem, np.array([False]), 10.0, F)
+    assert not F.any()

@@ -388,29 +388,52 @@ def project_inside(x, active_all, values, ox, oy, inv_h, limit):
 
 
 @njit(cache=True)
-def corner_force(x, corners, tri_xy, tri_elem, tri_order, tri_start, tox, toy, tinv, tgx, tgy,
-                 tris, moving, k_b, F):
-    """Beyond the paper: the container's reflex corners (pointing into the container, like
-    the cleft of a heart) can slip between two skin vertices into a mesh, where no vertex
-    is outside. A corner found inside a triangle pushes that triangle's vertices away
-    from it, k_b·(v − c) each, like a vertex of a fixed obstacle."""
+def corner_candidates(corners, tri_order, tri_start, tox, toy, tinv, tgx, tgy, cand_ptr, cand):
+    """The triangles in the 3×3 triangle-cell window of each reflex corner, ``cand[
+    cand_ptr[k]:cand_ptr[k+1]]`` for corner k. Returns the number of entries needed; if
+    that exceeds ``len(cand)``, the lists are incomplete and the caller must retry with a
+    larger ``cand``.
+
+    Gathered at each full neighbour query: a triangle containing a corner has its centroid
+    within 2/3 of its longest edge (< 0.64 cell) of it, so the window keeps a third of a
+    cell of margin for the few steps until the next query."""
+    n = 0
     for k in range(corners.shape[0]):
-        cx = corners[k, 0]
-        cy = corners[k, 1]
-        gx, gy = cell_of(cx, cy, tox, toy, tinv, tgx, tgy)
+        cand_ptr[k] = n
+        gx, gy = cell_of(corners[k, 0], corners[k, 1], tox, toy, tinv, tgx, tgy)
         for yy in range(max(gy - 1, 0), min(gy + 2, tgy)):
             for xx in range(max(gx - 1, 0), min(gx + 2, tgx)):
                 c = yy * tgx + xx
                 for m in range(tri_start[c], tri_start[c + 1]):
-                    if not moving[tri_elem[m]]:
-                        continue
-                    if _inside_triangle(cx, cy, tri_xy[m, 0], tri_xy[m, 1], tri_xy[m, 2],
-                                        tri_xy[m, 3], tri_xy[m, 4], tri_xy[m, 5]):
-                        t = tri_order[m]
-                        for j in range(3):
-                            v = tris[t, j]
-                            F[v, 0] += k_b * (x[v, 0] - cx)
-                            F[v, 1] += k_b * (x[v, 1] - cy)
+                    if n < cand.shape[0]:
+                        cand[n] = tri_order[m]
+                    n += 1
+    cand_ptr[corners.shape[0]] = n
+    return n
+
+
+@njit(cache=True)
+def corner_force(x, corners, cand_ptr, cand, tris, tri_elem, moving, k_b, F):
+    """Beyond the paper: the container's reflex corners (pointing into the container, like
+    the cleft of a heart) can slip between two skin vertices into a mesh, where no vertex
+    is outside. A corner found inside a triangle pushes that triangle's vertices away
+    from it, k_b·(v − c) each, like a vertex of a fixed obstacle. Only the corner's
+    candidate triangles (:func:`corner_candidates`) are tested."""
+    for k in range(corners.shape[0]):
+        cx = corners[k, 0]
+        cy = corners[k, 1]
+        for m in range(cand_ptr[k], cand_ptr[k + 1]):
+            t = cand[m]
+            if not moving[tri_elem[t]]:
+                continue
+            a = tris[t, 0]
+            b = tris[t, 1]
+            c = tris[t, 2]
+            if _inside_triangle(cx, cy, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1]):
+                for j in range(3):
+                    v = tris[t, j]
+                    F[v, 0] += k_b * (x[v, 0] - cx)
+                    F[v, 1] += k_b * (x[v, 1] - cy)
 
 
 @njit(cache=True)

@@ -55,8 +55,11 @@ def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_d
 
 
 @njit(cache=True)
-def skin_areas(x, elem_vstart, elem_nskin, out):
-    """Area enclosed by each element's skin polygon (shoelace), (M,)."""
+def skin_areas(x, elem_vstart, elem_nskin, moving, out):
+    """Area enclosed by each element's skin polygon (shoelace) into ``out`` (M,); returns
+    (sum of all areas, sum over the ``moving`` elements)."""
+    total = 0.0
+    total_moving = 0.0
     for e in range(elem_nskin.shape[0]):
         s = elem_vstart[e]
         n = elem_nskin[e]
@@ -66,6 +69,21 @@ def skin_areas(x, elem_vstart, elem_nskin, out):
             b = s + (k + 1) % n
             acc += x[a, 0] * x[b, 1] - x[b, 0] * x[a, 1]
         out[e] = 0.5 * abs(acc)
+        total += out[e]
+        if moving[e]:
+            total_moving += out[e]
+    return total, total_moving
+
+
+@njit(cache=True)
+def window_change(h, n, w):
+    """Stopping-rule statistics over the last ``w`` steps of the history ``h[:n]`` (n > w):
+    (RMS of the per-step changes, |net change| / w)."""
+    acc = 0.0
+    for k in range(n - w, n):
+        d = h[k] - h[k - 1]
+        acc += d * d
+    return np.sqrt(acc / w), abs(h[n - 1] - h[n - 1 - w]) / w
 
 
 @njit(cache=True)

@@ -17,10 +17,11 @@ import numpy as np
 
 from ..errors import DivergedError
 from ..params import SimParams
-from .forces import (boundary_force, contact_query, contact_update, corner_force, edge_force,
+from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
+                     edge_force,
                      inversion_force, overlap_force, project_inside, repulsion_force)
 from .grid import Grid
-from .integrate import count_inside, euler_step, grow, skin_areas
+from .integrate import count_inside, euler_step, grow, skin_areas, window_change
 from .model import Model, State
 from .selfintersect import relax_self_intersections
 
@@ -89,6 +90,8 @@ class Simulator:
          self.chunk_b, self.chunk_elem, self.chunk_first, self.chunk_count) = skin_topology(m)
         self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.chunk_a), len(m.tris))
         self.F = np.zeros((N, 2))
+        self.corner_ptr = np.zeros(len(m.corners) + 1, np.int64)
+        self.corner_tris = np.zeros(1024, np.int64)  # grown on demand
         self.inside = np.zeros(N, np.bool_)
         self.outside = np.zeros(N, np.bool_)
         self.nb_count = np.zeros(N, np.int64)
@@ -101,6 +104,7 @@ class Simulator:
         self.moving_area = 0.0
         sp_start = np.searchsorted(m.spring_elem, np.arange(M)).astype(np.int64)
         self.sp_start = sp_start
+        self.relax_order = np.arange(N, dtype=np.int64)
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
         self.dt = params.dt
         self.max_growth = m.max_growth * params.max_size
@@ -122,9 +126,15 @@ class Simulator:
         full = st.iteration % p.requery_every == 0
         if full:
             g.fit_triangles(x, m.tris)
-        if full or len(m.corners):
-            g.rebuild_triangles(x, m.tris, m.tri_elem)
         if full:
+            g.rebuild_triangles(x, m.tris, m.tri_elem)
+            if len(m.corners):
+                need = corner_candidates(m.corners, g.tris.order, g.tris.start, *g.tris.params,
+                                         self.corner_ptr, self.corner_tris)
+                if need > len(self.corner_tris):
+                    self.corner_tris = np.zeros(2 * need, np.int64)
+                    corner_candidates(m.corners, g.tris.order, g.tris.start, *g.tris.params,
+                                      self.corner_ptr, self.corner_tris)
             g.rebuild_segments(x, self.chunk_a, self.chunk_b, self.chunk_elem)
             contact_query(x, self.active_skin, m.vert_elem,
                           g.segs.xy, g.segs.elem, g.segs.start, g.segs.order, *g.segs.params,
@@ -150,8 +160,8 @@ class Simulator:
             inversion_force(x, m.tris, m.tri_elem, m.tri_rest, self.growth, self.moving,
                             p.min_triangle_area, p.k_overlap, F)
         if len(m.corners):
-            corner_force(x, m.corners, g.tris.xy, g.tris.elem, g.tris.order, g.tris.start,
-                         *g.tris.params, m.tris, self.moving, p.k_corner, F)
+            corner_force(x, m.corners, self.corner_ptr, self.corner_tris, m.tris, m.tri_elem,
+                         self.moving, p.k_corner, F)
         euler_step(x, st.v, F, self.active_all, self.dt, p.velocity_cap * self.dt)
         if p.hard_boundary and not self.allow_growth:  # while settling
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
@@ -161,11 +171,11 @@ class Simulator:
         if p.relax_passes > 0:
             relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_start,
                                      self.sp_nedge, m.springs, m.vnbr_ptr, m.vnbr,
-                                     p.relax_passes, p.relax_fraction)
-        skin_areas(x, m.elem_vstart, m.elem_nskin, self.areas)
+                                     p.relax_passes, p.relax_fraction, self.relax_order)
+        total, moving = skin_areas(x, m.elem_vstart, m.elem_nskin, self.moving, self.areas)
         st.iteration += 1
-        self.moving_area = float(self.areas[self.moving].sum() / m.container_area)
-        return float(self.areas.sum() / m.container_area)
+        self.moving_area = moving / m.container_area
+        return total / m.container_area
 
     def begin_settle(self) -> None:
         """Stop growing; the last iterations only resolve overlaps and even out gaps."""
@@ -219,20 +229,28 @@ class Simulator:
         w = p.stop_window
         a = hist[-1] if hist else 0.0
         rms = trend = math.inf
+        # numpy mirror of the history for the stopping rule (the list is what checkpoints keep)
+        hbuf = np.zeros(max(2 * len(hist), 1024))
+        hbuf[:len(hist)] = hist
+        probe = int(self.active_all[0]) if len(self.active_all) else 0
         if checkpoint_every > 0:
             checkpoint_every = -(-checkpoint_every // p.requery_every) * p.requery_every
         self._good = st.copy()
         try:
             while True:
                 a = self.step()
-                if not math.isfinite(a) or not np.isfinite(st.x[self.active_all[:1]]).all():
+                if not math.isfinite(a) or not math.isfinite(st.x[probe, 0]):
                     self._recover()
                     continue
                 hist.append(self.moving_area)
-                if len(hist) > w:
-                    d = np.diff(np.asarray(hist[-(w + 1):]))
-                    rms = float(np.sqrt(np.mean(d * d))) / max(self.moving_area, 1e-12)
-                    trend = abs(hist[-1] - hist[-(w + 1)]) / (w * max(self.moving_area, 1e-12))
+                n = len(hist)
+                if n > len(hbuf):
+                    hbuf = np.concatenate([hbuf, np.zeros(len(hbuf))])
+                hbuf[n - 1] = self.moving_area
+                if n > w:
+                    rms, trend = window_change(hbuf, n, w)
+                    rms /= max(self.moving_area, 1e-12)
+                    trend /= max(self.moving_area, 1e-12)
                 if st.iteration % 200 == 0:
                     self._check_exploded()
                     self._good = st.copy()

@@ -8,7 +8,7 @@ from numba import njit, prange
 
 @njit(cache=True, parallel=True)
 def relax_self_intersections(x, elem_vstart, elem_nskin, moving, sp_start, sp_nedge, springs,
-                             vnbr_ptr, vnbr, passes, fraction):
+                             vnbr_ptr, vnbr, passes, fraction, order):
     """For each moving element: ℓ̄ = mean current length of its edge springs; every pair of
     skin vertices not joined by a spring and closer than fraction·ℓ̄ is pushed apart
     symmetrically to that distance. ``passes`` Gauss–Seidel cycles; pairs are visited in
@@ -16,6 +16,10 @@ def relax_self_intersections(x, elem_vstart, elem_nskin, moving, sp_start, sp_ne
     too far apart in x to violate the constraint (O(n log n) instead of O(n²) per mesh).
 
     The edge springs of element e are ``springs[sp_start[e] : sp_start[e] + sp_nedge[e]]``.
+    ``order`` (N,) holds, at the skin slots of each element, its skin vertex ids in the
+    sweep order of the previous call (``np.arange(N)`` to start); it is re-sorted in place
+    by insertion sort, which is linear on the nearly sorted orders of consecutive steps.
+    The key is (x, vertex id), so the order never depends on the previous one.
     Returns the number of corrections made.
     """
     M = elem_nskin.shape[0]
@@ -37,10 +41,17 @@ def relax_self_intersections(x, elem_vstart, elem_nskin, moving, sp_start, sp_ne
         n = elem_nskin[e]
         for _ in range(passes):
             # sweep along x: only pairs closer than ``lim`` in x can violate the constraint
-            order = np.argsort(x[s0:s0 + n, 0], kind="mergesort") + s0
-            for a in range(n):
+            for a in range(s0 + 1, s0 + n):
+                v = order[a]
+                xv = x[v, 0]
+                b = a - 1
+                while b >= s0 and (x[order[b], 0] > xv or (x[order[b], 0] == xv and order[b] > v)):
+                    order[b + 1] = order[b]
+                    b -= 1
+                order[b + 1] = v
+            for a in range(s0, s0 + n):
                 p = order[a]
-                for b in range(a + 1, n):
+                for b in range(a + 1, s0 + n):
                     q = order[b]
                     dx = x[q, 0] - x[p, 0]
                     if dx > lim:
