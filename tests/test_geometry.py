@@ -572,3 +572,32 @@ def test_bind_points_beyond_the_border_extrapolate_from_the_nearest_triangle():
     tri, bary = bind_points(pts, verts, tris)
     assert bary.min() < 0  # outside: extrapolated
     np.testing.assert_allclose(apply_binding(verts, tris, tri, bary), pts, atol=1e-12)
+
+
+# --------------------------------------------------------------------------------------
+# exact Euclidean distance transform (numba; scipy is the reference)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_distance_transform_matches_scipy(seed):
+    from scipy import ndimage
+
+    from repulsionpak.geometry.edt import distance_transform
+
+    rng = np.random.default_rng(seed)
+    mask = rng.random((37, 53)) < [0.6, 0.95, 0.995][seed]
+    mask[0, 0] = False  # at least one background pixel
+    np.testing.assert_allclose(distance_transform(mask, 0.7),
+                               ndimage.distance_transform_edt(mask, sampling=0.7), rtol=1e-12)
+
+
+def test_distance_transform_of_a_disc_is_the_distance_to_its_rim():
+    from repulsionpak.geometry.edt import distance_transform
+
+    yy, xx = np.mgrid[0:101, 0:101]
+    r = np.hypot(xx - 50, yy - 50)
+    d = distance_transform(r < 40, 1.0)
+    assert d[50, 50] == pytest.approx(40.0, abs=1.0)
+    assert (d[r >= 40] == 0).all()
+    inner = r < 35
+    np.testing.assert_allclose(d[inner], 40 - r[inner], atol=1.0)

@@ -20,8 +20,9 @@ SCP discretisation
 The container and the union of the art are rasterised by *pixel-centre sampling* (an
 exact scanline rasteriser, no anti-aliasing) on a grid whose longer side has ``grid``
 pixels over the container's bounds, plus a margin of ``margin`` pixels. The negative
-space is ``container & ~art``. ``scipy.ndimage.distance_transform_edt`` (``sampling`` =
-pixel size) gives, for each negative pixel, the distance D to the nearest
+space is ``container & ~art``. An exact Euclidean distance transform
+(:func:`repulsionpak.geometry.edt.distance_transform`, tested against
+``scipy.ndimage.distance_transform_edt``; spacing = pixel size) gives, for each negative pixel, the distance D to the nearest
 non-negative pixel *centre*. For an axis-aligned boundary, the pixel whose centre is at
 D = k·h covers exactly the true boundary distances [(k−1)·h, k·h]; the default
 ``estimator="interval"`` therefore lets each negative pixel contribute the fraction of
@@ -47,10 +48,10 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 import shapely
-from scipy import ndimage
 from shapely.geometry import Polygon, box
 
 from .errors import ParameterError
+from .geometry.edt import distance_transform
 from .geometry.outline import _polygonal, art_area
 from .types import Container, PlacedArt
 
@@ -392,7 +393,7 @@ def scp(
     if n_cont == 0:
         raise ParameterError("the container is smaller than one pixel of the SCP grid; raise grid")
     if neg.any():
-        dist = ndimage.distance_transform_edt(neg, sampling=g.h)
+        dist = distance_transform(neg, g.h)
         d = dist[neg]
     else:
         d = np.zeros(0)
@@ -467,6 +468,7 @@ def evaluate(
     grid: int = 1000,
     *,
     outside_tol: float | None = None,
+    with_scp: bool = True,
 ) -> dict:
     """All metrics of a packing as a JSON-serialisable dict (DESIGN.md "Evaluate JSON").
 
@@ -477,6 +479,8 @@ def evaluate(
     ``deformation`` {mean, max, values} (``None`` entries when unknown),
     ``scp`` {r, q, h, q0, pixel_size, shape} (r includes gap/2 exactly),
     ``scp_at_half_gap`` = Q_s(gap/2) and ``scp_ratio`` = Q_s(gap/2)/Q_s(0).
+    With ``with_scp=False`` the three SCP entries are ``None`` (the raster and its
+    distance transform are the slow part; ``pack`` reports do without them).
     """
     if gap is None or not np.isfinite(gap) or gap <= 0:
         raise ParameterError(f"gap must be a positive number, got {gap!r}")
@@ -490,9 +494,11 @@ def evaluate(
     gs["requested"] = gap
     defs = [None if p.deformation is None else float(p.deformation) for p in placed]
     known = [d for d in defs if d is not None and np.isfinite(d)]
-    s = scp(region, geoms, grid=grid, gap=gap)
-    q_half = _q_at(s, 0.5 * gap)
-    q0 = s["q"][0] if s["q"] else None
+    s = q_half = q0 = None
+    if with_scp:
+        s = scp(region, geoms, grid=grid, gap=gap)
+        q_half = _q_at(s, 0.5 * gap)
+        q0 = s["q"][0] if s["q"] else None
     return {
         "area_fraction": float(af),
         "overlap_area": overlap_area(geoms),

@@ -8,9 +8,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import shapely
-from scipy import ndimage
 
 from .evaluate import rasterize
+from .geometry.edt import distance_transform
 from .params import SecondaryParams
 from .placement import Placement
 from .preprocess import build_template, outline_of
@@ -36,7 +36,7 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
     occ, _ = rasterize(polys, bounds, grid=params.grid)
     h = info["pixel_size"]
     neg = cont & ~occ
-    dist = ndimage.distance_transform_edt(neg, sampling=h)
+    dist = distance_transform(neg, h)
     d_min = params.d_min * gap
     d_sep = params.d_sep * gap
     iy, ix = np.nonzero(dist > d_min)

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
-from scipy import ndimage
 
+from ..geometry.edt import distance_transform
 from ..placement import Placement, placed_vertices
 from ..preprocess import Template
 
@@ -61,8 +61,8 @@ def container_field(region, h: float, margin: float, max_cells: int = 2_000_000)
     inside = shapely.contains_xy(region, px, py).reshape(ny, nx)
     # distances by the Euclidean distance transform of the inside/outside raster, exact
     # (shapely) within ~4 cells of the boundary, where the boundary force acts
-    d_in = ndimage.distance_transform_edt(inside, sampling=h)
-    d_out = ndimage.distance_transform_edt(~inside, sampling=h)
+    d_in = distance_transform(inside, h)
+    d_out = distance_transform(~inside, h)
     d = np.where(inside, d_in, d_out).ravel()
     near = np.flatnonzero(d < 6.0 * h)  # EDT overestimates by up to ~1.5 h
     boundary = region.boundary

@@ -1,0 +1,72 @@
+"""Exact Euclidean distance transform of a binary raster (numba).
+
+Felzenszwalb & Huttenlocher's lower envelope of parabolas, one pass along each axis:
+O(pixels), exact. Used for the container's distance field, the secondary seeds and the
+SCP, so the package does not need scipy, whose import cost a fifth of a packing's
+start-up (the tests check it against ``scipy.ndimage.distance_transform_edt``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_FAR = 1e20  # "no background pixel yet" (squared pixels; any real value is < 1e15)
+
+
+@njit(cache=True, inline="always")
+def _envelope_1d(f, n, out, v, z):
+    """Squared distance transform of the sampled function f[:n] into out[:n]."""
+    k = 0
+    v[0] = 0
+    z[0] = -np.inf
+    z[1] = np.inf
+    for q in range(1, n):
+        p = v[k]
+        s = ((f[q] + q * q) - (f[p] + p * p)) / (2.0 * (q - p))
+        while s <= z[k]:  # z[0] = -inf ends this at k = 0
+            k -= 1
+            p = v[k]
+            s = ((f[q] + q * q) - (f[p] + p * p)) / (2.0 * (q - p))
+        k += 1
+        v[k] = q
+        z[k] = s
+        z[k + 1] = np.inf
+    k = 0
+    for q in range(n):
+        while z[k + 1] < q:
+            k += 1
+        p = v[k]
+        out[q] = (q - p) * (q - p) + f[p]
+
+
+@njit(cache=True)
+def squared_edt(mask):
+    """For each True pixel the squared distance (in pixels) to the nearest False pixel;
+    0 on False pixels; ~1e20 everywhere if there is no False pixel."""
+    ny, nx = mask.shape
+    d = np.empty((ny, nx))
+    m = max(nx, ny)
+    f = np.empty(m)
+    out = np.empty(m)
+    v = np.empty(m, np.int64)
+    z = np.empty(m + 1)
+    for i in range(nx):  # columns
+        for j in range(ny):
+            f[j] = _FAR if mask[j, i] else 0.0
+        _envelope_1d(f, ny, out, v, z)
+        for j in range(ny):
+            d[j, i] = out[j]
+    for j in range(ny):  # rows
+        for i in range(nx):
+            f[i] = d[j, i]
+        _envelope_1d(f, nx, out, v, z)
+        for i in range(nx):
+            d[j, i] = out[i]
+    return d
+
+
+def distance_transform(mask: np.ndarray, h: float = 1.0) -> np.ndarray:
+    """Euclidean distance of every True pixel to the nearest False pixel, pixel spacing
+    ``h`` (like ``scipy.ndimage.distance_transform_edt(mask, sampling=h)``)."""
+    return np.sqrt(squared_edt(np.ascontiguousarray(mask, dtype=np.bool_))) * h
