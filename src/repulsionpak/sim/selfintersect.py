@@ -40,6 +40,7 @@ def relax_self_intersections(x, elem_vstart, elem_nskin, moving, sp_start, sp_ne
         s0 = elem_vstart[e]
         n = elem_nskin[e]
         for _ in range(passes):
+            before = fixes[e]
             # sweep along x: only pairs closer than ``lim`` in x can violate the constraint
             for a in range(s0 + 1, s0 + n):
                 v = order[a]
@@ -78,4 +79,6 @@ def relax_self_intersections(x, elem_vstart, elem_nskin, moving, sp_start, sp_ne
                     x[q, 0] += dx * push
                     x[q, 1] += dy * push
                     fixes[e] += 1
+            if fixes[e] == before:  # nothing moved: a further pass would find nothing
+                break
     return fixes.sum()
