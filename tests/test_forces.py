@@ -22,6 +22,7 @@ from repulsionpak.sim.forces import (
     boundary_force,
     contact_query,
     edge_force,
+    element_ranges,
     outside_distance,
     overlap_force,
     repulsion_force,
@@ -94,7 +95,7 @@ def make_model(templates, placement, frame, region, cell_size, field_h):
 def one_spring(d, rest, k_e=40.0, growth=1.0, moving=True):
     x = np.array([[1.0, 2.0], [1.0 + 0.6 * d, 2.0 + 0.8 * d]])
     F = np.zeros((2, 2))
-    edge_force(x, np.array([[0, 1]], np.int32), np.array([rest]), np.array([0], np.int32),
+    edge_force(x, np.array([[0, 1]], np.int32), np.array([rest]), np.array([0, 1]),
                np.array([growth]), np.array([moving]), k_e, F)
     return F
 
@@ -150,7 +151,8 @@ def test_edge_force_conserves_momentum_on_a_mesh(template):
     F0 = rng.normal(0, 1, state.x.shape)
     F = F0.copy()
     growth = np.array([1.3, 0.9])
-    edge_force(x, model.springs, model.rest0, model.spring_elem, growth, np.ones(2, bool), 40.0, F)
+    edge_force(x, model.springs, model.rest0, element_ranges(model.spring_elem, 2), growth,
+               np.ones(2, bool), 40.0, F)
     dF = F - F0  # the kernel adds to F
     assert np.abs(dF).max() > 1.0
     for e in range(2):
@@ -165,7 +167,8 @@ def test_edge_force_conserves_momentum_on_a_mesh(template):
 def test_edge_force_is_zero_on_the_undeformed_mesh(template):
     model, state = two_square_model(template, (30, 30), (60, 60), shrink=0.5)
     F = np.zeros_like(state.x)
-    edge_force(state.x, model.springs, model.rest0, model.spring_elem, np.ones(2), np.ones(2, bool), 40.0, F)
+    edge_force(state.x, model.springs, model.rest0, element_ranges(model.spring_elem, 2), np.ones(2),
+               np.ones(2, bool), 40.0, F)
     np.testing.assert_allclose(F, 0.0, atol=1e-9)
 
 

@@ -259,27 +259,42 @@ def overlap_force(x, active, inside, tris, vtri_ptr, vtri, nb_count, nb_d2, nb_q
         F[i, 1] += k_o * fy
 
 
-@njit(cache=True)
-def edge_force(x, springs, rest0, spring_elem, growth, moving, k_e, F):
+def element_ranges(owner: np.ndarray, n_elements: int) -> np.ndarray:
+    """CSR pointers (M+1,) of items (springs, triangles) stored grouped by element:
+    element e owns ``owner``'s items ``ptr[e]:ptr[e+1]``."""
+    if len(owner) and np.any(np.diff(owner) < 0):
+        raise ValueError("items are not grouped by element")
+    return np.searchsorted(owner, np.arange(n_elements + 1)).astype(np.int64)
+
+
+@njit(cache=True, inline="always")
+def _spring(x, springs, rest0, g, k_e, F, s):
+    a = springs[s, 0]
+    b = springs[s, 1]
+    ux = x[b, 0] - x[a, 0]
+    uy = x[b, 1] - x[a, 1]
+    d = np.sqrt(ux * ux + uy * uy)
+    if d < 1e-12:
+        return
+    diff = d - rest0[s] * g
+    mag = k_e * diff * abs(diff) / d
+    F[a, 0] += mag * ux
+    F[a, 1] += mag * uy
+    F[b, 0] -= mag * ux
+    F[b, 1] -= mag * uy
+
+
+@njit(cache=True, parallel=True)
+def edge_force(x, springs, rest0, sp_ptr, growth, moving, k_e, F):
     """Eq. 3: F_e = k_e · u/|u| · s(|u| − ℓ)², u = x_b − x_a, applied +F to x_a and −F
-    to x_b; ℓ = rest0 · growth[element] (sec. 6)."""
-    for s in range(springs.shape[0]):
-        e = spring_elem[s]
+    to x_b; ℓ = rest0 · growth[element] (sec. 6). Element e's springs are
+    ``sp_ptr[e]:sp_ptr[e+1]`` (:func:`element_ranges`); elements share no vertex, so
+    they run in parallel without write conflicts, each in its serial order."""
+    for e in prange(sp_ptr.shape[0] - 1):
         if not moving[e]:
             continue
-        a = springs[s, 0]
-        b = springs[s, 1]
-        ux = x[b, 0] - x[a, 0]
-        uy = x[b, 1] - x[a, 1]
-        d = np.sqrt(ux * ux + uy * uy)
-        if d < 1e-12:
-            continue
-        diff = d - rest0[s] * growth[e]
-        mag = k_e * diff * abs(diff) / d
-        F[a, 0] += mag * ux
-        F[a, 1] += mag * uy
-        F[b, 0] -= mag * ux
-        F[b, 1] -= mag * uy
+        for s in range(sp_ptr[e], sp_ptr[e + 1]):
+            _spring(x, springs, rest0, growth[e], k_e, F, s)
 
 
 @njit(cache=True, inline="always")
@@ -338,36 +353,42 @@ def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_
         F[i, 1] -= k_b * d * gy / n
 
 
-@njit(cache=True)
-def inversion_force(x, tris, tri_elem, tri_rest, growth, moving, min_fraction, k, F):
+@njit(cache=True, parallel=True)
+def inversion_force(x, tris, tri_ptr, tri_rest, growth, moving, min_fraction, k, F):
     """Beyond the paper (whose sec. 12 notes folded, unaesthetic bends): a triangle whose
     signed area falls below ``min_fraction`` of its (grown) rest area pushes its vertices
     along the gradient of its area, k·(A_min − A)/sqrt(A_rest) each, so meshes do not fold
-    over and the art mapped through them stays inside the skin."""
-    for t in range(tris.shape[0]):
-        e = tri_elem[t]
+    over and the art mapped through them stays inside the skin. Element e's triangles
+    are ``tri_ptr[e]:tri_ptr[e+1]`` (parallel over elements, like :func:`edge_force`)."""
+    for e in prange(tri_ptr.shape[0] - 1):
         if not moving[e]:
             continue
-        a = tris[t, 0]
-        b = tris[t, 1]
-        c = tris[t, 2]
-        area = 0.5 * ((x[b, 0] - x[a, 0]) * (x[c, 1] - x[a, 1]) - (x[b, 1] - x[a, 1]) * (x[c, 0] - x[a, 0]))
-        rest = tri_rest[t] * growth[e] * growth[e]
-        target = min_fraction * rest
-        if area >= target:
-            continue
-        mag = k * (target - area) / np.sqrt(rest)
-        # dA/dx_v = 0.5 * perp(x_next - x_prev) for v in (a, b, c) counter-clockwise
-        for j in range(3):
-            v = tris[t, j]
-            p = tris[t, (j + 1) % 3]
-            q = tris[t, (j + 2) % 3]
-            gx = 0.5 * (x[p, 1] - x[q, 1])
-            gy = 0.5 * (x[q, 0] - x[p, 0])
-            n = np.sqrt(gx * gx + gy * gy)
-            if n > 1e-12:
-                F[v, 0] += mag * gx / n
-                F[v, 1] += mag * gy / n
+        for t in range(tri_ptr[e], tri_ptr[e + 1]):
+            _unfold(x, tris, tri_rest, growth[e], min_fraction, k, F, t)
+
+
+@njit(cache=True, inline="always")
+def _unfold(x, tris, tri_rest, g, min_fraction, k, F, t):
+    a = tris[t, 0]
+    b = tris[t, 1]
+    c = tris[t, 2]
+    area = 0.5 * ((x[b, 0] - x[a, 0]) * (x[c, 1] - x[a, 1]) - (x[b, 1] - x[a, 1]) * (x[c, 0] - x[a, 0]))
+    rest = tri_rest[t] * g * g
+    target = min_fraction * rest
+    if area >= target:
+        return
+    mag = k * (target - area) / np.sqrt(rest)
+    # dA/dx_v = 0.5 * perp(x_next - x_prev) for v in (a, b, c) counter-clockwise
+    for j in range(3):
+        v = tris[t, j]
+        p = tris[t, (j + 1) % 3]
+        q = tris[t, (j + 2) % 3]
+        gx = 0.5 * (x[p, 1] - x[q, 1])
+        gy = 0.5 * (x[q, 0] - x[p, 0])
+        n = np.sqrt(gx * gx + gy * gy)
+        if n > 1e-12:
+            F[v, 0] += mag * gx / n
+            F[v, 1] += mag * gy / n
 
 
 @njit(cache=True, parallel=True)

@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import DivergedError
 from ..params import SimParams
 from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
-                     edge_force,
+                     edge_force, element_ranges,
                      inversion_force, overlap_force, project_inside, repulsion_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas, window_change
@@ -102,9 +102,10 @@ class Simulator:
         self.growth = np.ones(M)
         self.areas = np.zeros(M)
         self.moving_area = 0.0
-        sp_start = np.searchsorted(m.spring_elem, np.arange(M)).astype(np.int64)
-        self.sp_start = sp_start
         self.relax_order = np.arange(N, dtype=np.int64)
+        self.sp_ptr = element_ranges(m.spring_elem, M)
+        self.sp_start = self.sp_ptr[:-1]
+        self.tri_ptr = element_ranges(m.tri_elem, M)
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
         self.dt = params.dt
         self.max_growth = m.max_growth * params.max_size
@@ -150,14 +151,14 @@ class Simulator:
         # F = F_r + F_e + F_b + F_o  (Eq. 1)
         repulsion_force(x, self.active_skin, self.inside, self.nb_count, self.nb_q,
                         p.k_repulsion, p.soft, F)
-        edge_force(x, m.springs, m.rest0, m.spring_elem, self.growth, self.moving, p.k_edge, F)
+        edge_force(x, m.springs, m.rest0, self.sp_ptr, self.growth, self.moving, p.k_edge, F)
         boundary_force(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                        1.0 / m.field.h, p.k_boundary, F, self.outside,
                        p.outside_block * m.gap, p.boundary_inset * m.gap)
         overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, self.nb_count, self.nb_d2,
                       self.nb_q, p.k_overlap, F)
         if p.min_triangle_area > 0:
-            inversion_force(x, m.tris, m.tri_elem, m.tri_rest, self.growth, self.moving,
+            inversion_force(x, m.tris, self.tri_ptr, m.tri_rest, self.growth, self.moving,
                             p.min_triangle_area, p.k_overlap, F)
         if len(m.corners):
             corner_force(x, m.corners, self.corner_ptr, self.corner_tris, m.tris, m.tri_elem,
