@@ -1,6 +1,6 @@
 """Reproducible timings of repulsionpak (not part of the test run).
 
-    python benchmarks/bench.py iteration            # ms/iteration vs vertex count (example library)
+    python benchmarks/bench.py iteration [--plot docs/images/bench-scaling.png]  # ms/iteration vs vertices
     python benchmarks/bench.py preprocess           # preprocessing time per element
     python benchmarks/bench.py heart                # whole `repulsionpak pack` on ../shared/data (5 runs)
     python benchmarks/bench.py secondary            # the same with secondary cats (seeding time)
@@ -40,7 +40,8 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100) -> None:
+def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100,
+                    plot: str | None = None) -> None:
     """ms per simulation iteration on square containers filled with the example library,
     measured after ``warmup`` iterations (elements grown, neighbours in contact)."""
     import dataclasses
@@ -56,6 +57,7 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
     elements = load_elements(examples.element_files())
     print("| vertices | elements | threads | ms/iteration | peak RSS so far (MB) |")
     print("| ---: | ---: | ---: | ---: | ---: |")
+    rows = []
     for target in targets:
         # about 91 vertices per element at gap 5 with the default element size
         count = max(4, int(target / 91))
@@ -84,6 +86,23 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
         ms = (time.perf_counter() - t0) / steps * 1e3
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         print(f"| {model.n_vertices} | {model.n_elements} | {sim.threads()} | {ms:.2f} | {rss:.0f} |", flush=True)
+        rows.append((model.n_vertices, ms))
+    if plot:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(5, 3.4))
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        v, ms = np.array(rows).T
+        ax.plot(v / 1e3, ms, "o-", label="repulsionpak")
+        ax.axhline(30, color="grey", ls="--", lw=0.8, label="target at 100k")
+        ax.set_xlabel("vertices (thousands)")
+        ax.set_ylabel("ms / iteration")
+        ax.set_title(machine(), fontsize=8)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(plot, dpi=120)
 
 
 def bench_preprocess() -> None:
@@ -136,6 +155,7 @@ def bench_heart(runs: int = 5, secondary: bool = False) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "preprocess", "heart", "secondary", "all"])
+    ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
     print(f"date: {time.strftime('%Y-%m-%d')}")
@@ -146,7 +166,7 @@ def main() -> None:
     if a.what in ("secondary", "all"):
         bench_heart(runs=2, secondary=True)
     if a.what in ("iteration", "all"):
-        bench_iteration()
+        bench_iteration(plot=a.plot)
 
 
 if __name__ == "__main__":
