@@ -233,14 +233,14 @@ class Simulator:
         # numpy mirror of the history for the stopping rule (the list is what checkpoints keep)
         hbuf = np.zeros(max(2 * len(hist), 1024))
         hbuf[:len(hist)] = hist
-        probe = int(self.active_all[0]) if len(self.active_all) else 0
+        probe = int(self.active_all[0]) if len(self.active_all) else -1  # NaN check of one vertex
         if checkpoint_every > 0:
             checkpoint_every = -(-checkpoint_every // p.requery_every) * p.requery_every
         self._good = st.copy()
         try:
             while True:
                 a = self.step()
-                if not math.isfinite(a) or not math.isfinite(st.x[probe, 0]):
+                if not math.isfinite(a) or (probe >= 0 and not math.isfinite(st.x[probe, 0])):
                     self._recover()
                     continue
                 hist.append(self.moving_area)
