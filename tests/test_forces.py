@@ -22,14 +22,13 @@ from repulsionpak.sim.forces import (
     boundary_force,
     contact_query,
     edge_force,
-    element_ranges,
     outside_distance,
     overlap_force,
     repulsion_force,
 )
 from repulsionpak.sim.grid import Grid
 from repulsionpak.sim.integrate import euler_step, grow, skin_areas
-from repulsionpak.sim.model import SimFrame, _csr, build_model, container_field
+from repulsionpak.sim.model import SimFrame, _csr, build_model, container_field, element_ranges
 from repulsionpak.sim.runner import MAX_NEIGHBOURS, Simulator
 from repulsionpak.sim.selfintersect import relax_self_intersections
 from repulsionpak.types import ArtPath, Element, Style

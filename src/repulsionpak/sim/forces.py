@@ -259,14 +259,6 @@ def overlap_force(x, active, inside, tris, vtri_ptr, vtri, nb_count, nb_d2, nb_q
         F[i, 1] += k_o * fy
 
 
-def element_ranges(owner: np.ndarray, n_elements: int) -> np.ndarray:
-    """CSR pointers (M+1,) of items (springs, triangles) stored grouped by element:
-    element e owns ``owner``'s items ``ptr[e]:ptr[e+1]``."""
-    if len(owner) and np.any(np.diff(owner) < 0):
-        raise ValueError("items are not grouped by element")
-    return np.searchsorted(owner, np.arange(n_elements + 1)).astype(np.int64)
-
-
 @njit(cache=True, inline="always")
 def _spring(x, springs, rest0, g, k_e, F, s):
     a = springs[s, 0]

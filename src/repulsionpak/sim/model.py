@@ -155,6 +155,14 @@ def reflex_corners(region, max_angle_deg: float = 160.0) -> np.ndarray:
     return np.asarray(out, dtype=float).reshape(-1, 2)
 
 
+def element_ranges(owner: np.ndarray, n_elements: int) -> np.ndarray:
+    """CSR pointers (M+1,) of items (springs, triangles) stored grouped by element:
+    element e owns ``owner``'s items ``ptr[e]:ptr[e+1]``."""
+    if len(owner) and np.any(np.diff(owner) < 0):
+        raise ValueError("items are not grouped by element")
+    return np.searchsorted(owner, np.arange(n_elements + 1)).astype(np.int64)
+
+
 def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     order = np.argsort(rows, kind="stable")
     counts = np.bincount(rows, minlength=n)

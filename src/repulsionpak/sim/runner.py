@@ -18,11 +18,11 @@ import numpy as np
 from ..errors import DivergedError
 from ..params import SimParams
 from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
-                     edge_force, element_ranges,
+                     edge_force,
                      inversion_force, overlap_force, project_inside, repulsion_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas, window_change
-from .model import Model, State
+from .model import Model, State, element_ranges
 from .selfintersect import relax_self_intersections
 
 MAX_NEIGHBOURS = 24
@@ -104,7 +104,6 @@ class Simulator:
         self.moving_area = 0.0
         self.relax_order = np.arange(N, dtype=np.int64)
         self.sp_ptr = element_ranges(m.spring_elem, M)
-        self.sp_start = self.sp_ptr[:-1]
         self.tri_ptr = element_ranges(m.tri_elem, M)
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
         self.dt = params.dt
@@ -127,15 +126,9 @@ class Simulator:
         full = st.iteration % p.requery_every == 0
         if full:
             g.fit_triangles(x, m.tris)
-        if full:
             g.rebuild_triangles(x, m.tris, m.tri_elem)
             if len(m.corners):
-                need = corner_candidates(m.corners, g.tris.order, g.tris.start, *g.tris.params,
-                                         self.corner_ptr, self.corner_tris)
-                if need > len(self.corner_tris):
-                    self.corner_tris = np.zeros(2 * need, np.int64)
-                    corner_candidates(m.corners, g.tris.order, g.tris.start, *g.tris.params,
-                                      self.corner_ptr, self.corner_tris)
+                self._gather_corner_triangles()
             g.rebuild_segments(x, self.chunk_a, self.chunk_b, self.chunk_elem)
             contact_query(x, self.active_skin, m.vert_elem,
                           g.segs.xy, g.segs.elem, g.segs.start, g.segs.order, *g.segs.params,
@@ -170,13 +163,24 @@ class Simulator:
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:
-            relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_start,
+            relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_ptr,
                                      self.sp_nedge, m.springs, m.vnbr_ptr, m.vnbr,
                                      p.relax_passes, p.relax_fraction, self.relax_order)
         total, moving = skin_areas(x, m.elem_vstart, m.elem_nskin, self.moving, self.areas)
         st.iteration += 1
         self.moving_area = moving / m.container_area
         return total / m.container_area
+
+    def _gather_corner_triangles(self) -> None:
+        """Candidate triangles of each reflex corner from the freshly built triangle grid
+        (the buffer grows when a corner's window holds more than it has room for)."""
+        t = self.grid.tris
+        need = corner_candidates(self.model.corners, t.order, t.start, *t.params,
+                                 self.corner_ptr, self.corner_tris)
+        if need > len(self.corner_tris):
+            self.corner_tris = np.zeros(2 * need, np.int64)
+            corner_candidates(self.model.corners, t.order, t.start, *t.params,
+                              self.corner_ptr, self.corner_tris)
 
     def begin_settle(self) -> None:
         """Stop growing; the last iterations only resolve overlaps and even out gaps."""

@@ -15,7 +15,8 @@ def relax_self_intersections(x, elem_vstart, elem_nskin, moving, sp_start, sp_ne
     the order of a sweep along x (sorted once per cycle), which skips the pairs that are
     too far apart in x to violate the constraint (O(n log n) instead of O(n²) per mesh).
 
-    The edge springs of element e are ``springs[sp_start[e] : sp_start[e] + sp_nedge[e]]``.
+    The edge springs of element e are ``springs[sp_start[e] : sp_start[e] + sp_nedge[e]]``
+    (``sp_start`` may be the (M+1,) spring pointers: only its first M entries are read).
     ``order`` (N,) holds, at the skin slots of each element, its skin vertex ids in the
     sweep order of the previous call (``np.arange(N)`` to start); it is re-sorted in place
     by insertion sort, which is linear on the nearly sorted orders of consecutive steps.
