@@ -570,13 +570,6 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
     inputs = BatchInputs(cont, tuple(load_elements(list(elements))),
                          tuple(load_elements(list(secondary))) if secondary else ())
     outdir = Path(outdir)
-    try:
-        outdir.mkdir(parents=True, exist_ok=True)
-    except (FileExistsError, NotADirectoryError):
-        raise OutputError(f"{outdir}: exists and is not a directory; -o names the output directory") from None
-    except OSError as exc:
-        raise OutputError(f"{outdir}: cannot create the output directory ({exc.strerror or exc})") from None
-
     files: dict[int, str] = {}
     best: list = [None, None]  # (scp_half_gap, svg text) of the best so far
 
@@ -591,6 +584,12 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
             on_result(i, jobs[i], r)
 
     with dask_client(workers, scheduler) as client:
+        try:  # once the cluster is there, before any work
+            outdir.mkdir(parents=True, exist_ok=True)
+        except (FileExistsError, NotADirectoryError):
+            raise OutputError(f"{outdir}: exists and is not a directory; -o names the output directory") from None
+        except OSError as exc:
+            raise OutputError(f"{outdir}: cannot create the output directory ({exc.strerror or exc})") from None
         if on_start is not None:
             on_start(len(jobs), client)
         results, interrupted = run_jobs(client, inputs, jobs, collect)
