@@ -63,7 +63,7 @@ def first_task_extra(results) -> tuple[float, float]:
 def bench_speedup(seeds: str = "1-8") -> None:
     from repulsionpak.batch import BatchInputs, make_jobs, parse_seeds, run_batch, run_job
     from repulsionpak.io import load_container, load_elements
-    from repulsionpak.params import Params, params_from_dict
+    from repulsionpak.params import params_from_dict
 
     container, elements, gap, what = scene()
     warm(container, elements, gap)
