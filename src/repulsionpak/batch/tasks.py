@@ -47,7 +47,8 @@ class JobResult:
     failed); ``error`` is one line naming the problem, ``exit_code`` the CLI code of that
     error (0 on success). ``worker`` is ``host:pid`` of the process that ran the task,
     ``started`` / ``finished`` its wall clock (``time.time()``), ``seconds`` the task's
-    own duration (pack, measure, SVG text, thumbnail).
+    own duration (pack, measure, SVG text, thumbnail) and ``cpu_seconds`` the CPU time
+    of the thread that ran it (unlike ``seconds``, not stretched by other load).
     """
 
     name: str
@@ -56,6 +57,7 @@ class JobResult:
     metrics: dict | None = None
     iterations: dict = field(default_factory=dict)
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
     svg: str | None = None
     thumbnail: bytes | None = None
     error: str | None = None
@@ -117,7 +119,7 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
     from ..pack import pack
     from ..packing_output import invariants, packing_svg_text
 
-    started, t0 = time.time(), time.perf_counter()
+    started, t0, c0 = time.time(), time.perf_counter(), time.thread_time()
     res = JobResult(name=job.name, seed=job.seed, setting=job.setting,
                     worker=f"{socket.gethostname()}:{os.getpid()}", started=started)
     try:
@@ -142,6 +144,7 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
     except Exception as exc:  # noqa: BLE001  (one job's bug must not stop the batch)
         res.error, res.exit_code = _one_line(exc), 1
     res.seconds = time.perf_counter() - t0
+    res.cpu_seconds = time.thread_time() - c0
     res.finished = time.time()
     return res
 
