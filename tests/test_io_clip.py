@@ -130,6 +130,20 @@ def test_clip_path_in_a_css_rule_and_in_a_hidden_group(tmp_path):
     assert g.bounds == pytest.approx((5, 5, 15, 15))
 
 
+def test_clip_path_on_the_root_and_on_a_used_element(tmp_path):
+    body = ('<clipPath id="c"><rect width="30" height="30"/></clipPath><g><rect width="50" height="50"/></g>')
+    p = tmp_path / "root.svg"
+    p.write_text(_svg(body, 'viewBox="0 0 100 100" clip-path="url(#c)"'))
+    assert _area(p).bounds == pytest.approx((0, 0, 30, 30))
+    # the clip moves with the <use> (it is in the used element's user space)
+    body = ('<defs><rect id="r" width="40" height="40" clip-path="url(#d)"/></defs>'
+            '<clipPath id="d"><circle cx="20" cy="20" r="20"/></clipPath>'
+            '<use xlink:href="#r" x="50" y="50"/>')
+    g = _area(_write(tmp_path, "use.svg", body))
+    assert g.area == pytest.approx(math.pi * 20**2, rel=5e-3)
+    np.testing.assert_allclose(g.bounds, (50, 50, 90, 90), atol=0.05)
+
+
 def test_missing_clip_path_warns_and_draws_unclipped(tmp_path):
     """As browsers do (CSS Masking: an invalid reference is as if none were given)."""
     body = ('<rect id="notaclip" width="5" height="5"/>'

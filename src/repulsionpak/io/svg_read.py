@@ -912,7 +912,9 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 notes.add("image")
 
     root_own = own(doc)
-    walk(doc, _clamp01(_float_attr(root_own.get("opacity"), 1.0)), False, ())
+    # a clip-path on the root <svg> is in the file's user units (as resvg draws it)
+    root_clips = clip_refs(doc.values.get("clip-path"), np.eye(3), notes)
+    walk(doc, _clamp01(_float_attr(root_own.get("opacity"), 1.0)), False, (), root_clips)
     defs = clip_defs(doc, inv_viewport, notes) if any(s.clips for s in shapes) else {}
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
