@@ -10,6 +10,9 @@ Metrics
 * :func:`art_geometry` – the area one placed element's art actually paints (fills with
   their fill rule, plus strokes buffered by half the scaled stroke width).
 * :func:`area_fraction`, :func:`overlap_area`, :func:`outside`, :func:`gap_statistics`.
+* From :mod:`repulsionpak.metrics` (issue 10, art only): the exact area outside the
+  container, each element's distance to the container's edge and its distortion from
+  its source (when the sources are given).
 * :func:`scp` – the spherical contact probability Q_s(r): the probability that a disc of
   radius r centred at a uniformly random point of the container lies entirely in the
   negative space (inside the container, outside every element's art), and
