@@ -203,7 +203,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
                        on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every, resume=resumed)
     t_eval = time.perf_counter()
-    metrics = evaluate(cont, packing.placed, g, with_scp=False)  # area, gaps, overlap: exact
+    # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
+    metrics = evaluate(cont, packing.placed, g, with_scp=False,
+                       sources=[*elems, *secs] if report is not None else None)
     checks = invariants(packing, metrics)
     attrs = {"seed": str(params.seed), "iterations": str(sum(packing.iterations.values())),
              "area-fraction": f"{metrics['area_fraction']:.4f}"}
@@ -223,6 +225,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         "iterations": dict(packing.iterations), "seconds": seconds,
         "area_fraction": metrics["area_fraction"], "overlap_area": metrics["overlap_area"],
         "gap": g, "gap_stats": metrics["gap"], "seed": params.seed,
+        "outside_area": metrics["outside_area"], "edge": metrics["edge"],
+        "distortion": metrics["distortion"],
         "partial": packing.partial, "stopped_by": packing.stopped_by, "invariants": checks,
         "inputs": {"container": str(container), "elements": [str(e) for e in elements],
                    "secondary": [str(s) for s in secondary or []]},
@@ -326,9 +330,13 @@ def evaluate(
     plot: Annotated[Optional[Path], typer.Option(help="Plot Q_s(r) of all given packings to this PNG.")] = None,
     gap: Annotated[Optional[float], typer.Option(help="Gap to evaluate against (default: the file's data-gap).")] = None,
     grid: Annotated[int, typer.Option(help="Pixels along the longer side of the SCP raster.")] = 1000,
+    elements: Annotated[Optional[list[Path]], typer.Option(
+        "--elements", help="Source element files or directories (matched by data-source): "
+                           "adds each element's distortion from its source.")] = None,
     debug: DebugOpt = False,
 ) -> None:
-    """Measure packings: area fraction, overlaps, gaps, deformation, SCP Q_s(r) (sec. 11)."""
+    """Measure packings: area fraction, overlaps, gaps, edge distance, deformation,
+    distortion (with --elements), SCP Q_s(r) (sec. 11)."""
     global _DEBUG
     _DEBUG = debug
     from .evaluate import evaluate_file, format_table, plot_scp
@@ -338,7 +346,13 @@ def evaluate(
             raise ParameterError(f"--gap must be a positive number, got {gap:g}")
         if plot is not None:
             _check_outputs([plot], packings)
-        results = [(p, evaluate_file(p, gap=gap, grid=grid)) for p in packings]
+        sources = None
+        if elements:
+            from .io import load_elements
+            from .metrics import source_geometries
+
+            sources = source_geometries(load_elements(elements))
+        results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources)) for p in packings]
         if json_out:
             data = results[0][1] if len(results) == 1 else {str(p): r for p, r in results}
             typer.echo(json.dumps(data, indent=2))
