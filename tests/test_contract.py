@@ -2,9 +2,9 @@
 ``python benchmarks/contract.py`` makes on the whole suite, see docs/quality.md).
 
 Each scene is packed once through ``repulsionpak pack``'s code path and measured on the
-output SVG read back from disk. The promise tests are expected to fail until the
-simulation fix of issue 10 lands (xfail, not strict: a promise already kept shows as
-XPASS); the tests of the measurement itself must pass today.
+output SVG read back from disk. The gap, overlap and outside promises must hold (the
+final verification enforces them); the promises not kept on every scene yet are marked
+xfail (not strict: a scene that keeps one shows as XPASS) with the reason.
 """
 
 from __future__ import annotations
@@ -19,7 +19,6 @@ from repulsionpak.metrics import ContractLimits
 
 LIMITS = ContractLimits()
 FAST = scenes.fast_suite()
-pending = pytest.mark.xfail(strict=False, reason="issue 10: simulation fix pending")
 
 
 @pytest.fixture(scope="module")
@@ -57,35 +56,31 @@ def test_measured_from_the_output_svg(run):
 # --------------------------------------------------------------------------- the promises
 
 
-@pending
 @pytest.mark.slow
 def test_gap_median_within_10_percent(run):
     v = run["metrics"]["gap"]["median"] / run["files"].gap
     assert LIMITS.gap_median_low <= v <= LIMITS.gap_median_high, f"median gap {v:.3f} × gap"
 
 
-@pending
 @pytest.mark.slow
 def test_gap_p10_at_least_80_percent(run):
     v = run["metrics"]["gap"]["p10"] / run["files"].gap
     assert v >= LIMITS.gap_p10, f"10th percentile gap {v:.3f} × gap"
 
 
-@pending
 @pytest.mark.slow
 def test_no_art_overlap(run):
     m = run["metrics"]
     assert m["overlap_area"] <= LIMITS.overlap * m["container_area"], m["overlap_area"]
 
 
-@pending
 @pytest.mark.slow
 def test_nothing_outside(run):
     m = run["metrics"]
     assert m["outside_area"] <= LIMITS.outside * m["container_area"], m["outside_area"]
 
 
-@pending
+@pytest.mark.xfail(strict=False, reason="issue 10: letters keep the margin on their art polygons (verify.py) but not within the metric's tolerance; to investigate")
 @pytest.mark.slow
 def test_edge_margin(run):
     m, gap = run["metrics"], run["files"].gap
@@ -93,7 +88,7 @@ def test_edge_margin(run):
         f"art {m['edge']['min'] / gap:.3f} × gap from the edge; {m['edge']['n_below_margin']} elements too close"
 
 
-@pending
+@pytest.mark.xfail(strict=False, reason="issue 10: sim.k_shape = 1.5 keeps crosses at p95 0.14 but not every category under its limit yet")
 @pytest.mark.slow
 def test_distortion_p95_by_category(run):
     m = run["metrics"]
@@ -105,7 +100,7 @@ def test_distortion_p95_by_category(run):
     assert not bad, f"distortion p95 over the limit: {bad}"
 
 
-@pending
+@pytest.mark.xfail(strict=False, reason="issue 10: evenness (narrow container parts) not solved yet")
 @pytest.mark.slow
 def test_scp_ratio(run):
     v = run["metrics"]["scp_ratio"]

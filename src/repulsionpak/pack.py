@@ -17,6 +17,7 @@ from .render import placed_art, skin_polygons
 from .sim.model import Model, SimFrame, State, build_model
 from .sim.runner import Simulator, Snapshot
 from .types import Container, Element, PlacedArt
+from .verify import Verification, verify_and_repair
 
 
 @dataclass(eq=False)
@@ -35,6 +36,7 @@ class Packing:
     seconds: dict[str, float] = field(default_factory=dict)
     stopped_by: dict[str, str] = field(default_factory=dict)
     area_fraction_meshes: float = 0.0
+    verification: Verification | None = None
 
     @property
     def partial(self) -> bool:
@@ -56,6 +58,11 @@ def default_gap(container: Container) -> float:
     """1% of the container's larger side, to 4 significant digits (a readable data-gap)."""
     minx, miny, maxx, maxy = container.bounds
     return float(f"{0.01 * max(maxx - minx, maxy - miny):.4g}")
+
+
+def margin_of(params: Params, gap: float) -> float:
+    """The edge margin in container units: ``params.margin``, or half the gap."""
+    return 0.5 * gap if params.margin is None else float(params.margin)
 
 
 def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float:
@@ -113,6 +120,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
     model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
                                gap=gap / frame.unit)
+    # skins rest inside the container by boundary_inset; where the margin asks for more
+    # than the skin's width, the rest of it moves the boundary in
+    model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     res = sim.run_resumable((resume or {}).get("primary"),
@@ -132,8 +142,14 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
-    packing.placed = placed_art(packing.templates, packing.model, packing.state, frame)
-    packing.seconds["render"] = time.perf_counter() - t3
+    placed = placed_art(packing.templates, packing.model, packing.state, frame)
+    t4 = time.perf_counter()
+    v = params.verify
+    packing.placed, packing.verification = verify_and_repair(
+        placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
+        min_scale=v.min_scale, repair=v.repair)
+    packing.seconds["verify"] = time.perf_counter() - t4
+    packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0
     return packing
 

@@ -19,7 +19,7 @@ from ..errors import DivergedError
 from ..params import SimParams
 from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
                      edge_force,
-                     inversion_force, overlap_force, project_inside, repulsion_force)
+                     inversion_force, overlap_force, project_inside, repulsion_force, shape_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas, window_change
 from .model import Model, State, element_ranges
@@ -145,9 +145,11 @@ class Simulator:
         repulsion_force(x, self.active_skin, self.inside, self.nb_count, self.nb_q,
                         p.k_repulsion, p.soft, F)
         edge_force(x, m.springs, m.rest0, self.sp_ptr, self.growth, self.moving, p.k_edge, F)
+        if p.k_shape > 0:
+            shape_force(x, m.x_rest, m.elem_vstart, self.moving, m.stiffness, p.k_shape, F)
         boundary_force(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                        1.0 / m.field.h, p.k_boundary, F, self.outside,
-                       p.outside_block * m.gap, p.boundary_inset * m.gap)
+                       p.outside_block * m.gap, p.boundary_inset * m.gap + m.inset_extra)
         overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, self.nb_count, self.nb_d2,
                       self.nb_q, p.k_overlap, F)
         if p.min_triangle_area > 0:
