@@ -180,11 +180,14 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     params.validate()
     from .pack import default_gap
 
-    # one read: with a given gap, curves are flattened to gap/4; otherwise the reader's
-    # default (1e-3 of the diagonal) is already finer than a quarter of the default gap
-    tol = None if params.gap is None else params.preprocess.flatten_tolerance * params.gap
+    # the container's curves are flattened finely (gap/100; without a gap, read twice:
+    # the default gap comes from the container's size), so the edge margin is checked
+    # against the outline as drawn, not a polygon that cuts its curves by the tolerance
+    tol = None if params.gap is None else 0.01 * params.gap
     cont = load_container(container, tolerance=tol)
     g = params.gap if params.gap is not None else default_gap(cont)
+    if tol is None:
+        cont = load_container(container, tolerance=0.01 * g)
     params = dataclasses.replace(params, gap=g)
     elems = load_elements(elements)
     secs = load_elements(secondary) if secondary else []

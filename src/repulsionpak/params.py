@@ -78,9 +78,16 @@ class SimParams:
         "is 40 (its authors' own parameter file uses 7 against k_r = 100); 20 deforms more and packs "
         "denser with the gap still within ~15% (measured on the heart scene).")
     k_shape: float = _doc(
-        1.5, "paper units", "Strength of the shape-matching force that pulls every mesh towards the "
+        0.0, "paper units", "Strength of the shape-matching force that pulls every mesh towards the "
         "best rotated, scaled copy of its rest shape (beyond the paper; 0 = the paper's springs "
         "only). Higher keeps shapes truer, lower lets them bend to fill (see docs/quality.md).")
+    bend_limit: float = _doc(
+        0.2, "-", "Largest distortion of an element's art (area of the symmetric difference with "
+        "its best rotated, scaled copy, over its area) the simulation allows: a mesh bent "
+        "further is pulled back onto the limit after every step (beyond the paper; 0 = no limit).")
+    bend_limit_convex: float = _doc(
+        0.08, "-", "The same for nearly convex elements (art ≥ 0.9 of its convex hull), "
+        "whose dents show more.")
     k_overlap: float = _doc(80.0, "paper units", "k_o, strength of the overlap force (Eq. 4).")
     k_boundary: float = _doc(80.0, "paper units", "k_b, strength of the boundary force (Eq. 5).")
     soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")
@@ -158,6 +165,10 @@ class VerifyParams:
         0.5, "-", "An element that would have to shrink below this share of its size is dropped "
         "(with a warning naming it).")
     repair: bool = _doc(True, "-", "Shrink or drop offenders; false: only verify and report.")
+    straighten: float = _doc(
+        1.25, "× sim.bend_limit", "An element whose art ends up distorted beyond this multiple of "
+        "its bend limit (symmetric difference with its best rotated, scaled copy, over its "
+        "area) is replaced by that unbent copy; 0 never replaces (nor does sim.bend_limit = 0).")
 
 
 @dataclass(frozen=True)
@@ -214,6 +225,7 @@ class Params:
             (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary, s.k_shape) >= 0,
              "force constants must be >= 0"),
             (s.k_growth >= 0, "sim.k_growth must be >= 0"),
+            (s.bend_limit >= 0 and s.bend_limit_convex >= 0, "sim.bend_limit and bend_limit_convex must be >= 0"),
             (s.soft > 0, "sim.soft must be > 0"),
             (s.cell_size > 0, "sim.cell_size must be > 0"),
             (s.stop_window >= 2, "sim.stop_window must be >= 2"),
@@ -233,6 +245,7 @@ class Params:
             (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
             (0 <= self.verify.min_gap <= 2, "verify.min_gap must be in [0, 2] (× gap)"),
             (0 < self.verify.min_scale <= 1, "verify.min_scale must be in (0, 1]"),
+            (self.verify.straighten >= 0, "verify.straighten must be >= 0"),
         ]
         for ok, msg in checks:
             if not ok:

@@ -24,6 +24,7 @@ from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas, window_change
 from .model import Model, State, element_ranges
 from .selfintersect import relax_self_intersections
+from .shape import limit_deformation
 
 MAX_NEIGHBOURS = 24
 CHUNK = 4  # skin segments per chunk in the full neighbour query
@@ -162,6 +163,8 @@ class Simulator:
         if p.hard_boundary and not self.allow_growth:  # while settling
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
+        if m.bend_limit.any():
+            limit_deformation(x, m.x_rest, m.elem_vstart, self.moving, m.bend_limit)
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:
