@@ -28,6 +28,7 @@ EXIT_CODES = {
     3: "bad parameter or config file",
     4: "the simulation failed (diverged)",
     5: "an output cannot be written",
+    6: "the packing was written but breaks a promise (overlap, outside, edge margin or gap; see the report)",
     130: "interrupted (a partial result was written if an output was requested)",
 }
 
@@ -133,10 +134,12 @@ class _StopFlag:
 
 
 def resolve_params(config: Path | None = None, gap: float | None = None, seed: int | None = None,
-                   count: int | None = None, max_iterations: int | None = None):
-    """:class:`Params` from ``--config`` with the options ``--gap``, ``--seed``, ``--count``
-    and ``--max-iterations`` on top, validated; errors name the option. The seed and the
-    gap stay None when neither the config nor the options give them."""
+                   count: int | None = None, max_iterations: int | None = None, margin: float | None = None,
+                   pocket_fill: bool = True):
+    """:class:`Params` from ``--config`` with the options ``--gap``, ``--seed``, ``--count``,
+    ``--max-iterations``, ``--margin`` and ``--no-pocket-fill`` on top, validated; errors
+    name the option. The seed and the gap stay None when neither the config nor the
+    options give them."""
     from .params import Params, load_config
 
     params = load_config(config) if config else Params()
@@ -146,6 +149,12 @@ def resolve_params(config: Path | None = None, gap: float | None = None, seed: i
         params = dataclasses.replace(params, gap=gap)
     if seed is not None:
         params = dataclasses.replace(params, seed=seed)
+    if not pocket_fill:
+        params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, auto=False))
+    if margin is not None:
+        if not margin >= 0:
+            raise ParameterError(f"--margin must be a number >= 0, got {margin:g}")
+        params = dataclasses.replace(params, margin=margin)
     for option, value, low in (("--count", count, 1), ("--max-iterations", max_iterations, 1), ("--seed", seed, 0)):
         if value is not None and value < low:  # name the option, not the config key
             raise ParameterError(f"{option} must be >= {low}, got {value}")
@@ -160,7 +169,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              gap: float | None = None, seed: int | None = None, config: Path | None = None,
              report: Path | None = None, png: Path | None = None, count: int | None = None,
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
-             checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None) -> dict:
+             checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
+             margin: float | None = None, pocket_fill: bool = True) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png
@@ -180,16 +190,19 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         resumed = load_checkpoint(resume)
         if seed is None:  # the seed of the interrupted run
             seed = int(next(iter(resumed.values()))["seed"])
-    params = resolve_params(config, gap, seed, count, max_iterations)
+    params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill)
     if params.seed is None:
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     from .pack import default_gap
 
-    # one read: with a given gap, curves are flattened to gap/4; otherwise the reader's
-    # default (1e-3 of the diagonal) is already finer than a quarter of the default gap
-    tol = None if params.gap is None else params.preprocess.flatten_tolerance * params.gap
+    # the container's curves are flattened finely (gap/100; without a gap, read twice:
+    # the default gap comes from the container's size), so the edge margin is checked
+    # against the outline as drawn, not a polygon that cuts its curves by the tolerance
+    tol = None if params.gap is None else 0.01 * params.gap
     cont = load_container(container, tolerance=tol)
     g = params.gap if params.gap is not None else default_gap(cont)
+    if tol is None:
+        cont = load_container(container, tolerance=0.01 * g)
     params = dataclasses.replace(params, gap=g)
     elems = load_elements(elements)
     secs = load_elements(secondary) if secondary else []
@@ -208,7 +221,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
                        on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every, resume=resumed)
     t_eval = time.perf_counter()
-    metrics = evaluate(cont, packing.placed, g, with_scp=False)  # area, gaps, overlap: exact
+    # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
+    metrics = evaluate(cont, packing.placed, g, with_scp=False,
+                       sources=[*elems, *secs] if report is not None else None)
     checks = invariants(packing, metrics)
     text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
     atomic_write_bytes(output, text.encode("utf-8"))
@@ -223,6 +238,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         "iterations": dict(packing.iterations), "seconds": seconds,
         "area_fraction": metrics["area_fraction"], "overlap_area": metrics["overlap_area"],
         "gap": g, "gap_stats": metrics["gap"], "seed": params.seed,
+        "outside_area": metrics["outside_area"], "edge": metrics["edge"],
+        "distortion": metrics["distortion"],
         "partial": packing.partial, "stopped_by": packing.stopped_by, "invariants": checks,
         "inputs": {"container": str(container), "elements": [str(e) for e in elements],
                    "secondary": [str(s) for s in secondary or []]},
@@ -253,7 +270,7 @@ def _write_json_atomic(path: Path, data: dict) -> None:
 
 def _summary(rep: dict, output: Path) -> str:
     inv = rep["invariants"]
-    ok = inv["art_overlap_ok"] and inv["vertices_inside_ok"]
+    ok = inv["ok"]
     return (f"{output}: {rep['n_primary']} primary + {rep['n_secondary']} secondary elements, "
             f"area fraction {rep['area_fraction']:.3f}, median gap {rep['gap_stats']['median']:.3g} "
             f"(asked {rep['gap']:.3g}), {sum(rep['iterations'].values())} iterations in "
@@ -272,6 +289,8 @@ ConfigOpt = Annotated[Optional[Path], typer.Option(help="TOML file of parameters
 CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")]
 MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")]
 QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
+MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
+NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")]
 
 
 @app.command()
@@ -282,6 +301,8 @@ def pack(
     secondary: SecondaryOpt = None,
     gap: GapOpt = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
+    margin: MarginOpt = None,
+    no_pocket_fill: NoPocketFillOpt = False,
     config: ConfigOpt = None,
     report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
     png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
@@ -300,11 +321,16 @@ def pack(
     with _errors():
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
-                       checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume)
+                       checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
+                       margin=margin, pocket_fill=not no_pocket_fill)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:
             raise typer.Exit(130)
+        if not rep["invariants"]["ok"]:
+            typer.echo(f"error: {output}: the packing breaks a promise (see the report's "
+                       "'invariants'); it was written for inspection", err=True)
+            raise typer.Exit(6)
 
 
 @app.command()
@@ -314,9 +340,13 @@ def evaluate(
     plot: Annotated[Optional[Path], typer.Option(help="Plot Q_s(r) of all given packings to this PNG.")] = None,
     gap: Annotated[Optional[float], typer.Option(help="Gap to evaluate against (default: the file's data-gap).")] = None,
     grid: Annotated[int, typer.Option(help="Pixels along the longer side of the SCP raster.")] = 1000,
+    elements: Annotated[Optional[list[Path]], typer.Option(
+        "--elements", help="Source element files or directories (matched by data-source): "
+                           "adds each element's distortion from its source.")] = None,
     debug: DebugOpt = False,
 ) -> None:
-    """Measure packings: area fraction, overlaps, gaps, deformation, SCP Q_s(r) (sec. 11)."""
+    """Measure packings: area fraction, overlaps, gaps, edge distance, deformation,
+    distortion (with --elements), SCP Q_s(r) (sec. 11)."""
     global _DEBUG
     _DEBUG = debug
     from .evaluate import evaluate_file, format_table, plot_scp
@@ -326,7 +356,13 @@ def evaluate(
             raise ParameterError(f"--gap must be a positive number, got {gap:g}")
         if plot is not None:
             _check_outputs([plot], packings)
-        results = [(p, evaluate_file(p, gap=gap, grid=grid)) for p in packings]
+        sources = None
+        if elements:
+            from .io import load_elements
+            from .metrics import source_geometries
+
+            sources = source_geometries(load_elements(elements))
+        results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources)) for p in packings]
         if json_out:
             data = results[0][1] if len(results) == 1 else {str(p): r for p, r in results}
             typer.echo(json.dumps(data, indent=2))
@@ -419,6 +455,8 @@ def batch(
     gap: GapOpt = None,
     count: CountOpt = None,
     max_iterations: MaxIterationsOpt = None,
+    margin: MarginOpt = None,
+    no_pocket_fill: NoPocketFillOpt = False,
     config: ConfigOpt = None,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
@@ -430,7 +468,7 @@ def batch(
     from .batch import run_batch
 
     with _errors():
-        base = resolve_params(config, gap, None, count, max_iterations)
+        base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill)
         with _BatchProgress(not quiet) as prog, _sigterm_as_interrupt():
             summary = run_batch(container, elements, output, seeds, set_ or [], base, secondary or [],
                                 workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog)

@@ -63,7 +63,7 @@ def deformation_study(container: Container, elements: Sequence[Element], gap: fl
     inputs = BatchInputs(container, tuple(elements))
 
     def collect(j: int, res) -> None:
-        if on_run is not None and res.ok:
+        if on_run is not None and res.metrics is not None:
             on_run(k_values[j // runs], j % runs, _result(res))
 
     if client is not None:
@@ -74,7 +74,7 @@ def deformation_study(container: Container, elements: Sequence[Element], gap: fl
     if interrupted:
         raise KeyboardInterrupt
     for job, res in zip(jobs, results):
-        if not res.ok:
+        if res.metrics is None:  # a packing that breaks a promise is still measured, as before
             raise JobFailed(f"deformation study, {job.name}: {res.error}", res.exit_code)
     groups: dict[str, list[dict]] = {}
     for j, k_e in enumerate(k_values):

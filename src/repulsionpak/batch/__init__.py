@@ -46,11 +46,18 @@ class BatchSummary:
         return sum(1 for r in self.results if r is not None and r.ok)
 
 
-def _tolerance(jobs: Sequence[Job]) -> float | None:
-    """Curve flattening tolerance of the shared read: the finest any job asks for (the
-    same as ``repulsionpak pack`` when all jobs share one gap)."""
-    tols = [None if j.params.gap is None else j.params.preprocess.flatten_tolerance * j.params.gap for j in jobs]
-    return None if not tols or any(t is None for t in tols) else min(tols)
+def _n_combos(settings) -> int:
+    n = 1
+    for _, values in settings:
+        n *= len(values)
+    return n
+
+
+def _tolerance(jobs: Sequence[Job]) -> float:
+    """Curve flattening tolerance of the shared container read: gap/100 like
+    ``repulsionpak pack`` (the edge margin is checked against the outline as drawn), for
+    the smallest gap of the batch (the same read as ``pack`` when all jobs share a gap)."""
+    return 0.01 * min(j.params.gap for j in jobs)
 
 
 def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: str,
@@ -73,12 +80,11 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
     check_outdir(outdir, [container, *elements, *secondary])
     seed_list = parse_seeds(seeds)
     settings = [parse_set(s) for s in sets]
-    jobs = make_jobs(base, seed_list, settings)  # all parameter errors before any work
-    thumb = thumbnail_size(len(jobs))
+    make_jobs(base, seed_list, settings)  # all parameter errors before any work
+    if base.gap is None:  # as pack: the default gap comes from the container's size
+        base = dataclasses.replace(base, gap=default_gap(load_container(container)))
+    jobs = make_jobs(base, seed_list, settings, thumbnail_size(len(seed_list) * _n_combos(settings)))
     cont = load_container(container, tolerance=_tolerance(jobs))
-    if base.gap is None:
-        base = dataclasses.replace(base, gap=default_gap(cont))
-    jobs = make_jobs(base, seed_list, settings, thumb)
     inputs = BatchInputs(cont, tuple(load_elements(list(elements))),
                          tuple(load_elements(list(secondary))) if secondary else ())
     outdir = Path(outdir)
@@ -86,10 +92,10 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
     best: list = [None, None]  # ((scp_half_gap, job index), svg text) of the best so far
 
     def collect(i: int, r: JobResult) -> None:
-        if r.ok and r.svg is not None:
+        if r.svg is not None:  # also a packing that breaks a promise, for inspection
             files[i] = write_svg(outdir, r)
             q = r.scp_half_gap
-            if q is not None and (best[0] is None or (q, i) < best[0]):  # ties: the first job, as best_result
+            if r.ok and q is not None and (best[0] is None or (q, i) < best[0]):  # ties: the first job
                 best[0], best[1] = (q, i), r.svg
             r.svg = None  # written: do not keep hundreds of SVGs in memory
         if on_result is not None:

@@ -65,6 +65,8 @@ def _label(job: Job, r: JobResult | None, max_chars: int) -> str:
     parts = [f"seed {job.seed}"] + [f"{n.rpartition('.')[2]}={_fmt_value(v)}" for n, v in job.setting]
     if r is None:
         parts.append("cancelled")
+    elif r.exit_code == 6:
+        parts.append("promise broken")
     elif not r.ok:
         parts.append("failed")
     elif r.scp_half_gap is not None:
@@ -85,7 +87,7 @@ def write_summary(outdir: Path, jobs: Sequence[Job], results: Sequence[JobResult
         atomic_write_bytes(outdir / "best.svg", best_svg.encode("utf-8"))
     tile = max([j.thumbnail_px for j in jobs] + [16])
     max_chars = int(tile / 6.2)
-    tiles = [None if r is None or not r.ok else r.thumbnail for r in results]
+    tiles = [None if r is None else r.thumbnail for r in results]
     labels = [_label(j, r, max_chars) for j, r in zip(jobs, results)]
     atomic_write_bytes(outdir / "contact-sheet.png", contact_sheet_png(tiles, labels, tile))
     return best

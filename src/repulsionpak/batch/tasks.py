@@ -132,13 +132,19 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
         if packing.partial:
             raise JobFailed("cancelled before it finished", 130)
         metrics = evaluate(inputs.container, packing.placed, packing.gap, with_scp=job.scp)
+        checks = invariants(packing, metrics)
         if job.svg:
-            res.svg = packing_svg_text(packing, metrics, invariants(packing, metrics), path=f"{job.name}.svg")
+            res.svg = packing_svg_text(packing, metrics, checks, path=f"{job.name}.svg")
         if job.thumbnail_px:
             from ..io.png import png_bytes
 
             res.thumbnail = png_bytes(inputs.container, packing.placed, size_px=job.thumbnail_px)
         res.metrics = metrics
+        if not checks["ok"]:  # written for inspection, like `pack` (exit code 6), never the best
+            broken = sorted(k[:-3] for k, v in checks.items() if k.endswith("_ok") and v is False)
+            res.error = ("the packing breaks a promise" + (f" ({', '.join(broken)})" if broken else "")
+                         + "; see the invariants in its SVG metadata")
+            res.exit_code = 6
     except RepulsionPakError as exc:
         res.error, res.exit_code = _one_line(exc), getattr(exc, "exit_code", 1)
     except Exception as exc:  # noqa: BLE001  (one job's bug must not stop the batch)
