@@ -40,12 +40,14 @@ pytest.importorskip("distributed")
 EX = examples.examples_dir()
 CONTAINER = EX / "containers" / "circle.svg"
 ELEMENTS = [EX / "elements" / "apple.svg", EX / "elements" / "fish.svg"]
-TINY = ["--gap", "10", "--count", "5", "--max-iterations", "300"]
+TINY = ["--gap", "10", "--count", "5", "--max-iterations", "300", "--no-pocket-fill"]
 SRC = Path(repulsionpak.__file__).resolve().parents[1]
 
 
 def tiny_params(**more):
-    return params_from_dict({"gap": 10.0, "placement": {"count": 5}, "sim": {"max_iterations": 300}, **more})
+    """5 elements, 300 + 300 iterations, no pocket filling: about a second per packing."""
+    return params_from_dict({"gap": 10.0, "placement": {"count": 5}, "sim": {"max_iterations": 300},
+                             "secondary": {"auto": False}, **more})
 
 
 def png_size(data: bytes) -> tuple[int, int]:
@@ -136,7 +138,7 @@ def test_batch_cli_on_the_local_cluster(tmp_path, local_client):
     out = tmp_path / "out"
     res = CliRunner().invoke(app, ["batch", str(CONTAINER), *map(str, ELEMENTS), "-o", str(out), "--seeds", "1-2",
                                    "--set", "gap=10,300", "--count", "5", "--max-iterations", "300",
-                                   "--scheduler", local_client.scheduler.address, "-q"])
+                                   "--no-pocket-fill", "--scheduler", local_client.scheduler.address, "-q"])
     assert res.exit_code == 1, res.output  # some jobs failed
     assert "2 of 4 packings failed" in res.output
     header, rows = read_csv(out / "results.csv")
@@ -298,7 +300,7 @@ def test_ctrl_c_cancels_cleanly(tmp_path):
     process left behind."""
     out = tmp_path / "out"
     cfg = tmp_path / "c.toml"
-    cfg.write_text("gap = 10.0\n[placement]\ncount = 5\n[sim]\nstop_epsilon = 0.0\n")
+    cfg.write_text("gap = 10.0\n[placement]\ncount = 5\n[sim]\nstop_epsilon = 0.0\n[secondary]\nauto = false\n")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.Popen([sys.executable, "-m", "repulsionpak.cli", "batch", str(CONTAINER), *map(str, ELEMENTS),
                              "-o", str(out), "--seeds", "1", "--config", str(cfg), "--workers", "2",

@@ -21,7 +21,7 @@ def study_jobs(gap: float, k_values: Sequence[float] = (10.0, 250.0, 1000.0), ru
                count_range: tuple[int, int] = (23, 27), seed: int = 0, base: Params = Params()) -> list[Job]:
     """The study's packings, k_e outermost: run i of every k_e uses the same seed and
     count (random in ``count_range``, drawn from ``(seed, i)``), so the groups differ
-    only by k_e. Workers return the metrics with the SCP curve, no SVG or thumbnail."""
+    only by k_e; no secondary elements and no pocket filling (``secondary.auto`` off). Workers return the metrics with the SCP curve, no SVG or thumbnail."""
     if runs < 1:
         raise ValueError("runs must be >= 1")
     jobs = []
@@ -32,7 +32,8 @@ def study_jobs(gap: float, k_values: Sequence[float] = (10.0, 250.0, 1000.0), ru
             p = dataclasses.replace(
                 base, gap=gap, seed=int(rng.integers(2**31)),
                 sim=dataclasses.replace(base.sim, k_edge=float(k_e)),
-                placement=dataclasses.replace(base.placement, count=count)).validate()
+                placement=dataclasses.replace(base.placement, count=count),
+                secondary=dataclasses.replace(base.secondary, auto=False)).validate()  # as the paper: none
             jobs.append(Job(seed=p.seed, params=p, setting=(("sim.k_edge", float(k_e)),),
                             name=f"k_e={k_e:g} run {i + 1}", svg=False, thumbnail_px=0, scp=True))
     return jobs
