@@ -407,6 +407,13 @@ class _BatchProgress:
     def __call__(self, i: int, job, result) -> None:
         self.done += 1
         self.failed += not result.ok
+        if self.enabled:
+            for w in result.warnings:
+                line = f"repulsionpak: warning: {job.name}: {w}"
+                if self._live is not None:
+                    self._live.console.print(line, markup=False, highlight=False)
+                else:
+                    typer.echo(line, err=True)
         if self._live is not None:
             self._live.update(self._task, advance=1, failed=self.failed)
         elif self.enabled:

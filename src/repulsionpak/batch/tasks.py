@@ -14,6 +14,7 @@ import signal
 import socket
 import time
 import uuid
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
@@ -44,9 +45,10 @@ class JobResult:
     """What a worker returns for a :class:`Job` (picklable, no files).
 
     ``metrics`` is the :func:`~repulsionpak.evaluate.evaluate` dict (None when the job
-    failed); ``error`` is one line naming the problem, ``exit_code`` the CLI code of that
-    error (0 on success). ``worker`` is ``host:pid`` of the process that ran the task,
-    ``started`` / ``finished`` its wall clock (``time.time()``), ``seconds`` the task's
+    failed, or measured but breaking a promise: then ``error`` says so and ``exit_code``
+    is 6); ``error`` is one line naming the problem, ``exit_code`` the CLI code of that
+    error (0 on success); ``warnings`` the messages ``pack`` warned with. ``worker`` is
+    ``host:pid`` of the process that ran the task, ``started`` / ``finished`` its wall clock (``time.time()``), ``seconds`` the task's
     own duration (pack, measure, SVG text, thumbnail) and ``cpu_seconds`` the CPU time
     of the thread that ran it (unlike ``seconds``, not stretched by other load).
     """
@@ -58,6 +60,7 @@ class JobResult:
     iterations: dict = field(default_factory=dict)
     seconds: float = 0.0
     cpu_seconds: float = 0.0
+    warnings: list[str] = field(default_factory=list)
     svg: str | None = None
     thumbnail: bytes | None = None
     error: str | None = None
@@ -126,8 +129,11 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
         params = job.params
         if params.sim.threads == 0:
             params = dataclasses.replace(params, sim=dataclasses.replace(params.sim, threads=1))
-        packing = pack(inputs.container, inputs.elements, params, secondary=inputs.secondary,
-                       should_stop=_cancel_probe())
+        with warnings.catch_warnings(record=True) as caught:  # returned to the client, not the worker's log
+            warnings.simplefilter("always")
+            packing = pack(inputs.container, inputs.elements, params, secondary=inputs.secondary,
+                           should_stop=_cancel_probe())
+        res.warnings = [" ".join(str(w.message).split()) for w in caught]
         res.iterations = dict(packing.iterations)
         if packing.partial:
             raise JobFailed("cancelled before it finished", 130)
