@@ -77,6 +77,17 @@ class SimParams:
         20.0, "paper units", "k_e, strength of the quadratic edge springs (Eq. 3). The paper's example "
         "is 40 (its authors' own parameter file uses 7 against k_r = 100); 20 deforms more and packs "
         "denser with the gap still within ~15% (measured on the heart scene).")
+    k_shape: float = _doc(
+        0.0, "paper units", "Strength of the shape-matching force that pulls every mesh towards the "
+        "best rotated, scaled copy of its rest shape (beyond the paper; 0 = the paper's springs "
+        "only). Higher keeps shapes truer, lower lets them bend to fill (see docs/quality.md).")
+    bend_limit: float = _doc(
+        0.2, "-", "Largest distortion of an element's art (area of the symmetric difference with "
+        "its best rotated, scaled copy, over its area) the simulation allows: a mesh bent "
+        "further is pulled back onto the limit after every step (beyond the paper; 0 = no limit).")
+    bend_limit_convex: float = _doc(
+        0.08, "-", "The same for nearly convex elements (art ≥ 0.9 of its convex hull), "
+        "whose dents show more.")
     k_overlap: float = _doc(80.0, "paper units", "k_o, strength of the overlap force (Eq. 4).")
     k_boundary: float = _doc(80.0, "paper units", "k_b, strength of the boundary force (Eq. 5).")
     soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")
@@ -144,21 +155,43 @@ class SecondaryParams:
 
 
 @dataclass(frozen=True)
+class VerifyParams:
+    """The final check of the promises on the art, and its repair (``verify.py``)."""
+
+    min_gap: float = _doc(
+        0.9, "× gap", "Every element's art keeps at least this distance to every other element's "
+        "art; closer elements are shrunk about their centroid (their shape is kept).")
+    min_scale: float = _doc(
+        0.5, "-", "An element that would have to shrink below this share of its size is dropped "
+        "(with a warning naming it).")
+    repair: bool = _doc(True, "-", "Shrink or drop offenders; false: only verify and report.")
+    straighten: float = _doc(
+        1.25, "× sim.bend_limit", "An element whose art ends up distorted beyond this multiple of "
+        "its bend limit (symmetric difference with its best rotated, scaled copy, over its "
+        "area) is replaced by that unbent copy; 0 never replaces (nor does sim.bend_limit = 0).")
+
+
+@dataclass(frozen=True)
 class Params:
     """All parameters of a packing run."""
 
     gap: float = _doc(None, "container units", "d_gap, the desired distance between neighbouring "
                       "elements' art in the final packing. None: 1% of the container's larger side.")
     seed: int | None = _doc(None, "-", "Random seed; the same seed gives the same packing.")
+    margin: float | None = _doc(None, "container units", "Smallest distance between any art and "
+                                "the container's edge. None: half the gap.")
     preprocess: PreprocessParams = field(default_factory=PreprocessParams)
     placement: PlacementParams = field(default_factory=PlacementParams)
     sim: SimParams = field(default_factory=SimParams)
     secondary: SecondaryParams = field(default_factory=SecondaryParams)
+    verify: VerifyParams = field(default_factory=VerifyParams)
 
     def validate(self) -> "Params":
         """Raise :class:`ParameterError` on values that cannot work; return self."""
         if self.gap is not None and not (math.isfinite(self.gap) and self.gap > 0):
             raise ParameterError(f"gap must be a positive number, got {self.gap!r}")
+        if self.margin is not None and not (math.isfinite(self.margin) and self.margin >= 0):
+            raise ParameterError(f"margin must be a number >= 0, got {self.margin!r}")
         if self.seed is not None:
             try:
                 seed_ok = 0 <= operator.index(self.seed) < 2**64
@@ -189,8 +222,10 @@ class Params:
              "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),
             (s.dt > 0 and s.dt <= 0.5, "sim.dt must be in (0, 0.5]"),
             (s.velocity_cap > 0, "sim.velocity_cap must be > 0"),
-            (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary) >= 0, "force constants must be >= 0"),
+            (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary, s.k_shape) >= 0,
+             "force constants must be >= 0"),
             (s.k_growth >= 0, "sim.k_growth must be >= 0"),
+            (s.bend_limit >= 0 and s.bend_limit_convex >= 0, "sim.bend_limit and bend_limit_convex must be >= 0"),
             (s.soft > 0, "sim.soft must be > 0"),
             (s.cell_size > 0, "sim.cell_size must be > 0"),
             (s.stop_window >= 2, "sim.stop_window must be >= 2"),
@@ -208,6 +243,9 @@ class Params:
             (64 <= sec.grid <= 10_000, "secondary.grid must be in [64, 10000]"),
             (sec.max_count is None or sec.max_count >= 0, "secondary.max_count must be >= 0"),
             (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
+            (0 <= self.verify.min_gap <= 2, "verify.min_gap must be in [0, 2] (× gap)"),
+            (0 < self.verify.min_scale <= 1, "verify.min_scale must be in (0, 1]"),
+            (self.verify.straighten >= 0, "verify.straighten must be >= 0"),
         ]
         for ok, msg in checks:
             if not ok:
@@ -222,7 +260,7 @@ class Params:
 MAX_COUNT = 100_000
 
 _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
-             "sim": SimParams, "secondary": SecondaryParams}
+             "sim": SimParams, "secondary": SecondaryParams, "verify": VerifyParams}
 
 
 def _check_type(value, tp, where: str, source: str):

@@ -67,3 +67,23 @@ def skin_polygons(model: Model, state: State, frame: SimFrame) -> list[np.ndarra
     """Each element's skin polygon (container units), for debug layers and checks."""
     return [state.x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]] * frame.unit
             for e in range(model.n_elements)]
+
+
+def rest_art(templates: Sequence[Template], model: Model, elements: Sequence[int] | None = None
+             ) -> list[PlacedArt]:
+    """Each element's art undeformed, in its template's frame (centred, at the template's
+    scale), vertex for vertex like :func:`placed_art`: the shape it should keep."""
+    out = []
+    for e in range(model.n_elements) if elements is None else elements:
+        t = templates[model.template_index[e]]
+        c, k = t.outline.center, t.scale
+        paths = tuple(a.transformed(lambda p: (np.asarray(p) - c) * k) for a in t.element.paths)
+        out.append(PlacedArt(t.element.source, model.kind[e], paths, stroke_scale=t.scale, deformation=0.0))
+    return out
+
+
+def is_convex(template: Template, solidity: float = 0.9) -> bool:
+    """True when the template's art covers at least ``solidity`` of its convex hull."""
+    g = template.outline.geometry
+    hull = g.convex_hull.area
+    return hull > 0 and g.area >= solidity * hull

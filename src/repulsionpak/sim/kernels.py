@@ -87,7 +87,7 @@ def cache_is_cold() -> bool:
     cache holds no valid entry for the serial build of some kernel (first run, or the
     sources changed since). Reads only the small cache index files; False when that
     cannot be told (a numba without these internals)."""
-    from . import forces, integrate, selfintersect  # noqa: F401  (registers the kernels)
+    from . import forces, integrate, selfintersect, shape  # noqa: F401  (registers the kernels)
 
     try:
         return any(not k.serial._cache._cache_file._load_index() for k in _KERNELS)
