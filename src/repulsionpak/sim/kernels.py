@@ -84,13 +84,14 @@ def uses_parallel_builds() -> bool:
 
 def cache_is_cold() -> bool:
     """Whether the simulation kernels still have to be compiled: True when numba's disk
-    cache holds no valid entry for the serial build of some kernel (first run, or the
-    sources changed since). Reads only the small cache index files; False when that
-    cannot be told (a numba without these internals)."""
+    cache holds no valid entry for the serial build of any kernel (the first run, or the
+    sources changed since). Not *some* kernel: one a run never calls (a force switched
+    off by default) is never cached. Reads only the small cache index files; False when
+    that cannot be told (a numba without these internals)."""
     from . import forces, integrate, selfintersect, shape  # noqa: F401  (registers the kernels)
 
     try:
-        return any(not k.serial._cache._cache_file._load_index() for k in _KERNELS)
+        return not any(k.serial._cache._cache_file._load_index() for k in _KERNELS)
     except Exception:  # noqa: BLE001  (private numba API: stay silent rather than fail)
         return False
 
