@@ -88,7 +88,7 @@ def cache_is_cold() -> bool:
     sources changed since). Not *some* kernel: one a run never calls (a force switched
     off by default) is never cached. Reads only the small cache index files; False when
     that cannot be told (a numba without these internals)."""
-    from . import forces, integrate, selfintersect, shape  # noqa: F401  (registers the kernels)
+    from . import runner  # noqa: F401  (imports, and so registers, every kernel a run calls)
 
     try:
         return not any(k.serial._cache._cache_file._load_index() for k in _KERNELS)
