@@ -55,7 +55,8 @@ def git_revision() -> str:
     try:
         rev = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                              text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no",
+                                "--", "src", "benchmarks"],  # the code measured, not the docs written
                                capture_output=True, text=True, check=True).stdout.strip()
         return rev + ("+dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
@@ -311,6 +312,7 @@ def main(argv=None) -> int:
         workdir = args.workdir
         workdir.mkdir(parents=True, exist_ok=True)
 
+    revision = git_revision()
     t0 = time.perf_counter()
     results: dict[str, dict] = {}
     jobs = [(s.name, str(workdir), str(pic_dir) if (pic_dir and s.name in PICTURES) or (pic_dir and partial)
@@ -336,7 +338,7 @@ def main(argv=None) -> int:
                 done(f.result())
     wall = time.perf_counter() - t0
     ordered = [results[s.name] for s in chosen]
-    meta = {"revision": git_revision(), "date": time.strftime("%Y-%m-%d"), "machine": machine(),
+    meta = {"revision": revision, "date": time.strftime("%Y-%m-%d"), "machine": machine(),
             "command": "python benchmarks/contract.py" + (f" --jobs {args.jobs}" if args.jobs > 1 else "")
             + "".join(f" --only {n}" for n in args.only) + (" --fast" if args.fast else ""),
             "jobs": args.jobs, "wall_seconds": wall}

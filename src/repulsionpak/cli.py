@@ -138,7 +138,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              report: Path | None = None, png: Path | None = None, count: int | None = None,
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
-             margin: float | None = None) -> dict:
+             margin: float | None = None, pocket_fill: bool = True) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png, write_packing_svg
@@ -164,6 +164,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         params = dataclasses.replace(params, gap=gap)
     if seed is not None:
         params = dataclasses.replace(params, seed=seed)
+    if not pocket_fill:
+        params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, auto=False))
     if margin is not None:
         if not margin >= 0:
             raise ParameterError(f"--margin must be a number >= 0, got {margin:g}")
@@ -301,6 +303,7 @@ def pack(
     gap: Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")] = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
     margin: Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")] = None,
+    no_pocket_fill: Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")] = False,
     config: Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")] = None,
     report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
     png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
@@ -320,7 +323,7 @@ def pack(
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
-                       margin=margin)
+                       margin=margin, pocket_fill=not no_pocket_fill)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:
