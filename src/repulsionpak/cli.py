@@ -217,6 +217,11 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         if checkpoint is not None:
             def on_checkpoint(states: dict) -> None:
                 save_checkpoint(checkpoint, {k: dict(v, seed=params.seed) for k, v in states.items()}, fp)
+    if progress:
+        from .sim.kernels import cache_is_cold
+
+        if cache_is_cold():
+            typer.echo("compiling the simulation kernels, first run only…", err=True)
     with _Progress(progress) as prog, _StopFlag() as stop:
         packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
                        on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every, resume=resumed)
@@ -506,7 +511,7 @@ def demo(
     quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Pack the example library shipped with repulsionpak (SVG + PNG, about half a minute)."""
+    """Pack the example library shipped with repulsionpak (SVG + PNG, a few seconds; the first run also compiles the simulation kernels)."""
     global _DEBUG
     _DEBUG = debug
     from . import examples
