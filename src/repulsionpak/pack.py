@@ -132,7 +132,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
-    packing.placed = placed_art(packing.templates, packing.model, packing.state, frame)
+    packing.placed = placed_art(packing.templates, packing.model, packing.state, frame,
+                                params=params.render)
     packing.seconds["render"] = time.perf_counter() - t3
     packing.seconds["total"] = time.perf_counter() - t0
     return packing

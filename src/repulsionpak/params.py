@@ -144,6 +144,24 @@ class SecondaryParams:
 
 
 @dataclass(frozen=True)
+class RenderParams:
+    """Output curves: the deformation map and the curve fitting (``render`` package)."""
+
+    smooth_map: bool = _doc(
+        True, "-", "Map the art with a thin-plate spline through the mesh vertices (smooth); "
+        "false: the paper's per-triangle barycentric map (kinks at triangle edges).")
+    curve_tolerance: float = _doc(
+        1e-3, "× element size", "Largest distance between the written curves and the exact "
+        "mapped outline, relative to the copy's bounding-box diagonal.")
+    max_gap_share: float = _doc(
+        0.02, "× gap", "The curve tolerance never exceeds this share of the gap, so fitting "
+        "cannot eat into the gap between neighbours.")
+    samples: float = _doc(
+        4.0, "per mesh spacing", "Samples of each source segment per mesh edge length when "
+        "mapping it (at least 4, at most 64 per segment).")
+
+
+@dataclass(frozen=True)
 class Params:
     """All parameters of a packing run."""
 
@@ -154,6 +172,7 @@ class Params:
     placement: PlacementParams = field(default_factory=PlacementParams)
     sim: SimParams = field(default_factory=SimParams)
     secondary: SecondaryParams = field(default_factory=SecondaryParams)
+    render: RenderParams = field(default_factory=RenderParams)
 
     def validate(self) -> "Params":
         """Raise :class:`ParameterError` on values that cannot work; return self."""
@@ -208,6 +227,9 @@ class Params:
             (64 <= sec.grid <= 10_000, "secondary.grid must be in [64, 10000]"),
             (sec.max_count is None or sec.max_count >= 0, "secondary.max_count must be >= 0"),
             (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
+            (1e-7 <= self.render.curve_tolerance <= 0.05, "render.curve_tolerance must be in [1e-7, 0.05]"),
+            (0 < self.render.max_gap_share <= 0.5, "render.max_gap_share must be in (0, 0.5]"),
+            (1 <= self.render.samples <= 64, "render.samples must be in [1, 64]"),
         ]
         for ok, msg in checks:
             if not ok:
@@ -222,7 +244,7 @@ class Params:
 MAX_COUNT = 100_000
 
 _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
-             "sim": SimParams, "secondary": SecondaryParams}
+             "sim": SimParams, "secondary": SecondaryParams, "render": RenderParams}
 
 
 def _check_type(value, tp, where: str, source: str):

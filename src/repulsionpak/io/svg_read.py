@@ -664,6 +664,15 @@ def _gradient_colours(root: ET.Element) -> dict[str, str]:
                 break
             ref = _href(el)
             el = grads.get(ref[1:]) if ref and ref.startswith("#") else None
+    for el in root.iter():  # patterns: the first plain fill of their content, else grey
+        if _local(el.tag) == "pattern" and el.get("id") and el.get("id") not in out:
+            colour = "#808080"
+            for c in el.iter():
+                f = c.get("fill")
+                if c is not el and f and not f.strip().startswith("url(") and f.strip() != "none":
+                    colour = f.strip()
+                    break
+            out[el.get("id")] = colour
     return out
 
 
@@ -686,6 +695,7 @@ class SvgShape:
     hole: bool
     attrs: dict
     groups: tuple = ()
+    node: object = None  # the svgelements shape (resolved presentation values, tag)
 
 
 @dataclass
@@ -694,6 +704,7 @@ class SvgDocument:
     svg_root: dict
     root_attrs: dict = field(default_factory=dict)
     metadata_text: str | None = None
+    xml: object = None  # the (sanitised) ElementTree root, for paint servers
 
 
 def _matrix_to_np(m) -> np.ndarray:
@@ -736,8 +747,7 @@ def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None,
     if s.lower().startswith("url("):
         m = re.match(r"url\(\s*['\"]?#([^)'\"]+)['\"]?\s*\)\s*(.*)$", s, re.IGNORECASE)
         fallback = m.group(2).strip() if m else ""
-        if m and m.group(1) in gradients:
-            notes.add("gradient (drawn with its first stop colour)")
+        if m and m.group(1) in gradients:  # kept in the output; the outline uses a colour
             s = gradients[m.group(1)]
         elif fallback:
             s = fallback
@@ -873,7 +883,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
                 segs = list(child.segments(transformed=False))
                 shapes.append(
-                    SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups)
+                    SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups, node=child)
                 )
             elif isinstance(child, (se.Group, se.Use)):
                 attrs = own(child)
@@ -892,7 +902,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     walk(doc, _clamp01(_float_attr(root_own.get("opacity"), 1.0)), False, ())
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
-    return SvgDocument(shapes, svg_root, root_attrs, metadata_text)
+    return SvgDocument(shapes, svg_root, root_attrs, metadata_text, xml=root_xml)
 
 
 # --------------------------------------------------------------------------- flattening
@@ -1103,6 +1113,20 @@ def flatten_shape(
 # --------------------------------------------------------------------------- public API
 
 
+def shape_source(path, sh: SvgShape):
+    """Curve-level data of a shape (see :mod:`.svg_source`); None if it cannot be built."""
+    from .svg_source import shape_source as _shape_source
+
+    return _shape_source(path, sh)
+
+
+def paint_servers(path, xml, arts) -> dict:
+    """Self-contained markup of the gradients and patterns ``arts`` are painted with."""
+    from .svg_source import paint_servers as _paint_servers
+
+    return _paint_servers(path, xml, arts)
+
+
 def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
     doc = parse_svg_shapes(path, data)
     shapes = [s for s in doc.shapes if s.style.visible]
@@ -1113,18 +1137,21 @@ def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
         subs = flatten_shape(path, sh, tol, budget)
         if subs:
             arts.append(
-                ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style)
+                ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style,
+                        source=shape_source(path, sh))
             )
     if not arts:
         raise InputError(
             path,
             "has no visible geometry (no filled or stroked shape); an element needs at least one visible path",
         )
-    return Element(name=path.stem, source=path.name, paths=tuple(arts))
+    return Element(name=path.stem, source=path.name, paths=tuple(arts),
+                   paint_servers=paint_servers(path, doc.xml, arts))
 
 
 def container_from_shapes(
-    path, shapes: list[SvgShape], tol: float, budget: PointBudget, svg_root: dict
+    path, shapes: list[SvgShape], tol: float, budget: PointBudget, svg_root: dict,
+    xml=None,
 ) -> Container:
     """Build a Container from visible SVG shapes (closed subpaths only; holes subtracted)."""
     outer, holes, arts = [], [], []
@@ -1145,7 +1172,8 @@ def container_from_shapes(
         geom = rings_to_region(rings, sh.style.fill_rule, path)
         n_crossing += count_self_crossing(rings)
         (holes if sh.hole else outer).append(geom)
-        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), sh.style))
+        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), sh.style,
+                            source=shape_source(path, sh)))
     if n_open:
         warn(
             path,
@@ -1178,6 +1206,7 @@ def container_from_shapes(
         region=region,
         paths=tuple(arts),
         svg_root=dict(svg_root),
+        paint_servers=paint_servers(path, xml, arts),
     )
 
 
@@ -1185,7 +1214,7 @@ def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Containe
     doc = parse_svg_shapes(path, data)
     shapes = [s for s in doc.shapes if s.style.visible]
     tol = flattening_tolerance(shapes, tolerance)
-    return container_from_shapes(path, shapes, tol, PointBudget(path), doc.svg_root)
+    return container_from_shapes(path, shapes, tol, PointBudget(path), doc.svg_root, doc.xml)
 
 
 def load_element(path: str | Path, tolerance: float | None = None) -> Element:

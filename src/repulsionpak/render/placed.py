@@ -1,0 +1,147 @@
+"""Map every element's art through its deformed mesh and fit smooth curves to it.
+
+The art's exact source curves are sampled densely in the rest mesh, mapped through the
+deformation map (:mod:`.deform`: thin-plate-spline interpolation of the mesh vertices by
+default) and fitted with lines, quadratic and cubic Béziers within a tolerance
+(:mod:`.fit`). The fitted curves, rounded as written, are what the SVG and PDF hold; each
+placed path's ``subpaths`` are a fine flattening of them, so every metric and check sees
+exactly what is written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..params import RenderParams
+from ..preprocess import Template
+from ..sim.model import Model, SimFrame, State
+from ..types import ArtPath, PlacedArt, ShapeSource
+from .curves import decimals_for, flatten_subpath, round_curves
+from .deform import map_plan
+from .fit import fit_subpath
+
+#: written curves are fitted to this share of the tolerance; rounding the coordinates
+#: (at most tol/5) and the error between samples use the rest
+FIT_SHARE = 0.75
+#: the flattening of the written curves used by metrics and checks, × tolerance
+FLATTEN_SHARE = 0.1
+
+
+def similarity_fit(rest: np.ndarray, cur: np.ndarray) -> tuple[float, float]:
+    """Best similarity transform (rotation, uniform scale, translation) from ``rest`` to
+    ``cur`` (both (n, 2)), least squares. Returns (scale, rms residual)."""
+    a = rest - rest.mean(axis=0)
+    b = cur - cur.mean(axis=0)
+    za = a[:, 0] + 1j * a[:, 1]
+    zb = b[:, 0] + 1j * b[:, 1]
+    denom = float(np.vdot(za, za).real)
+    if denom <= 0:
+        return 1.0, 0.0
+    c = np.vdot(za, zb) / denom  # complex scale·rotation
+    resid = zb - c * za
+    return float(abs(c)), float(np.sqrt(np.mean(np.abs(resid) ** 2)))
+
+
+def deformation(rest: np.ndarray, cur: np.ndarray) -> float:
+    """Dimensionless deformation of a mesh: RMS distance of its vertices from the best
+    similarity transform of the rest shape, divided by the RMS radius of the deformed mesh
+    (0 for a rigid motion plus uniform scaling)."""
+    scale, rms = similarity_fit(rest, cur)
+    b = cur - cur.mean(axis=0)
+    size = float(np.sqrt(np.mean((b ** 2).sum(axis=1))))
+    return rms / size if size > 0 else 0.0
+
+
+def element_vertices(model: Model, state: State, e: int) -> np.ndarray:
+    s, t = model.elem_vstart[e], model.elem_vstart[e + 1]
+    return state.x[s:t]
+
+
+def affine_fit(rest: np.ndarray, cur: np.ndarray) -> np.ndarray:
+    """Least-squares affine map (3, 3) from ``rest`` (n, 2) to ``cur`` (n, 2)."""
+    a = np.column_stack([rest, np.ones(len(rest))])
+    sol = np.linalg.lstsq(a, cur, rcond=None)[0]  # (3, 2)
+    m = np.eye(3)
+    m[:2, :] = sol.T
+    return m
+
+
+def _rest_matrix(t: Template) -> np.ndarray:
+    """File units of the element -> the template's rest coordinates."""
+    s, c = t.scale, t.outline.center
+    return np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
+
+
+def curve_tolerance(size: float, gap: float | None, params: RenderParams) -> float:
+    """Largest distance allowed between written curves and the exact mapped outline:
+    ``params.curve_tolerance`` × the copy's size, at most ``params.max_gap_share`` × gap."""
+    tol = params.curve_tolerance * max(size, 1e-12)
+    if gap is not None and gap > 0:
+        tol = min(tol, params.max_gap_share * gap)
+    return tol
+
+
+def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
+                params: RenderParams = RenderParams()) -> tuple[list[ArtPath], float]:
+    """The written art of one copy of template ``t`` whose mesh vertices are ``verts``
+    (container units); returns (paths, tolerance used)."""
+    plan = map_plan(t, params.smooth_map, params.samples)
+    q, g = plan.apply(verts)
+    size = float(np.hypot(*np.ptp(q, axis=0))) if len(q) else 0.0
+    tol = curve_tolerance(size, gap, params)
+    decimals = decimals_for(tol)
+    to_copy = affine_fit(t.verts, verts) @ _rest_matrix(t)
+    paths = []
+    for art, subs, starts in zip(t.element.paths, plan.curves, plan.seg_start):
+        curves = []
+        for sub, st in zip(subs, starts):
+            c = fit_subpath(sub.order, st, sub.closed, q, g, plan.t, FIT_SHARE * tol)
+            if c is not None:
+                curves.append(c)
+        if not curves:
+            continue
+        curves = round_curves(curves, decimals)
+        flat = [flatten_subpath(c, FLATTEN_SHARE * tol) for c in curves]
+        keep = [i for i, f in enumerate(flat) if len(f) >= 2]
+        if not keep:
+            continue
+        src = art.source
+        written = ShapeSource(
+            curves=tuple(curves[i] for i in keep),
+            tag="path",
+            matrix=to_copy @ (src.matrix if src is not None else np.eye(3)),
+            fill_paint=src.fill_paint if src is not None else None,
+            stroke_paint=src.stroke_paint if src is not None else None,
+            local_bbox=src.local_bbox if src is not None else None,
+            id=src.id if src is not None else None,
+        )
+        paths.append(ArtPath(tuple(flat[i] for i in keep), tuple(curves[i].closed for i in keep),
+                             art.style, source=written))
+    return paths, tol
+
+
+def placed_art(templates: Sequence[Template], model: Model, state: State, frame: SimFrame,
+               elements: Sequence[int] | None = None,
+               params: RenderParams | None = None) -> list[PlacedArt]:
+    """The deformed art of elements (all by default) in container units, in model order,
+    as smooth curves (see the module docstring)."""
+    params = params or RenderParams()
+    gap = float(model.gap) * frame.unit
+    out = []
+    for e in range(model.n_elements) if elements is None else elements:
+        t = templates[model.template_index[e]]
+        verts = element_vertices(model, state, e) * frame.unit
+        paths, _ = render_copy(t, verts, gap, params)
+        scale, _ = similarity_fit(t.verts, verts)
+        out.append(PlacedArt(t.element.source, model.kind[e], tuple(paths),
+                             stroke_scale=t.scale * scale, deformation=deformation(t.verts, verts),
+                             paint_servers=dict(t.element.paint_servers)))
+    return out
+
+
+def skin_polygons(model: Model, state: State, frame: SimFrame) -> list[np.ndarray]:
+    """Each element's skin polygon (container units), for debug layers and checks."""
+    return [state.x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]] * frame.unit
+            for e in range(model.n_elements)]
