@@ -136,8 +136,10 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              gap: float | None = None, seed: int | None = None, config: Path | None = None,
              report: Path | None = None, png: Path | None = None, count: int | None = None,
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
-             checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None) -> dict:
-    """Everything ``repulsionpak pack`` does; returns the report dict."""
+             checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
+             pdf: Path | None = None) -> dict:
+    """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
+    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png, write_packing_svg
     from .pack import pack
@@ -145,7 +147,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
     t_start = time.perf_counter()
     inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
-    _check_outputs([output, report, png, checkpoint], inputs + ([resume] if resume else []))
+    _check_outputs([output, report, png, checkpoint, pdf], inputs + ([resume] if resume else []))
     if checkpoint_every < 1:
         raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
     resumed = None
@@ -204,8 +206,17 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     meta = {"generator": "repulsionpak", "seed": params.seed, "partial": packing.partial,
             "stopped_by": packing.stopped_by, "invariants": checks}
     debug = {"skins": packing.skins()} if debug_layers else None
-    write_packing_svg(output, cont, packing.placed, g, attrs=attrs, debug_layers=debug,
-                      partial=packing.partial, metadata=meta)
+    svg_options = dict(attrs=attrs, debug_layers=debug, partial=packing.partial, metadata=meta)
+    if output.suffix.lower() == ".pdf":
+        from .render.pdf import write_packing_pdf
+
+        write_packing_pdf(output, cont, packing.placed, g, **svg_options)
+    else:
+        write_packing_svg(output, cont, packing.placed, g, **svg_options)
+    if pdf is not None:
+        from .render.pdf import write_packing_pdf
+
+        write_packing_pdf(pdf, cont, packing.placed, g, **svg_options)
     if png is not None:
         render_png(png, cont, packing.placed)
     seconds = dict(packing.seconds)
@@ -294,13 +305,14 @@ DebugOpt = Annotated[bool, typer.Option("--debug", help="Show Python tracebacks 
 def pack(
     container: Annotated[Path, typer.Argument(help="Container: SVG or .path file; every closed path is a region.")],
     elements: Annotated[list[Path], typer.Argument(help="Element files (SVG or .path) or directories of them.")],
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG (or a vector PDF when it ends in .pdf).")],
     secondary: Annotated[Optional[list[Path]], typer.Option("--secondary", help="Secondary element files or directories.")] = None,
     gap: Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")] = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
     config: Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")] = None,
     report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
     png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
+    pdf: Annotated[Optional[Path], typer.Option(help="Also write the packing as a vector PDF (for print).")] = None,
     count: Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")] = None,
     max_iterations: Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")] = None,
     debug_layers: Annotated[bool, typer.Option("--debug-layers", help="Add hidden skin layers to the SVG.")] = False,
@@ -316,7 +328,8 @@ def pack(
     with _errors():
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
-                       checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume)
+                       checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
+                       pdf=pdf)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:

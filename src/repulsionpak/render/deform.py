@@ -27,12 +27,17 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..geometry.mesh import bind_points
 from ..types import CurveSubpath
 from .curves import bezier, bezier_deriv
 
 __all__ = ["MapPlan", "art_curves", "map_plan", "tps_weights", "linear_weights"]
+
+#: samples are dense enough that the source curve is within this share of the element's
+#: size of the chords between them (a quarter of the default curve tolerance)
+SAMPLE_TOLERANCE = 2.5e-4
 
 
 def _kernel(r2: np.ndarray) -> np.ndarray:
@@ -47,6 +52,47 @@ def _kernel_grad_factor(r2: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         g = np.log(r2) + 1.0
     return np.where(r2 > 0, g, 0.0)
+
+
+@njit(cache=True)
+def _solve(a, b):
+    """Solve a x = b by Gaussian elimination with partial pivoting (NaN if singular).
+
+    The systems are small (mesh vertices + 3); a compiled loop is as fast as LAPACK here
+    and, unlike a threaded BLAS on a busy machine, never waits for other threads."""
+    n = a.shape[0]
+    m = a.copy()
+    x = b.copy()
+    scale = np.abs(m).max()
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(m[i, k]) > abs(m[p, k]):
+                p = i
+        if abs(m[p, k]) <= 1e-13 * scale:
+            x[:, :] = np.nan
+            return x
+        if p != k:
+            for j in range(n):
+                m[k, j], m[p, j] = m[p, j], m[k, j]
+            for j in range(x.shape[1]):
+                x[k, j], x[p, j] = x[p, j], x[k, j]
+        inv = 1.0 / m[k, k]
+        for i in range(k + 1, n):
+            f = m[i, k] * inv
+            if f != 0.0:
+                for j in range(k, n):
+                    m[i, j] -= f * m[k, j]
+                for j in range(x.shape[1]):
+                    x[i, j] -= f * x[k, j]
+    for k in range(n - 1, -1, -1):
+        inv = 1.0 / m[k, k]
+        for j in range(x.shape[1]):
+            s = x[k, j]
+            for i in range(k + 1, n):
+                s -= m[k, i] * x[i, j]
+            x[k, j] = s * inv
+    return x
 
 
 def tps_weights(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
@@ -71,11 +117,8 @@ def tps_weights(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | N
     a[n + 1 :, :n] = q.T
     rhs = np.zeros((n + 3, n))
     rhs[:n] = np.eye(n)
-    try:
-        coef = np.linalg.solve(a, rhs)  # (N+3, N): spline coefficients per unit vertex
-        if not np.all(np.isfinite(coef)):
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:  # coincident centres: least-squares solution
+    coef = _solve(a, rhs)  # (N+3, N): spline coefficients per unit vertex
+    if not np.all(np.isfinite(coef)):  # coincident centres: least-squares solution
         coef = np.linalg.lstsq(a, rhs, rcond=None)[0]
     W = np.empty((len(points), n))
     D = None if directions is None else np.empty((len(points), n))
@@ -154,9 +197,22 @@ class MapPlan:
         return self.W @ verts, self.D @ verts
 
 
-def _samples_per_segment(ctrl: np.ndarray, order: int, spacing: float, density: float) -> int:
+def _samples_per_segment(ctrl: np.ndarray, order: int, spacing: float, density: float,
+                         tol: float) -> int:
+    """``density`` samples per mesh spacing along the segment, and enough that the source
+    curve is within ``tol`` of the chords between samples; 8 to 128."""
     length = float(np.hypot(*np.diff(ctrl[: order + 1], axis=0).T).sum())
-    return int(min(64, max(4, math.ceil(density * length / spacing))))
+    n = density * length / spacing
+    if order == 2:
+        bound = 2.0 * float(np.hypot(*(ctrl[0] - 2 * ctrl[1] + ctrl[2])))
+    elif order == 3:
+        bound = 6.0 * max(float(np.hypot(*(ctrl[0] - 2 * ctrl[1] + ctrl[2]))),
+                          float(np.hypot(*(ctrl[1] - 2 * ctrl[2] + ctrl[3]))))
+    else:
+        bound = 0.0
+    if bound > 0 and tol > 0:
+        n = max(n, math.sqrt(bound / (8.0 * tol)))
+    return int(min(128, max(8, math.ceil(n))))
 
 
 def build_plan(template, smooth: bool = True, density: float = 4.0) -> MapPlan:
@@ -170,13 +226,16 @@ def build_plan(template, smooth: bool = True, density: float = 4.0) -> MapPlan:
     pts, ders, ts = [], [], []
     curves_out, starts_out = [], []
     count = 0
-    for art in template.element.paths:
+    rest_curves = [[sub.transformed(to_rest) for sub in art_curves(art)] for art in template.element.paths]
+    ends = [sub.ctrl.reshape(-1, 2) for subs in rest_curves for sub in subs]
+    size = float(np.hypot(*np.ptp(np.concatenate(ends), axis=0))) if ends else 1.0
+    tol = SAMPLE_TOLERANCE * size
+    for subs_in in rest_curves:
         subs, starts = [], []
-        for sub in art_curves(art):
-            sub = sub.transformed(to_rest)
+        for sub in subs_in:
             st = [count]
             for o, c in zip(sub.order, sub.ctrl):
-                n = _samples_per_segment(c, int(o), spacing, density)
+                n = _samples_per_segment(c, int(o), spacing, density, tol)
                 t = np.arange(n + 1) / n
                 pts.append(bezier(c, int(o), t))
                 ders.append(bezier_deriv(c, int(o), t))

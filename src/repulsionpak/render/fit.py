@@ -5,8 +5,8 @@ its smooth joints stay smooth: the end tangents of a fitted piece are the exact
 derivatives of the mapped source curve (``Df · c'(t)``), which are parallel on both
 sides of a smooth joint. A source line stays a line when its mapped samples are within
 the tolerance of the chord (and a curve meeting it at a smooth joint takes the line's
-direction as its end tangent); a quadratic stays a quadratic when one fits (its control
-point where the two end tangents meet); otherwise a cubic Hermite piece (the end
+direction as its end tangent); any segment becomes a quadratic when one fits (its control
+point where the two end tangents meet: two numbers fewer than a cubic); otherwise a cubic Hermite piece (the end
 derivatives), then a least-squares cubic with the same tangent directions, and if
 neither is within the tolerance the piece is split at its middle sample.
 
@@ -72,6 +72,20 @@ def _max_error(c, u, q, lo, hi):
         if best > worst:
             worst = best
     return math.sqrt(worst)
+
+
+@njit(cache=True)
+def _forward(c, u, g, lo, hi):
+    """True when the cubic c moves the way the mapped curve does at every sample
+    (B'(u_i) · g_i > 0): a fitted piece never doubles back or loops between samples."""
+    for i in range(lo, hi):
+        uu = u[i - lo]
+        s = 1.0 - uu
+        dx = 3.0 * (s * s * (c[1, 0] - c[0, 0]) + 2.0 * s * uu * (c[2, 0] - c[1, 0]) + uu * uu * (c[3, 0] - c[2, 0]))
+        dy = 3.0 * (s * s * (c[1, 1] - c[0, 1]) + 2.0 * s * uu * (c[2, 1] - c[1, 1]) + uu * uu * (c[3, 1] - c[2, 1]))
+        if dx * g[i, 0] + dy * g[i, 1] <= 0.0:
+            return False
+    return True
 
 
 @njit(cache=True)
@@ -187,7 +201,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
             continue
         t0x, t0y, t3x, t3y = d0x / n0, d0y / n0, d3x / n3, d3y / n3
         best_err = 1e300
-        if order == 2:  # quadratic: control point where the end tangents meet
+        if True:  # a quadratic when one fits (fewer numbers): control point where the end tangents meet
             det = t0x * t3y - t3x * t0y  # p0 + al·t0 = p3 - be·t3
             if abs(det) > 1e-9:
                 vx, vy = p3x - p0x, p3y - p0y
@@ -200,6 +214,8 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
                     c[2, 0], c[2, 1] = p3x + 2.0 / 3.0 * (cx - p3x), p3y + 2.0 / 3.0 * (cy - p3y)
                     c[3, 0], c[3, 1] = p3x, p3y
                     err = _max_error(c, u, q, a, b)
+                    if not _forward(c, u, g, a, b):
+                        err = 1e300
                     if err <= tol:
                         out_o[n_out] = 2
                         out_c[n_out, 0, 0], out_c[n_out, 0, 1] = p0x, p0y
@@ -218,6 +234,8 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
         c[2, 0], c[2, 1] = p3x - d3x / 3.0, p3y - d3y / 3.0
         c[3, 0], c[3, 1] = p3x, p3y
         err = _max_error(c, u, q, a, b)
+        if not _forward(c, u, g, a, b):
+            err = 1e299
         done = err <= tol
         if err < best_err:
             best[:, :] = c
@@ -226,13 +244,15 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
             for _ in range(2):
                 _lsq(q, u, a, b, c)
                 err = _max_error(c, u, q, a, b)
+                if not _forward(c, u, g, a, b):
+                    err = 1e299
                 if err < best_err:
                     best[:, :] = c
                     best_err = err
                 if err <= tol:
                     done = True
                     break
-        if done or m < 5 or depth >= MAX_DEPTH:
+        if done or m < 3 or depth >= MAX_DEPTH:
             out_o[n_out] = 3
             out_c[n_out, :, :] = best
             n_out += 1

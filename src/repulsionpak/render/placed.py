@@ -62,10 +62,21 @@ def element_vertices(model: Model, state: State, e: int) -> np.ndarray:
 def affine_fit(rest: np.ndarray, cur: np.ndarray) -> np.ndarray:
     """Least-squares affine map (3, 3) from ``rest`` (n, 2) to ``cur`` (n, 2)."""
     a = np.column_stack([rest, np.ones(len(rest))])
-    sol = np.linalg.lstsq(a, cur, rcond=None)[0]  # (3, 2)
+    ata = a.T @ a
     m = np.eye(3)
-    m[:2, :] = sol.T
+    det = float(np.linalg.det(ata)) if len(rest) >= 3 else 0.0
+    if not abs(det) > 1e-12 * max(1.0, float(np.abs(ata).max())) ** 3:
+        return m  # degenerate rest shape: no usable affine fit
+    m[:2, :] = (_inv3(ata) @ (a.T @ cur)).T
     return m
+
+
+def _inv3(m: np.ndarray) -> np.ndarray:
+    """Inverse of a 3 × 3 matrix by cofactors (no LAPACK call per copy)."""
+    c = np.array([[m[1, 1] * m[2, 2] - m[1, 2] * m[2, 1], m[0, 2] * m[2, 1] - m[0, 1] * m[2, 2], m[0, 1] * m[1, 2] - m[0, 2] * m[1, 1]],
+                  [m[1, 2] * m[2, 0] - m[1, 0] * m[2, 2], m[0, 0] * m[2, 2] - m[0, 2] * m[2, 0], m[0, 2] * m[1, 0] - m[0, 0] * m[1, 2]],
+                  [m[1, 0] * m[2, 1] - m[1, 1] * m[2, 0], m[0, 1] * m[2, 0] - m[0, 0] * m[2, 1], m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]]])
+    return c / (m[0, 0] * c[0, 0] + m[0, 1] * c[1, 0] + m[0, 2] * c[2, 0])
 
 
 def _rest_matrix(t: Template) -> np.ndarray:
