@@ -156,8 +156,12 @@ class RenderParams:
     max_gap_share: float = _doc(
         0.02, "× gap", "The curve tolerance never exceeds this share of the gap, so fitting "
         "cannot eat into the gap between neighbours.")
+    angle_tolerance: float = _doc(
+        1.0, "degrees", "Largest angle between the written curve's direction and the exact "
+        "mapped outline's at any sample: keeps the curvature of the fit close to the exact "
+        "one, so smooth art has no visible bends at the joints of the fitted pieces.")
     samples: float = _doc(
-        4.0, "per mesh spacing", "Samples of each source segment per mesh edge length when "
+        8.0, "per mesh spacing", "Samples of each source segment per mesh edge length when "
         "mapping it (at least 4, at most 64 per segment).")
 
 
@@ -230,6 +234,7 @@ class Params:
             (1e-7 <= self.render.curve_tolerance <= 0.05, "render.curve_tolerance must be in [1e-7, 0.05]"),
             (0 < self.render.max_gap_share <= 0.5, "render.max_gap_share must be in (0, 0.5]"),
             (1 <= self.render.samples <= 64, "render.samples must be in [1, 64]"),
+            (0.05 <= self.render.angle_tolerance <= 45, "render.angle_tolerance must be in [0.05, 45] degrees"),
         ]
         for ok, msg in checks:
             if not ok:

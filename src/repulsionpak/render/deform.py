@@ -215,7 +215,7 @@ def _samples_per_segment(ctrl: np.ndarray, order: int, spacing: float, density: 
     return int(min(128, max(8, math.ceil(n))))
 
 
-def build_plan(template, smooth: bool = True, density: float = 4.0) -> MapPlan:
+def build_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
     """Sample ``template``'s art and compute the weights (see :class:`MapPlan`)."""
     verts, tris = template.verts, template.tris
     e = verts[np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])]
@@ -259,7 +259,7 @@ def build_plan(template, smooth: bool = True, density: float = 4.0) -> MapPlan:
 _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
-def map_plan(template, smooth: bool = True, density: float = 4.0) -> MapPlan:
+def map_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
     """:func:`build_plan`, cached per template (plans depend on the rest shape only)."""
     per = _PLANS.setdefault(template, {})
     key = (bool(smooth), float(density))

@@ -75,15 +75,18 @@ def _max_error(c, u, q, lo, hi):
 
 
 @njit(cache=True)
-def _forward(c, u, g, lo, hi):
-    """True when the cubic c moves the way the mapped curve does at every sample
-    (B'(u_i) · g_i > 0): a fitted piece never doubles back or loops between samples."""
+def _forward(c, u, g, lo, hi, cos_tol):
+    """True when the cubic c heads the way the mapped curve does at every sample: the
+    angle between B'(u_i) and g_i is below the angle tolerance. A fitted piece then never
+    doubles back, loops, or bends sharply where the exact curve does not."""
     for i in range(lo, hi):
         uu = u[i - lo]
         s = 1.0 - uu
         dx = 3.0 * (s * s * (c[1, 0] - c[0, 0]) + 2.0 * s * uu * (c[2, 0] - c[1, 0]) + uu * uu * (c[3, 0] - c[2, 0]))
         dy = 3.0 * (s * s * (c[1, 1] - c[0, 1]) + 2.0 * s * uu * (c[2, 1] - c[1, 1]) + uu * uu * (c[3, 1] - c[2, 1]))
-        if dx * g[i, 0] + dy * g[i, 1] <= 0.0:
+        dot = dx * g[i, 0] + dy * g[i, 1]
+        n = math.hypot(dx, dy) * math.hypot(g[i, 0], g[i, 1])
+        if dot <= 0.0 or (n > 0 and dot < cos_tol * n):
             return False
     return True
 
@@ -144,7 +147,8 @@ def _lsq(q, u, lo, hi, c):
 
 
 @njit(cache=True)
-def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, out_o, out_c, n_out):
+def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey, use_te, out_o, out_c,
+               n_out):
     """Fit samples [lo, hi) (ends included); appends pieces; returns the new count."""
     # explicit stack of pieces (lo, hi, depth, use_ts, use_te), processed left to right
     stack = np.empty((2 * MAX_DEPTH + 4, 5), np.int64)
@@ -201,7 +205,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
             continue
         t0x, t0y, t3x, t3y = d0x / n0, d0y / n0, d3x / n3, d3y / n3
         best_err = 1e300
-        if True:  # a quadratic when one fits (fewer numbers): control point where the end tangents meet
+        if order == 2:  # a quadratic when one fits (fewer numbers): control point where the end tangents meet
             det = t0x * t3y - t3x * t0y  # p0 + al·t0 = p3 - be·t3
             if abs(det) > 1e-9:
                 vx, vy = p3x - p0x, p3y - p0y
@@ -214,7 +218,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
                     c[2, 0], c[2, 1] = p3x + 2.0 / 3.0 * (cx - p3x), p3y + 2.0 / 3.0 * (cy - p3y)
                     c[3, 0], c[3, 1] = p3x, p3y
                     err = _max_error(c, u, q, a, b)
-                    if not _forward(c, u, g, a, b):
+                    if not _forward(c, u, g, a, b, cos_tol):
                         err = 1e300
                     if err <= tol:
                         out_o[n_out] = 2
@@ -234,7 +238,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
         c[2, 0], c[2, 1] = p3x - d3x / 3.0, p3y - d3y / 3.0
         c[3, 0], c[3, 1] = p3x, p3y
         err = _max_error(c, u, q, a, b)
-        if not _forward(c, u, g, a, b):
+        if not _forward(c, u, g, a, b, cos_tol):
             err = 1e299
         done = err <= tol
         if err < best_err:
@@ -244,7 +248,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
             for _ in range(2):
                 _lsq(q, u, a, b, c)
                 err = _max_error(c, u, q, a, b)
-                if not _forward(c, u, g, a, b):
+                if not _forward(c, u, g, a, b, cos_tol):
                     err = 1e299
                 if err < best_err:
                     best[:, :] = c
@@ -266,7 +270,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, tsx, tsy, use_ts, tex, tey, use_te, 
 
 
 @njit(cache=True)
-def _fit_chain(order, seg_start, closed, q, g, t, tol, snap):
+def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
     n = len(order)
     straight = np.zeros(n, np.bool_)
     for k in range(n):
@@ -309,24 +313,26 @@ def _fit_chain(order, seg_start, closed, q, g, t, tol, snap):
     out_c = np.empty((cap, 4, 2))
     n_out = 0
     for k in range(n):
-        n_out = _fit_piece(order[k], q, g, t, seg_start[k], seg_start[k + 1], tol,
+        n_out = _fit_piece(order[k], q, g, t, seg_start[k], seg_start[k + 1], tol, cos_tol,
                            ts[k, 0], ts[k, 1], use_ts[k], te[k, 0], te[k, 1], use_te[k],
                            out_o, out_c, n_out)
     return out_o[:n_out], out_c[:n_out]
 
 
 def fit_subpath(order: np.ndarray, seg_start: np.ndarray, closed: bool, q: np.ndarray,
-                g: np.ndarray, t: np.ndarray, tol: float) -> CurveSubpath | None:
+                g: np.ndarray, t: np.ndarray, tol: float, angle_tol: float = 1.0) -> CurveSubpath | None:
     """Fit every segment of one mapped subpath; returns the written curves (or None).
 
     ``order`` (n,) source segment orders, ``seg_start`` (n + 1,) sample ranges into the
     mapped samples ``q`` (P, 2) with derivatives ``g`` (P, 2) (d/dt) at segment
-    parameters ``t`` (P,) (see ``MapPlan``); ``tol`` the largest distance allowed.
+    parameters ``t`` (P,) (see ``MapPlan``); ``tol`` the largest distance allowed,
+    ``angle_tol`` (degrees) the largest angle between the fitted and the exact curve's
+    direction at any sample.
     """
     orders, ctrl = _fit_chain(np.asarray(order, np.int64), np.asarray(seg_start, np.int64),
                               bool(closed), np.ascontiguousarray(q, dtype=float),
                               np.ascontiguousarray(g, dtype=float), np.ascontiguousarray(t, dtype=float),
-                              float(tol), SNAP_ANGLE)
+                              float(tol), math.cos(math.radians(angle_tol)), SNAP_ANGLE)
     if len(orders) == 0:
         return None
     ctrl = ctrl.copy()

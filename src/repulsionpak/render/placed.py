@@ -108,7 +108,8 @@ def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
     for art, subs, starts in zip(t.element.paths, plan.curves, plan.seg_start):
         curves = []
         for sub, st in zip(subs, starts):
-            c = fit_subpath(sub.order, st, sub.closed, q, g, plan.t, FIT_SHARE * tol)
+            c = fit_subpath(sub.order, st, sub.closed, q, g, plan.t, FIT_SHARE * tol,
+                            params.angle_tolerance)
             if c is not None:
                 curves.append(c)
         if not curves:
