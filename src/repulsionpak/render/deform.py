@@ -31,7 +31,6 @@ from numba import njit
 
 from ..geometry.mesh import bind_points
 from ..types import CurveSubpath
-from .curves import bezier, bezier_deriv
 
 __all__ = ["MapPlan", "art_curves", "map_plan", "tps_weights", "linear_weights"]
 
@@ -97,11 +96,21 @@ def _solve(a, b):
 
 def tps_weights(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
                 chunk: int = 4096) -> tuple[np.ndarray, np.ndarray | None]:
+    """Thin-plate-spline weights (see :func:`tps_factors`): ``W`` (P, N) and ``D``."""
+    B, DB, coef = tps_factors(rest, points, directions)
+    return B @ coef, (None if DB is None else DB @ coef)
+
+
+def tps_factors(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
+                chunk: int = 4096) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Thin-plate-spline weights of ``points`` (P, 2) w.r.t. the centres ``rest`` (N, 2).
 
-    Returns ``W`` (P, N) with ``f(points) = W @ x`` for deformed centres ``x`` (N, 2), and,
-    when ``directions`` (P, 2) are given, ``D`` (P, N) with ``Df(points)·directions = D @ x``.
-    Rows of W sum to 1 and rows of D to 0 (affine maps are reproduced exactly).
+    Returns ``(B, DB, C)``: ``W = B @ C`` (P, N) gives ``f(points) = W @ x`` for deformed
+    centres ``x`` (N, 2), and, when ``directions`` (P, 2) are given, ``D = DB @ C`` gives
+    ``Df(points)·directions = D @ x``. Rows of W sum to 1 and rows of D to 0 (affine maps
+    are reproduced exactly). ``B``, ``DB`` (P, N + 3) are the kernel rows, ``C``
+    (N + 3, N) the spline coefficients of each unit vertex: mapping a copy as
+    ``B @ (C @ x)`` avoids ever forming the (P, N) product.
     """
     rest = np.asarray(rest, dtype=float)
     points = np.asarray(points, dtype=float)
@@ -120,20 +129,21 @@ def tps_weights(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | N
     coef = _solve(a, rhs)  # (N+3, N): spline coefficients per unit vertex
     if not np.all(np.isfinite(coef)):  # coincident centres: least-squares solution
         coef = np.linalg.lstsq(a, rhs, rcond=None)[0]
-    W = np.empty((len(points), n))
-    D = None if directions is None else np.empty((len(points), n))
+    W = np.empty((len(points), n + 3))
+    D = None if directions is None else np.empty((len(points), n + 3))
+    qq = (q * q).sum(axis=1)
     for i in range(0, len(points), chunk):
         p = (points[i : i + chunk] - c0) / s
-        diff = p[:, None, :] - q[None, :, :]
-        r2 = (diff**2).sum(-1)
+        r2 = np.maximum((p * p).sum(axis=1)[:, None] + qq[None, :] - 2.0 * (p @ q.T), 0.0)
         b = np.concatenate([_kernel(r2), np.ones((len(p), 1)), p], axis=1)
-        W[i : i + chunk] = b @ coef
+        W[i : i + chunk] = b
         if D is not None:
             d = np.asarray(directions[i : i + chunk], dtype=float) / s
-            g = _kernel_grad_factor(r2) * np.einsum("pnk,pk->pn", diff, d)
+            proj = (p * d).sum(axis=1)[:, None] - d @ q.T  # (p - q_j) · d
+            g = _kernel_grad_factor(r2) * proj
             db = np.concatenate([g, np.zeros((len(p), 1)), d], axis=1)
-            D[i : i + chunk] = db @ coef
-    return W, D
+            D[i : i + chunk] = db
+    return W, D, coef
 
 
 def linear_weights(rest: np.ndarray, tris: np.ndarray, points: np.ndarray,
@@ -181,7 +191,8 @@ class MapPlan:
     ``seg_start[a][s]`` (n_seg + 1,) indexes the samples of each of its segments
     (segment k owns samples ``seg_start[k] .. seg_start[k+1] - 1``, at t = 0, 1/n, ...,
     1: both end points included). ``t`` (P,) are the samples' segment parameters,
-    ``W``/``D`` (P, N) the position and derivative (d/dt) weights.
+    ``W``/``D`` (P, K) the position and derivative (d/dt) weights, applied to
+    ``R @ verts`` (``R`` (K, N): the spline coefficients; None for the barycentric map).
     """
 
     curves: tuple[tuple[CurveSubpath, ...], ...]
@@ -191,28 +202,58 @@ class MapPlan:
     W: np.ndarray
     D: np.ndarray
     smooth: bool
+    R: np.ndarray | None = None
 
     def apply(self, verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mapped samples (P, 2) and their derivatives d/dt (P, 2) for deformed ``verts``."""
-        return self.W @ verts, self.D @ verts
+        x = verts if self.R is None else self.R @ verts
+        return self.W @ x, self.D @ x
 
 
-def _samples_per_segment(ctrl: np.ndarray, order: int, spacing: float, density: float,
-                         tol: float) -> int:
-    """``density`` samples per mesh spacing along the segment, and enough that the source
-    curve is within ``tol`` of the chords between samples; 8 to 128."""
-    length = float(np.hypot(*np.diff(ctrl[: order + 1], axis=0).T).sum())
+def _as_cubics(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
+    """Every segment as cubic control points (n, 4, 2), same parametrisation (lines and
+    quadratics are degree-elevated exactly)."""
+    c = ctrl.copy()
+    q = order == 2
+    c[q, 1] = ctrl[q, 0] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 0])
+    c[q, 2] = ctrl[q, 2] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 2])
+    c[q, 3] = ctrl[q, 2]
+    ln = order == 1
+    c[ln, 1] = ctrl[ln, 0] + (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
+    c[ln, 2] = ctrl[ln, 0] + 2.0 * (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
+    c[ln, 3] = ctrl[ln, 1]
+    return c
+
+
+def _samples_per_segment(order: np.ndarray, cubic: np.ndarray, spacing: float, density: float,
+                         tol: float) -> np.ndarray:
+    """Intervals per segment: ``density`` per mesh spacing along it, and enough that the
+    source curve is within ``tol`` of the chords between samples; curves 8 to 128,
+    lines 3 to 128 (a line's map only varies at the mesh's scale)."""
+    length = np.hypot(*np.diff(cubic, axis=1).transpose(2, 0, 1)).sum(axis=1)
     n = density * length / spacing
-    if order == 2:
-        bound = 2.0 * float(np.hypot(*(ctrl[0] - 2 * ctrl[1] + ctrl[2])))
-    elif order == 3:
-        bound = 6.0 * max(float(np.hypot(*(ctrl[0] - 2 * ctrl[1] + ctrl[2]))),
-                          float(np.hypot(*(ctrl[1] - 2 * ctrl[2] + ctrl[3]))))
-    else:
-        bound = 0.0
-    if bound > 0 and tol > 0:
-        n = max(n, math.sqrt(bound / (8.0 * tol)))
-    return int(min(128, max(8, math.ceil(n))))
+    d1 = np.hypot(*(cubic[:, 0] - 2 * cubic[:, 1] + cubic[:, 2]).T)
+    d2 = np.hypot(*(cubic[:, 1] - 2 * cubic[:, 2] + cubic[:, 3]).T)
+    bound = 6.0 * np.maximum(d1, d2)
+    if tol > 0:
+        n = np.maximum(n, np.sqrt(bound / (8.0 * tol)))
+    low = np.where(order == 1, 3, 8)
+    return np.minimum(128, np.maximum(low, np.ceil(n))).astype(np.int64)
+
+
+def _sample_chain(order: np.ndarray, ctrl: np.ndarray, spacing: float, density: float, tol: float):
+    """Samples of one subpath: points, derivatives d/dt, parameters, segment starts."""
+    c = _as_cubics(order, ctrl)
+    n = _samples_per_segment(order, c, spacing, density, tol)
+    seg = np.repeat(np.arange(len(order)), n + 1)
+    first = np.concatenate([[0], np.cumsum(n + 1)])
+    t = (np.arange(len(seg)) - first[seg]) / n[seg]
+    cc = c[seg]
+    tt = t[:, None]
+    s = 1.0 - tt
+    pts = s**3 * cc[:, 0] + 3 * s * s * tt * cc[:, 1] + 3 * s * tt * tt * cc[:, 2] + tt**3 * cc[:, 3]
+    der = 3 * s * s * (cc[:, 1] - cc[:, 0]) + 6 * s * tt * (cc[:, 2] - cc[:, 1]) + 3 * tt * tt * (cc[:, 3] - cc[:, 2])
+    return pts, der, t, first
 
 
 def build_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
@@ -233,27 +274,23 @@ def build_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
     for subs_in in rest_curves:
         subs, starts = [], []
         for sub in subs_in:
-            st = [count]
-            for o, c in zip(sub.order, sub.ctrl):
-                n = _samples_per_segment(c, int(o), spacing, density, tol)
-                t = np.arange(n + 1) / n
-                pts.append(bezier(c, int(o), t))
-                ders.append(bezier_deriv(c, int(o), t))
-                ts.append(t)
-                count += n + 1
-                st.append(count)
+            p_, d_, t_, first = _sample_chain(sub.order, sub.ctrl, spacing, density, tol)
+            pts.append(p_)
+            ders.append(d_)
+            ts.append(t_)
+            starts.append(first + count)
+            count += len(t_)
             subs.append(sub)
-            starts.append(np.asarray(st))
         curves_out.append(tuple(subs))
         starts_out.append(tuple(starts))
     points = np.concatenate(pts) if pts else np.zeros((0, 2))
     dirs = np.concatenate(ders) if ders else np.zeros((0, 2))
     t = np.concatenate(ts) if ts else np.zeros(0)
     if smooth:
-        W, D = tps_weights(verts, points, dirs)
+        W, D, R = tps_factors(verts, points, dirs)
     else:
-        W, D = linear_weights(verts, tris, points, dirs)
-    return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth)
+        (W, D), R = linear_weights(verts, tris, points, dirs), None
+    return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth, R)
 
 
 _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
