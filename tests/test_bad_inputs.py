@@ -258,6 +258,63 @@ def test_pathological_inputs_are_time_bounded(tmp_path):
     assert time.perf_counter() - t0 < 10.0
 
 
+# --------------------------------------------------------------------------- empty elements fail fast
+
+
+def test_zero_area_element_fails_fast_through_the_process(tmp_path):
+    """Issue 10: two arcs retracing each other used to run 20,000 iterations (105 s) and
+    place nothing. Now: exit 2 naming the file, before any simulation. The real time
+    (interpreter start and imports included) is well under a second on a quiet
+    machine; the bound here only allows for CI noise."""
+    bad = BAD / "zero_area_arcs.svg"
+    out = tmp_path / "o.svg"
+    t0 = time.perf_counter()
+    res = _run(["pack", str(CIRCLE), str(bad), "-o", str(out)], tmp_path)  # default options
+    wall = time.perf_counter() - t0
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.splitlines() == [
+        f"repulsionpak: error: {bad}: has (almost) zero area: its shapes enclose 2.73e-14 "
+        "square units in a 20 × 9.98 bounding box (e.g. a path that retraces itself, or a "
+        "zero-width shape); an element needs a filled or stroked area"]
+    assert not out.exists()
+    assert wall < 10.0
+    t0 = time.perf_counter()
+    with pytest.raises(InputError, match=r"zero_area_arcs\.svg: has \(almost\) zero area"):
+        load_element(bad)
+    assert time.perf_counter() - t0 < 1.0
+
+
+def test_zero_area_element_built_in_code_is_refused_by_pack():
+    """The library API checks too (preprocess), before placing or simulating anything."""
+    import numpy as np
+
+    from repulsionpak import Params, pack
+    from repulsionpak.types import ArtPath, Element, Style
+
+    t = np.linspace(0.0, np.pi, 50)
+    arc = np.c_[10 - 10 * np.cos(t), -10 * np.sin(t)]
+    there_and_back = np.vstack([arc, arc[-2:0:-1] + [0.0, 1e-9]])  # encloses ~3e-8
+    flat = Element("flat", "flat-in-code", (ArtPath((there_and_back,), (True,), Style()),))
+    t0 = time.perf_counter()
+    with pytest.raises(InputError, match=r"flat-in-code: has \(almost\) zero area"):
+        pack(load_container(CIRCLE), [load_element(APPLE), flat], Params(gap=10, seed=1))
+    assert time.perf_counter() - t0 < 10.0
+
+
+def test_extremely_thin_element_warns(tmp_path):
+    hair = tmp_path / "hair.svg"
+    hair.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                    '<path d="M10,10 L90,90" stroke="#000" stroke-width="0.001"/></svg>')
+    with pytest.warns(UserWarning, match=r"hair\.svg: the art is extremely thin \(mean thickness 8\.8e-06"):
+        el = load_element(hair)
+    assert el.paths[0].style.stroke_width == pytest.approx(0.001)
+    thin = tmp_path / "thin.svg"  # a 1-unit stroke on a 113-unit line is fine
+    thin.write_text(hair.read_text().replace('stroke-width="0.001"', 'stroke-width="1"'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_element(thin)
+
+
 # --------------------------------------------------------------------------- not errors
 
 
@@ -386,3 +443,51 @@ def test_triangle_area_switch_has_no_exponent(monkeypatch):
     with pytest.raises(_Captured):
         triangulate_polygon(ring, max_area=1e14)
     assert re.search(r"a[0-9.]+[eE][+-]?[0-9]", seen[0]) is None, seen[0]
+
+
+# --------------------------------------------------------------------------- containers are geometry
+
+
+def test_unpainted_container_packs(tmp_path):
+    """Issue 10: a container drawn with fill="none" and no stroke was refused ("has no
+    closed path"); a container is geometry, not appearance."""
+    bare = BAD / "fill_none_stroke_none.svg"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a pure-geometry file gets no warning
+        c = load_container(bare)
+        assert c.area == pytest.approx(2500.0) and c.bounds == (10.0, 10.0, 60.0, 60.0)
+        diamond = load_container(Path(__file__).parent / "fixtures" / "container_unpainted.svg")
+    assert diamond.area == pytest.approx(0.5 * 160 * 160 - 20 * 20)  # hole subtracted
+    out = tmp_path / "o.svg"
+    res = CliRunner().invoke(app, ["pack", str(bare), str(APPLE), "-o", str(out),
+                                   "--count", "3", "--max-iterations", "200", "--gap", "1",
+                                   "--seed", "1", "-q"])
+    assert res.exit_code == 0, res.stderr
+    from repulsionpak.io import read_packing_svg
+
+    cont, placed, _ = read_packing_svg(out)
+    assert cont.area == pytest.approx(2500.0) and len(placed) == 3
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_container_shapes_count_whatever_their_paint_but_not_when_hidden(tmp_path):
+    p = tmp_path / "paint.svg"
+    p.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                 '<rect width="10" height="10" fill="none"/>'
+                 '<rect x="20" width="10" height="10" fill="#fff" opacity="0"/>'
+                 '<rect x="40" width="10" height="10" style="fill-opacity:0;stroke:none"/>'
+                 '<rect x="60" width="10" height="10" visibility="hidden"/>'
+                 '<rect x="80" width="10" height="10" style="display:none"/></svg>')
+    c = load_container(p)
+    assert c.area == pytest.approx(300.0) and c.bounds == (0.0, 0.0, 50.0, 10.0)
+
+
+def test_unpainted_helper_next_to_a_painted_outline_warns(tmp_path):
+    """An icon's invisible bounding square counts (it is geometry) but is reported."""
+    p = tmp_path / "icon.svg"
+    p.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 24 24">'
+                 '<path d="M0 0h24v24H0z" fill="none"/><circle cx="12" cy="12" r="8"/></svg>')
+    with pytest.warns(UserWarning, match=r"icon\.svg: 1 shape\(s\) with neither fill nor stroke "
+                      r"count as container geometry and add 65% of its area"):
+        c = load_container(p)
+    assert c.area == pytest.approx(576.0)

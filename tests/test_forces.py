@@ -745,3 +745,35 @@ def test_corner_force_pushes_the_triangle_holding_the_corner_and_only_it():
     F[:] = 0.0  # a frozen element is not pushed
     corner_force(x, corners, ptr, cand, tris, tri_elem, np.array([False]), 10.0, F)
     assert not F.any()
+
+
+def test_shape_force_is_zero_for_a_similarity_and_undoes_a_shear():
+    """Shape matching (beyond the paper): no force on a rotated, scaled, moved copy of the
+    rest shape; a sheared copy is pulled back towards a similarity (the shear shrinks)."""
+    from repulsionpak.sim.forces import shape_force
+
+    rng = np.random.default_rng(3)
+    rest = rng.uniform(-10, 10, (30, 2))
+    start = np.array([0, 30], np.int32)
+    moving = np.ones(1, bool)
+    stiff = np.ones(1)
+    a = 0.7
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    x = rest @ rot.T * 1.8 + [50.0, -20.0]
+    F = np.zeros_like(x)
+    shape_force(x, rest, start, moving, stiff, 5.0, F)
+    assert np.abs(F).max() < 1e-9
+    sheared = rest @ np.array([[1.0, 0.4], [0.0, 1.0]]).T
+    F[:] = 0
+    shape_force(sheared, rest, start, moving, stiff, 5.0, F)
+    moved = sheared + 0.05 * F
+
+    def shear_residual(p):  # rms distance from the best similarity of the rest shape
+        za = (rest - rest.mean(0)) @ [1, 1j]
+        zb = (p - p.mean(0)) @ [1, 1j]
+        c = np.vdot(za, zb) / np.vdot(za, za)
+        return np.sqrt(np.mean(np.abs(zb - c * za) ** 2))
+    assert shear_residual(moved) < 0.9 * shear_residual(sheared)
+    F[:] = 0
+    shape_force(sheared, rest, start, ~moving, stiff, 5.0, F)  # frozen: no force
+    assert not F.any()

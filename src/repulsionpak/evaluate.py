@@ -10,6 +10,9 @@ Metrics
 * :func:`art_geometry` – the area one placed element's art actually paints (fills with
   their fill rule, plus strokes buffered by half the scaled stroke width).
 * :func:`area_fraction`, :func:`overlap_area`, :func:`outside`, :func:`gap_statistics`.
+* From :mod:`repulsionpak.metrics` (issue 10, art only): the exact area outside the
+  container, each element's distance to the container's edge and its distortion from
+  its source (when the sources are given).
 * :func:`scp` – the spherical contact probability Q_s(r): the probability that a disc of
   radius r centred at a uniformly random point of the container lies entirely in the
   negative space (inside the container, outside every element's art), and
@@ -50,6 +53,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
+from . import metrics as _metrics
 from .errors import ParameterError
 from .geometry.edt import distance_transform
 from .geometry.outline import _polygonal, art_area
@@ -469,6 +473,8 @@ def evaluate(
     *,
     outside_tol: float | None = None,
     with_scp: bool = True,
+    sources=None,
+    margin: float | None = None,
 ) -> dict:
     """All metrics of a packing as a JSON-serialisable dict (DESIGN.md "Evaluate JSON").
 
@@ -481,6 +487,15 @@ def evaluate(
     ``scp_at_half_gap`` = Q_s(gap/2) and ``scp_ratio`` = Q_s(gap/2)/Q_s(0).
     With ``with_scp=False`` the three SCP entries are ``None`` (the raster and its
     distance transform are the slow part; ``pack`` reports do without them).
+
+    Issue 10's art-only measurements (:mod:`repulsionpak.metrics`):
+    ``outside_area`` (art area outside the container, exact), ``edge`` {min, margin,
+    n_below_margin, values}: each element's art distance to the container's boundary,
+    and how many are closer than 0.98 × ``margin`` (default gap/2); ``distortion``
+    {median, p95, max, values}: per element, area(best similar copy of its source △
+    the placed art) / its area. ``sources`` gives the source art: a mapping
+    ``data-source`` name → shapely geometry, or the library :class:`Element` s; without
+    it (or for an unknown name) the distortion values are ``None``.
     """
     if gap is None or not np.isfinite(gap) or gap <= 0:
         raise ParameterError(f"gap must be a positive number, got {gap!r}")
@@ -494,6 +509,15 @@ def evaluate(
     gs["requested"] = gap
     defs = [None if p.deformation is None else float(p.deformation) for p in placed]
     known = [d for d in defs if d is not None and np.isfinite(d)]
+    edges = _metrics.edge_distances(region, geoms)
+    margin = 0.5 * gap if margin is None else float(margin)
+    if not (np.isfinite(margin) and margin >= 0):
+        raise ParameterError(f"margin must be a non-negative number, got {margin!r}")
+    known_edges = [e for e in edges if e is not None]
+    if sources is not None and not isinstance(sources, dict):
+        sources = _metrics.source_geometries(sources)
+    dist = (_metrics.distortions(geoms, [p.source for p in placed], sources) if sources
+            else [None] * len(placed))
     s = q_half = q0 = None
     if with_scp:
         s = scp(region, geoms, grid=grid, gap=gap)
@@ -515,17 +539,27 @@ def evaluate(
             "max": float(np.max(known)) if known else None,
             "values": defs,
         },
+        "outside_area": _metrics.outside_area(region, geoms),
+        "edge": {
+            "min": min(known_edges) if known_edges else None,
+            "margin": margin,
+            "n_below_margin": sum(1 for e in known_edges if e < 0.98 * margin),
+            "values": edges,
+        },
+        "distortion": _metrics.distortion_summary(dist),
         "scp": s,
         "scp_at_half_gap": q_half,
         "scp_ratio": (q_half / q0) if (q_half is not None and q0) else None,
     }
 
 
-def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int = 1000) -> dict:
+def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int = 1000,
+                  sources=None) -> dict:
     """:func:`evaluate` of a packing SVG written by repulsionpak.
 
     The gap is ``gap`` if given, else the root's ``data-gap``; :class:`ParameterError`
-    when neither is known.
+    when neither is known. ``sources``: the source element art for the distortion
+    (see :func:`evaluate`), e.g. ``load_elements([...])``.
     """
     from .io import read_packing_svg  # local: io is written separately
 
@@ -541,7 +575,7 @@ def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int =
                 break
     if gap is None:
         raise ParameterError(f"{path}: the file has no data-gap; give the gap explicitly (--gap)")
-    result = evaluate(container, placed, gap, grid=grid)
+    result = evaluate(container, placed, gap, grid=grid, sources=sources)
     result["file"] = str(path)
     return result
 
@@ -577,6 +611,15 @@ def format_table(result: dict) -> str:
         ("gap p10 / p90", f"{_fmt(g.get('p10'))} / {_fmt(g.get('p90'))}"),
         ("deformation mean / max", f"{_fmt(d.get('mean'))} / {_fmt(d.get('max'))}"),
     ]
+    if "outside_area" in result:
+        rows.append(("outside area", _fmt(result.get("outside_area"))))
+    e = result.get("edge") or {}
+    if e:
+        rows.append(("edge distance min", _fmt(e.get("min"))))
+        rows.append((f"closer than {_fmt(e.get('margin'))} to edge", _fmt(e.get("n_below_margin"))))
+    dd = result.get("distortion") or {}
+    if dd.get("median") is not None:
+        rows.append(("distortion median / p95", f"{_fmt(dd.get('median'))} / {_fmt(dd.get('p95'))}"))
     s = result.get("scp") or {}
     if s.get("q"):
         rows.append(("Q_s(0) = 1 - A (raster)", _fmt(s["q"][0])))

@@ -13,10 +13,11 @@ from .errors import ParameterError
 from .params import Params
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
 from .preprocess import Outline, Template, build_template, outline_of
-from .render import placed_art, skin_polygons
+from .render import is_convex, placed_art, rest_art, skin_polygons
 from .sim.model import Model, SimFrame, State, build_model
 from .sim.runner import Simulator, Snapshot
 from .types import Container, Element, PlacedArt
+from .verify import Verification, straighten, verify_and_repair
 
 
 @dataclass(eq=False)
@@ -35,6 +36,7 @@ class Packing:
     seconds: dict[str, float] = field(default_factory=dict)
     stopped_by: dict[str, str] = field(default_factory=dict)
     area_fraction_meshes: float = 0.0
+    verification: Verification | None = None
 
     @property
     def partial(self) -> bool:
@@ -56,6 +58,32 @@ def default_gap(container: Container) -> float:
     """1% of the container's larger side, to 4 significant digits (a readable data-gap)."""
     minx, miny, maxx, maxy = container.bounds
     return float(f"{0.01 * max(maxx - minx, maxy - miny):.4g}")
+
+
+def bend_limits(templates, template_index, sim) -> np.ndarray:
+    """Per-element deformation limit of the mesh (``sim/shape.py``) that keeps the art's
+    distortion below ``sim.bend_limit`` (``bend_limit_convex`` for convex elements).
+
+    The art's distortion (symmetric difference over area) is about the mean normal
+    displacement of its outline over its mean half-width h = area / perimeter (thin strokes
+    show a bend more than a disc); the mesh limit is an RMS displacement relative to the
+    mesh's RMS radius R, so it is the art limit × h / R (× 0.8 for the difference between
+    an RMS and a mean)."""
+    out = {}
+    for ti in set(int(t) for t in template_index):
+        t = templates[ti]
+        d = sim.bend_limit_convex if is_convex(t) else sim.bend_limit
+        o = t.outline
+        h = t.scale * o.area / max(o.perimeter, 1e-300)
+        v = t.verts - t.verts.mean(axis=0)
+        r = float(np.sqrt((v ** 2).sum(axis=1).mean()))
+        out[ti] = 0.8 * d * h / r if r > 0 else 0.0
+    return np.array([out[int(ti)] for ti in template_index])
+
+
+def margin_of(params: Params, gap: float) -> float:
+    """The edge margin in container units: ``params.margin``, or half the gap."""
+    return 0.5 * gap if params.margin is None else float(params.margin)
 
 
 def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float:
@@ -113,6 +141,10 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
     model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
                                gap=gap / frame.unit)
+    # skins rest inside the container by boundary_inset; where the margin asks for more
+    # than the skin's width, the rest of it moves the boundary in
+    model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
+    model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     res = sim.run_resumable((resume or {}).get("primary"),
@@ -132,9 +164,21 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
-    packing.placed = placed_art(packing.templates, packing.model, packing.state, frame,
-                                params=params.render)
-    packing.seconds["render"] = time.perf_counter() - t3
+    placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
+    t4 = time.perf_counter()
+    v = params.verify
+    straightened: list[int] = []
+    if v.repair:  # shapes kept: elements bent too far are replaced by their unbent copy
+        sp = params.sim
+        limits = np.array([(sp.bend_limit_convex if is_convex(packing.templates[ti]) else sp.bend_limit)
+                           for ti in packing.model.template_index]) * v.straighten
+        limits[limits <= 0] = np.inf
+        placed, _, straightened = straighten(placed, rest_art(packing.templates, packing.model), limits)
+    packing.placed, packing.verification = verify_and_repair(
+        placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
+        min_scale=v.min_scale, repair=v.repair, straightened=straightened)
+    packing.seconds["verify"] = time.perf_counter() - t4
+    packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0
     return packing
 

@@ -77,6 +77,17 @@ class SimParams:
         20.0, "paper units", "k_e, strength of the quadratic edge springs (Eq. 3). The paper's example "
         "is 40 (its authors' own parameter file uses 7 against k_r = 100); 20 deforms more and packs "
         "denser with the gap still within ~15% (measured on the heart scene).")
+    k_shape: float = _doc(
+        0.0, "paper units", "Strength of the shape-matching force that pulls every mesh towards the "
+        "best rotated, scaled copy of its rest shape (beyond the paper; 0 = the paper's springs "
+        "only). Higher keeps shapes truer, lower lets them bend to fill (see docs/quality.md).")
+    bend_limit: float = _doc(
+        0.2, "-", "Largest distortion of an element's art (area of the symmetric difference with "
+        "its best rotated, scaled copy, over its area) the simulation allows: a mesh bent "
+        "further is pulled back onto the limit after every step (beyond the paper; 0 = no limit).")
+    bend_limit_convex: float = _doc(
+        0.08, "-", "The same for nearly convex elements (art ≥ 0.9 of its convex hull), "
+        "whose dents show more.")
     k_overlap: float = _doc(80.0, "paper units", "k_o, strength of the overlap force (Eq. 4).")
     k_boundary: float = _doc(80.0, "paper units", "k_b, strength of the boundary force (Eq. 5).")
     soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")
@@ -160,9 +171,30 @@ class RenderParams:
         1.0, "degrees", "Largest angle between the written curve's direction and the exact "
         "mapped outline's at any sample: keeps the curvature of the fit close to the exact "
         "one, so smooth art has no visible bends at the joints of the fitted pieces.")
+    smoothing: float = _doc(
+        0.0, "-", "λ of a smoothing thin-plate spline (coordinates scaled to the element's "
+        "size): 0 passes exactly through every mesh vertex; ~1e-3 irons out spots where the "
+        "simulation crumpled the skin, moving the art up to a few % of the gap off the mesh.")
     samples: float = _doc(
         8.0, "per mesh spacing", "Samples of each source segment per mesh edge length when "
-        "mapping it (at least 4, at most 64 per segment).")
+        "mapping it (curves get 8 to 128 samples, lines 3 to 128).")
+
+
+@dataclass(frozen=True)
+class VerifyParams:
+    """The final check of the promises on the art, and its repair (``verify.py``)."""
+
+    min_gap: float = _doc(
+        0.9, "× gap", "Every element's art keeps at least this distance to every other element's "
+        "art; closer elements are shrunk about their centroid (their shape is kept).")
+    min_scale: float = _doc(
+        0.5, "-", "An element that would have to shrink below this share of its size is dropped "
+        "(with a warning naming it).")
+    repair: bool = _doc(True, "-", "Shrink or drop offenders; false: only verify and report.")
+    straighten: float = _doc(
+        1.25, "× sim.bend_limit", "An element whose art ends up distorted beyond this multiple of "
+        "its bend limit (symmetric difference with its best rotated, scaled copy, over its "
+        "area) is replaced by that unbent copy; 0 never replaces (nor does sim.bend_limit = 0).")
 
 
 @dataclass(frozen=True)
@@ -172,16 +204,21 @@ class Params:
     gap: float = _doc(None, "container units", "d_gap, the desired distance between neighbouring "
                       "elements' art in the final packing. None: 1% of the container's larger side.")
     seed: int | None = _doc(None, "-", "Random seed; the same seed gives the same packing.")
+    margin: float | None = _doc(None, "container units", "Smallest distance between any art and "
+                                "the container's edge. None: half the gap.")
     preprocess: PreprocessParams = field(default_factory=PreprocessParams)
     placement: PlacementParams = field(default_factory=PlacementParams)
     sim: SimParams = field(default_factory=SimParams)
     secondary: SecondaryParams = field(default_factory=SecondaryParams)
     render: RenderParams = field(default_factory=RenderParams)
+    verify: VerifyParams = field(default_factory=VerifyParams)
 
     def validate(self) -> "Params":
         """Raise :class:`ParameterError` on values that cannot work; return self."""
         if self.gap is not None and not (math.isfinite(self.gap) and self.gap > 0):
             raise ParameterError(f"gap must be a positive number, got {self.gap!r}")
+        if self.margin is not None and not (math.isfinite(self.margin) and self.margin >= 0):
+            raise ParameterError(f"margin must be a number >= 0, got {self.margin!r}")
         if self.seed is not None:
             try:
                 seed_ok = 0 <= operator.index(self.seed) < 2**64
@@ -212,8 +249,10 @@ class Params:
              "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),
             (s.dt > 0 and s.dt <= 0.5, "sim.dt must be in (0, 0.5]"),
             (s.velocity_cap > 0, "sim.velocity_cap must be > 0"),
-            (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary) >= 0, "force constants must be >= 0"),
+            (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary, s.k_shape) >= 0,
+             "force constants must be >= 0"),
             (s.k_growth >= 0, "sim.k_growth must be >= 0"),
+            (s.bend_limit >= 0 and s.bend_limit_convex >= 0, "sim.bend_limit and bend_limit_convex must be >= 0"),
             (s.soft > 0, "sim.soft must be > 0"),
             (s.cell_size > 0, "sim.cell_size must be > 0"),
             (s.stop_window >= 2, "sim.stop_window must be >= 2"),
@@ -234,7 +273,11 @@ class Params:
             (1e-7 <= self.render.curve_tolerance <= 0.05, "render.curve_tolerance must be in [1e-7, 0.05]"),
             (0 < self.render.max_gap_share <= 0.5, "render.max_gap_share must be in (0, 0.5]"),
             (1 <= self.render.samples <= 64, "render.samples must be in [1, 64]"),
+            (0 <= self.render.smoothing <= 1, "render.smoothing must be in [0, 1]"),
             (0.05 <= self.render.angle_tolerance <= 45, "render.angle_tolerance must be in [0.05, 45] degrees"),
+            (0 <= self.verify.min_gap <= 2, "verify.min_gap must be in [0, 2] (× gap)"),
+            (0 < self.verify.min_scale <= 1, "verify.min_scale must be in (0, 1]"),
+            (self.verify.straighten >= 0, "verify.straighten must be >= 0"),
         ]
         for ok, msg in checks:
             if not ok:
@@ -249,7 +292,8 @@ class Params:
 MAX_COUNT = 100_000
 
 _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
-             "sim": SimParams, "secondary": SecondaryParams, "render": RenderParams}
+             "sim": SimParams, "secondary": SecondaryParams, "render": RenderParams,
+             "verify": VerifyParams}
 
 
 def _check_type(value, tp, where: str, source: str):

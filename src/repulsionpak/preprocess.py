@@ -14,7 +14,7 @@ import shapely
 
 from .errors import InputError
 from .geometry.mesh import bind_points, mesh_springs, triangulate_polygon
-from .geometry.outline import art_area, resample_adaptive, ring_coords, skin_polygon
+from .geometry.outline import art_area, art_area_problem, resample_adaptive, ring_coords, skin_polygon
 from .params import PreprocessParams
 from .types import Element
 
@@ -38,9 +38,9 @@ class Outline:
 
 def outline_of(element: Element) -> Outline:
     geom = art_area(element.paths)
-    if geom.is_empty or geom.area <= 0:
-        raise InputError(element.source, "the element has no visible area (every shape is "
-                         "unfilled and unstroked, or degenerate)")
+    problem = art_area_problem(geom)
+    if problem is not None:
+        raise InputError(element.source, problem)
     c = geom.centroid
     return Outline(element, geom, np.array([c.x, c.y]), float(geom.area), float(geom.length))
 

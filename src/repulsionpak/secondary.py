@@ -118,6 +118,9 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     # a secondary's nominal size is its pocket (it starts at initial_fraction of it), not
     # the template's: big pockets get big secondaries
     model.max_growth[m0.n_elements:] = 1.0 / sp.initial_fraction
+    from .pack import bend_limits  # noqa: PLC0415  (pack imports this module lazily too)
+
+    model.bend_limit[m0.n_elements:] = bend_limits(all_templates, placement.template_index, p.sim)
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,

@@ -6,6 +6,7 @@ in the user units of the file they came from.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,6 +40,25 @@ class Style:
         has_fill = self.fill is not None and self.fill_opacity > 0
         has_stroke = self.stroke is not None and self.stroke_opacity > 0 and self.stroke_width > 0
         return has_fill or has_stroke
+
+
+def _affine_of(fn) -> np.ndarray | None:
+    """The (3, 3) matrix of ``fn`` on (K, 2) point arrays if it is affine, else None."""
+    probe = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.37, -1.91]])
+    try:
+        out = np.asarray(fn(probe.copy()), dtype=float)
+    except Exception:  # noqa: BLE001  (fn may only accept real subpaths)
+        return None
+    if out.shape != (4, 2) or not np.all(np.isfinite(out)):
+        return None
+    m = np.eye(3)
+    m[:2, 0] = out[1] - out[0]
+    m[:2, 1] = out[2] - out[0]
+    m[:2, 2] = out[0]
+    scale = 1.0 + float(np.abs(out).max())
+    if np.abs(probe[3] @ m[:2, :2].T + m[:2, 2] - out[3]).max() > 1e-9 * scale:
+        return None
+    return m
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,9 +136,18 @@ class ArtPath:
     source: ShapeSource | None = None  # exact curves and markup, when known (SVG input, rendered art)
 
     def transformed(self, fn) -> "ArtPath":
-        """Return a copy whose every subpath is ``fn(points) -> points`` (the curve-level
-        ``source`` is dropped: ``fn`` need not be affine)."""
-        return ArtPath(tuple(np.asarray(fn(p), dtype=float) for p in self.subpaths), self.closed, self.style)
+        """Return a copy whose every subpath is ``fn(points) -> points``.
+
+        When ``fn`` is affine (checked on four points) the curve-level ``source`` moves
+        with it (curves and paint transform); otherwise it is dropped."""
+        subs = tuple(np.asarray(fn(p), dtype=float) for p in self.subpaths)
+        src = self.source
+        if src is not None:
+            m = _affine_of(fn)
+            src = None if m is None else dataclasses.replace(
+                src, curves=tuple(c.transformed(m) for c in src.curves),
+                matrix=m @ np.asarray(src.matrix, dtype=float))
+        return ArtPath(subs, self.closed, self.style, source=src)
 
     @property
     def n_points(self) -> int:
@@ -184,3 +213,9 @@ class PlacedArt:
     stroke_scale: float = 1.0
     deformation: float | None = None
     paint_servers: dict = field(default_factory=dict)
+    #: (3, 3) similarity from the element's rest frame (its template: centred, at the
+    #: template's scale) to container units, least squares over the mesh; None if unknown
+    frame: np.ndarray | None = None
+    #: the curve tolerance the art was fitted to (container units); the writer rounds the
+    #: coordinates of curves to match it (to tol/5); None: 6 decimals
+    tolerance: float | None = None

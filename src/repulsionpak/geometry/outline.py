@@ -184,6 +184,50 @@ def art_area(paths: Sequence[ArtPath], stroke_scale: float = 1.0) -> shapely.Geo
     return out
 
 
+#: Art whose mean thickness (:func:`relative_thickness`) is below this is degenerate:
+#: it encloses (numerically) nothing, e.g. a path whose two arcs retrace each other has
+#: a flattened area of float noise (~1e-17). Rejected by :func:`art_area_problem`.
+MIN_RELATIVE_THICKNESS = 1e-6
+#: Art thinner than this (a 0.1-unit hairline on a 1000-unit drawing) is nearly
+#: invisible once packed, and such elements' packings are slow to settle (measured: a
+#: 1e-5 hairline ran to max_iterations; a 0.027 line converged). The readers warn.
+THIN_RELATIVE_THICKNESS = 1e-4
+
+
+def relative_thickness(geom) -> float:
+    """Mean thickness ``2·area/perimeter`` of an art area over its bounding-box diagonal
+    (dimensionless, scale-invariant): ~1/4 for a disc, w/L for a w × L stroke, 0 when
+    empty."""
+    if geom is None or geom.is_empty:
+        return 0.0
+    area, perimeter = float(geom.area), float(geom.length)
+    x0, y0, x1, y1 = (float(b) for b in geom.bounds)
+    diag = float(np.hypot(x1 - x0, y1 - y0))
+    if not (area > 0 and perimeter > 0 and diag > 0):
+        return 0.0
+    return 2.0 * area / perimeter / diag
+
+
+def art_area_problem(geom) -> str | None:
+    """Why the art area ``geom`` (from :func:`art_area`) cannot be packed, or None.
+
+    Empty or zero area, non-finite, or a :func:`relative_thickness` below
+    :data:`MIN_RELATIVE_THICKNESS` (degenerate shapes whose area is rounding noise).
+    The message completes "FILE: ...".
+    """
+    if geom is None or geom.is_empty or not geom.area > 0:
+        return ("has no visible area (every shape is unfilled and unstroked, or degenerate); "
+                "an element needs a filled or stroked area")
+    x0, y0, x1, y1 = (float(b) for b in geom.bounds)
+    if not all(np.isfinite([geom.area, geom.length, x0, y0, x1, y1])):
+        return "has non-finite coordinates (NaN or infinity)"
+    if relative_thickness(geom) < MIN_RELATIVE_THICKNESS:
+        return (f"has (almost) zero area: its shapes enclose {float(geom.area):.3g} square units "
+                f"in a {x1 - x0:.3g} × {y1 - y0:.3g} bounding box (e.g. a path that retraces "
+                "itself, or a zero-width shape); an element needs a filled or stroked area")
+    return None
+
+
 def polygons_of(geom) -> list[Polygon]:
     """The polygons of any geometry (collections flattened, lower dimensions dropped)."""
     if geom is None or geom.is_empty:

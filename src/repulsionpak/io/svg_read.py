@@ -30,14 +30,21 @@ import re
 import warnings
 import xml.etree.ElementTree as ET
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import shapely
 
 from ..errors import InputError, ParameterError, RepulsionPakError
+from ..geometry.outline import (
+    THIN_RELATIVE_THICKNESS,
+    art_area,
+    art_area_problem,
+    relative_thickness,
+)
 from ..types import ArtPath, Container, Element, Style
+from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
 
 __all__ = [
     "MAX_FILE_BYTES",
@@ -695,6 +702,10 @@ class SvgShape:
     hole: bool
     attrs: dict
     groups: tuple = ()
+    #: clip paths that apply (own and ancestors', :class:`~.svg_clip.ClipRef`)
+    clips: tuple = ()
+    #: ``visibility:hidden``/``collapse`` (``display:none`` shapes are never parsed)
+    hidden: bool = False
     node: object = None  # the svgelements shape (resolved presentation values, tag)
 
 
@@ -704,6 +715,8 @@ class SvgDocument:
     svg_root: dict
     root_attrs: dict = field(default_factory=dict)
     metadata_text: str | None = None
+    #: the ``<clipPath>`` definitions (:class:`~.svg_clip.ClipDef` by id), if any shape is clipped
+    clip_defs: dict = field(default_factory=dict)
     xml: object = None  # the (sanitised) ElementTree root, for paint servers
 
 
@@ -805,8 +818,9 @@ def _style_of(
 def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     """Parse SVG bytes into shapes with user-unit matrices and styles (not flattened).
 
-    Invisible shapes are kept (check ``shape.style.visible``); text, images, filters,
-    clip paths and masks are reported with one warning naming the file.
+    Invisible shapes are kept (check ``shape.style.visible``); text, images, filters
+    and masks are reported with one warning naming the file. Clip paths are recorded
+    (``shape.clips``, ``doc.clip_defs``) for :func:`shape_clipper`.
     """
     import svgelements as se
 
@@ -815,6 +829,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     _check_attributes(path, root_xml)
     notes: set[str] = set()
     _sanitize(path, root_xml, notes)
+    hoist_clip_paths(root_xml)
     gradients = _gradient_colours(root_xml)
     svg_root = {
         k: root_xml.get(k)
@@ -866,14 +881,14 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
         attrs = vals.get("attributes") or {}
         return dict(attrs)
 
-    def walk(node, opacity: float, hole: bool, groups: tuple):
+    def walk(node, opacity: float, hole: bool, groups: tuple, clips: tuple = ()):
         for child in node:
             if isinstance(child, se.Shape):
                 attrs = own(child)
                 if "filter" in attrs:
                     notes.add("filter")
-                if "clip-path" in attrs or "mask" in attrs:
-                    notes.add("clip-path/mask (ignored, shape drawn unclipped)")
+                if "mask" in attrs:
+                    notes.add("mask (ignored, shape drawn unmasked)")
                 m = child.transform * inv_viewport
                 mat = _matrix_to_np(m)
                 det_scale = math.sqrt(
@@ -882,27 +897,38 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
                 style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
                 segs = list(child.segments(transformed=False))
+                own_clips = clip_refs(child.values.get("clip-path"), mat, notes)
+                vis = str(child.values.get("visibility", "visible")).strip().lower()
                 shapes.append(
-                    SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups, node=child)
+                    SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups,
+                             clips + own_clips, vis in ("hidden", "collapse"), node=child)
                 )
             elif isinstance(child, (se.Group, se.Use)):
                 attrs = own(child)
                 if "filter" in attrs:
                     notes.add("filter")
-                if "clip-path" in attrs or "mask" in attrs:
-                    notes.add("clip-path/mask (ignored, shape drawn unclipped)")
+                if "mask" in attrs:
+                    notes.add("mask (ignored, shape drawn unmasked)")
                 op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
-                walk(child, op, hole or _is_hole(attrs), groups + (attrs,))
+                own_clips = clip_refs(
+                    child.values.get("clip-path"),
+                    _matrix_to_np(child.transform * inv_viewport),
+                    notes,
+                )
+                walk(child, op, hole or _is_hole(attrs), groups + (attrs,), clips + own_clips)
             elif isinstance(child, se.Text):
                 notes.add("text")
             elif isinstance(child, se.Image):
                 notes.add("image")
 
     root_own = own(doc)
-    walk(doc, _clamp01(_float_attr(root_own.get("opacity"), 1.0)), False, ())
+    # a clip-path on the root <svg> is in the file's user units (as resvg draws it)
+    root_clips = clip_refs(doc.values.get("clip-path"), np.eye(3), notes)
+    walk(doc, _clamp01(_float_attr(root_own.get("opacity"), 1.0)), False, (), root_clips)
+    defs = clip_defs(doc, inv_viewport, notes) if any(s.clips for s in shapes) else {}
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
-    return SvgDocument(shapes, svg_root, root_attrs, metadata_text, xml=root_xml)
+    return SvgDocument(shapes, svg_root, root_attrs, metadata_text, defs, xml=root_xml)
 
 
 # --------------------------------------------------------------------------- flattening
@@ -1127,35 +1153,75 @@ def paint_servers(path, xml, arts) -> dict:
     return _paint_servers(path, xml, arts)
 
 
+def shape_clipper(path, doc: SvgDocument, tol: float, budget: PointBudget):
+    """``clip(shape) -> region | None``: the clip region of a shape of ``doc`` in file
+    user units (the intersection of its own and its groups' ``clip-path``), or None when
+    nothing clips it. See :mod:`.svg_clip`."""
+    if not any(s.clips for s in doc.shapes):
+        return lambda sh: None
+
+    def flatten(segments, matrix):
+        return flatten_shape(path, SvgShape(segments, matrix, Style(), False, {}), tol, budget)
+
+    resolver = ClipResolver(
+        path,
+        doc.clip_defs,
+        doc.shapes,
+        flatten,
+        lambda rings, rule: rings_to_region(rings, rule, path),
+        lambda message: warn(path, message),
+    )
+    return lambda sh: resolver.region(sh.clips) if sh.clips else None
+
+
 def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
     doc = parse_svg_shapes(path, data)
     shapes = [s for s in doc.shapes if s.style.visible]
     tol = flattening_tolerance(shapes, tolerance)
     budget = PointBudget(path)
+    clip = shape_clipper(path, doc, tol, budget)
     arts = []
+    n_clipped_away = 0
     for sh in shapes:
         subs = flatten_shape(path, sh, tol, budget)
         if subs:
-            arts.append(
-                ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style,
-                        source=shape_source(path, sh))
-            )
+            art = ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style,
+                          source=shape_source(path, sh))
+            region = clip(sh)
+            kept = [art] if region is None else clip_art(art, region)  # clipped: polygons
+            n_clipped_away += not kept
+            arts.extend(kept)
     if not arts:
+        why = (
+            "every shape is clipped away by its clip-path"
+            if n_clipped_away
+            else "no filled or stroked shape"
+        )
         raise InputError(
             path,
-            "has no visible geometry (no filled or stroked shape); an element needs at least one visible path",
+            f"has no visible geometry ({why}); an element needs at least one visible path",
         )
     return Element(name=path.stem, source=path.name, paths=tuple(arts),
                    paint_servers=paint_servers(path, doc.xml, arts))
 
 
 def container_from_shapes(
-    path, shapes: list[SvgShape], tol: float, budget: PointBudget, svg_root: dict,
+    path,
+    shapes: list[SvgShape],
+    tol: float,
+    budget: PointBudget,
+    svg_root: dict,
+    clip=None,
     xml=None,
 ) -> Container:
-    """Build a Container from visible SVG shapes (closed subpaths only; holes subtracted)."""
+    """Build a Container from SVG shapes (closed subpaths only; holes subtracted).
+
+    ``clip``: optional ``clip(shape) -> region | None`` (:func:`shape_clipper`); a
+    clipped shape counts, and is drawn, as its part inside the region.
+    """
     outer, holes, arts = [], [], []
-    n_open = n_crossing = 0
+    unpainted: list = []
+    n_open = n_crossing = n_clipped_away = 0
     for sh in shapes:
         rings = []
         for pts, closed in flatten_shape(path, sh, tol, budget):
@@ -1171,19 +1237,37 @@ def container_from_shapes(
             continue
         geom = rings_to_region(rings, sh.style.fill_rule, path)
         n_crossing += count_self_crossing(rings)
+        region_clip = clip(sh) if clip is not None else None
+        if region_clip is not None:
+            geom = polygon_parts(shapely.intersection(geom, region_clip))
+            rings = polygon_rings(geom)
+            if not rings:
+                n_clipped_away += 1
+                continue
+            style = replace(sh.style, fill_rule="evenodd")
+        else:
+            style = sh.style
         (holes if sh.hole else outer).append(geom)
-        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), sh.style,
-                            source=shape_source(path, sh)))
+        if not sh.style.visible and not sh.hole:
+            unpainted.append(geom)
+        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), style,
+                            source=None if region_clip is not None else shape_source(path, sh)))
     if n_open:
         warn(
             path,
             f"ignored {n_open} open subpath(s) of the container (first point != last point); close them with Z to use them",
         )
     if not arts:
+        if n_clipped_away:
+            raise InputError(
+                path,
+                "has no closed path left: every closed shape is clipped away by its clip-path",
+            )
         raise InputError(
             path, "has no closed path; a container needs at least one closed outline"
         )
     region = shapely.union_all(outer) if outer else shapely.Polygon()
+    warn_unpainted(path, unpainted, outer, region)
     if holes:
         hole_region = shapely.union_all(holes)
         if region.is_empty:
@@ -1210,11 +1294,32 @@ def container_from_shapes(
     )
 
 
+def warn_unpainted(path, unpainted: list, outer: list, region) -> None:
+    """Warn when shapes with neither fill nor stroke widen a container that also has
+    painted shapes (e.g. an icon's invisible bounding square): they count, since a
+    container is geometry, but that may not be what was meant."""
+    if not unpainted or len(unpainted) == len(outer):
+        return
+    painted = shapely.union_all([g for g in outer if not any(g is u for u in unpainted)])
+    extra = region.area - painted.area
+    if extra > 1e-9 * max(region.area, 1e-300):
+        warn(
+            path,
+            f"{len(unpainted)} shape(s) with neither fill nor stroke count as container "
+            f"geometry and add {extra / region.area:.0%} of its area; give helper shapes "
+            'display="none" to leave them out',
+        )
+
+
 def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Container:
     doc = parse_svg_shapes(path, data)
-    shapes = [s for s in doc.shapes if s.style.visible]
+    # a container is geometry, not appearance: fill, stroke and opacity do not matter;
+    # display:none (never parsed) and visibility:hidden shapes are left out
+    shapes = [s for s in doc.shapes if not s.hidden]
     tol = flattening_tolerance(shapes, tolerance)
-    return container_from_shapes(path, shapes, tol, PointBudget(path), doc.svg_root, doc.xml)
+    budget = PointBudget(path)
+    clip = shape_clipper(path, doc, tol, budget)
+    return container_from_shapes(path, shapes, tol, budget, doc.svg_root, clip, doc.xml)
 
 
 def load_element(path: str | Path, tolerance: float | None = None) -> Element:
@@ -1222,7 +1327,8 @@ def load_element(path: str | Path, tolerance: float | None = None) -> Element:
 
     ``tolerance``: largest chord error when flattening curves, in the file's user
     units; None -> 1e-3 x the element's bounding-box diagonal. The element's paths are
-    in paint order (first = back). Raises InputError for any unusable file.
+    in paint order (first = back). Raises InputError for any unusable file, art
+    covering no area included (:func:`check_element_area`).
     """
     tol = check_tolerance(tolerance)
     p = Path(path)
@@ -1231,17 +1337,42 @@ def load_element(path: str | Path, tolerance: float | None = None) -> Element:
         if sniff_kind(p, data) == "path":
             from .pathfile import element_from_pathfile
 
-            return element_from_pathfile(p, data)
-        return _svg_element(p, data, tol)
+            element = element_from_pathfile(p, data)
+        else:
+            element = _svg_element(p, data, tol)
+        check_element_area(p, element)
+        return element
+
+
+def check_element_area(path, element: Element) -> None:
+    """InputError naming ``path`` when the element's art covers no area (nothing
+    filled or stroked, or degenerate shapes such as a path retracing itself): caught
+    here, in milliseconds, instead of after a simulation that cannot place it. Art
+    thinner than :data:`~repulsionpak.geometry.outline.THIN_RELATIVE_THICKNESS` of its
+    size gets a warning."""
+    geom = art_area(element.paths)
+    problem = art_area_problem(geom)
+    if problem is not None:
+        raise InputError(path, problem)
+    t = relative_thickness(geom)
+    if t < THIN_RELATIVE_THICKNESS:
+        warn(
+            path,
+            f"the art is extremely thin (mean thickness {t:.1e} of its size): it will be "
+            "almost invisible in the packing, and the simulation may not settle; "
+            "thicken its strokes",
+        )
 
 
 def load_container(path: str | Path, tolerance: float | None = None) -> Container:
     """Load the container region (SVG or ``.path``).
 
-    Every closed path counts (an open one whose ends meet within tolerance too); each
-    shape's fill-rule decides its holes; shapes are united, except shapes marked as
-    holes (class ``hole``, id ``hole...``, ``data-path-type="7"``, ``.path`` type 7),
-    which are subtracted. Returns a valid (Multi)Polygon in the file's user units.
+    Every closed path counts (an open one whose ends meet within tolerance too),
+    whatever its fill, stroke and opacity -- a container is geometry, not appearance
+    (``display:none`` and ``visibility:hidden`` shapes do not count) -- clipped by its
+    ``clip-path``; each shape's fill-rule decides its holes; shapes are united, except
+    shapes marked as holes (class ``hole``, id ``hole...``, ``data-path-type="7"``,
+    ``.path`` type 7), which are subtracted. Returns a valid (Multi)Polygon in the file's user units.
     """
     tol = check_tolerance(tolerance)
     p = Path(path)

@@ -6,9 +6,9 @@ write a packing; :func:`written_geometry` is the area of exactly what is written
 checks.
 """
 
-from .placed import (affine_fit, deformation, element_vertices, placed_art, render_copy,
-                     similarity_fit, skin_polygons)
+from .placed import (affine_fit, deformation, element_vertices, is_convex, placed_art, render_copy,
+                     rest_art, similarity_fit, similarity_matrix, skin_polygons)
 from .written import written_geometry
 
-__all__ = ["affine_fit", "deformation", "element_vertices", "placed_art", "render_copy",
-           "similarity_fit", "skin_polygons", "written_geometry"]
+__all__ = ["affine_fit", "deformation", "element_vertices", "is_convex", "placed_art", "render_copy",
+           "rest_art", "similarity_fit", "similarity_matrix", "skin_polygons", "written_geometry"]

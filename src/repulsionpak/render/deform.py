@@ -95,20 +95,22 @@ def _solve(a, b):
 
 
 def tps_weights(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
-                chunk: int = 4096) -> tuple[np.ndarray, np.ndarray | None]:
+                chunk: int = 4096, smoothing: float = 0.0) -> tuple[np.ndarray, np.ndarray | None]:
     """Thin-plate-spline weights (see :func:`tps_factors`): ``W`` (P, N) and ``D``."""
-    B, DB, coef = tps_factors(rest, points, directions)
+    B, DB, coef = tps_factors(rest, points, directions, chunk, smoothing)
     return B @ coef, (None if DB is None else DB @ coef)
 
 
 def tps_factors(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
-                chunk: int = 4096) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+                chunk: int = 4096, smoothing: float = 0.0) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
     """Thin-plate-spline weights of ``points`` (P, 2) w.r.t. the centres ``rest`` (N, 2).
 
     Returns ``(B, DB, C)``: ``W = B @ C`` (P, N) gives ``f(points) = W @ x`` for deformed
     centres ``x`` (N, 2), and, when ``directions`` (P, 2) are given, ``D = DB @ C`` gives
     ``Df(points)·directions = D @ x``. Rows of W sum to 1 and rows of D to 0 (affine maps
-    are reproduced exactly). ``B``, ``DB`` (P, N + 3) are the kernel rows, ``C``
+    are reproduced exactly). ``smoothing`` > 0 gives the smoothing spline (λ added to the
+    kernel's diagonal, coordinates scaled to the rest mesh's size): it no longer passes
+    exactly through the vertices but irons out crumpled spots. ``B``, ``DB`` (P, N + 3) are the kernel rows, ``C``
     (N + 3, N) the spline coefficients of each unit vertex: mapping a copy as
     ``B @ (C @ x)`` avoids ever forming the (P, N) product.
     """
@@ -119,7 +121,7 @@ def tps_factors(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | N
     s = float(np.ptp(rest, axis=0).max()) or 1.0
     q = (rest - c0) / s
     a = np.zeros((n + 3, n + 3))
-    a[:n, :n] = _kernel(((q[:, None, :] - q[None, :, :]) ** 2).sum(-1))
+    a[:n, :n] = _kernel(((q[:, None, :] - q[None, :, :]) ** 2).sum(-1)) + smoothing * np.eye(n)
     a[:n, n] = 1.0
     a[:n, n + 1 :] = q
     a[n, :n] = 1.0
@@ -256,7 +258,7 @@ def _sample_chain(order: np.ndarray, ctrl: np.ndarray, spacing: float, density: 
     return pts, der, t, first
 
 
-def build_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
+def build_plan(template, smooth: bool = True, density: float = 8.0, smoothing: float = 0.0) -> MapPlan:
     """Sample ``template``'s art and compute the weights (see :class:`MapPlan`)."""
     verts, tris = template.verts, template.tris
     e = verts[np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])]
@@ -287,7 +289,7 @@ def build_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
     dirs = np.concatenate(ders) if ders else np.zeros((0, 2))
     t = np.concatenate(ts) if ts else np.zeros(0)
     if smooth:
-        W, D, R = tps_factors(verts, points, dirs)
+        W, D, R = tps_factors(verts, points, dirs, smoothing=smoothing)
     else:
         (W, D), R = linear_weights(verts, tris, points, dirs), None
     return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth, R)
@@ -296,10 +298,10 @@ def build_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
 _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
-def map_plan(template, smooth: bool = True, density: float = 8.0) -> MapPlan:
+def map_plan(template, smooth: bool = True, density: float = 8.0, smoothing: float = 0.0) -> MapPlan:
     """:func:`build_plan`, cached per template (plans depend on the rest shape only)."""
     per = _PLANS.setdefault(template, {})
-    key = (bool(smooth), float(density))
+    key = (bool(smooth), float(density), float(smoothing))
     if key not in per:
-        per[key] = build_plan(template, smooth, density)
+        per[key] = build_plan(template, smooth, density, smoothing)
     return per[key]

@@ -98,7 +98,7 @@ def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
                 params: RenderParams = RenderParams()) -> tuple[list[ArtPath], float]:
     """The written art of one copy of template ``t`` whose mesh vertices are ``verts``
     (container units); returns (paths, tolerance used)."""
-    plan = map_plan(t, params.smooth_map, params.samples)
+    plan = map_plan(t, params.smooth_map, params.samples, params.smoothing)
     q, g = plan.apply(verts)
     size = float(np.hypot(*np.ptp(q, axis=0))) if len(q) else 0.0
     tol = curve_tolerance(size, gap, params)
@@ -145,12 +145,46 @@ def placed_art(templates: Sequence[Template], model: Model, state: State, frame:
     for e in range(model.n_elements) if elements is None else elements:
         t = templates[model.template_index[e]]
         verts = element_vertices(model, state, e) * frame.unit
-        paths, _ = render_copy(t, verts, gap, params)
+        paths, tol = render_copy(t, verts, gap, params)
         scale, _ = similarity_fit(t.verts, verts)
         out.append(PlacedArt(t.element.source, model.kind[e], tuple(paths),
                              stroke_scale=t.scale * scale, deformation=deformation(t.verts, verts),
-                             paint_servers=dict(t.element.paint_servers)))
+                             paint_servers=dict(t.element.paint_servers),
+                             frame=similarity_matrix(t.verts, verts), tolerance=tol))
     return out
+
+
+def similarity_matrix(rest: np.ndarray, cur: np.ndarray) -> np.ndarray:
+    """(3, 3) least-squares similarity (rotation, uniform scale, translation) ``rest`` -> ``cur``."""
+    a, b = rest.mean(axis=0), cur.mean(axis=0)
+    za = (rest - a) @ np.array([1.0, 1j])
+    zb = (cur - b) @ np.array([1.0, 1j])
+    den = float(np.vdot(za, za).real)
+    c = complex(np.vdot(za, zb) / den) if den > 0 else 1.0 + 0j
+    m = np.array([[c.real, -c.imag, 0.0], [c.imag, c.real, 0.0], [0.0, 0.0, 1.0]])
+    m[:2, 2] = b - m[:2, :2] @ a
+    return m
+
+
+def rest_art(templates: Sequence[Template], model: Model, elements: Sequence[int] | None = None
+             ) -> list[PlacedArt]:
+    """Each element's art undeformed, in its template's frame (centred, at the template's
+    scale), with its curves: the shape it should keep. ``frame`` is the identity."""
+    out = []
+    for e in range(model.n_elements) if elements is None else elements:
+        t = templates[model.template_index[e]]
+        c, k = t.outline.center, t.scale
+        paths = tuple(a.transformed(lambda p: (np.asarray(p) - c) * k) for a in t.element.paths)
+        out.append(PlacedArt(t.element.source, model.kind[e], paths, stroke_scale=t.scale, deformation=0.0,
+                             paint_servers=dict(t.element.paint_servers), frame=np.eye(3)))
+    return out
+
+
+def is_convex(template: Template, solidity: float = 0.9) -> bool:
+    """True when the template's art covers at least ``solidity`` of its convex hull."""
+    g = template.outline.geometry
+    hull = g.convex_hull.area
+    return hull > 0 and g.area >= solidity * hull
 
 
 def skin_polygons(model: Model, state: State, frame: SimFrame) -> list[np.ndarray]:

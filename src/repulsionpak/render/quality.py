@@ -18,7 +18,7 @@ __all__ = ["curve_share", "dense_polyline", "deviation", "exact_outlines", "kink
 
 
 def exact_outlines(template, verts: np.ndarray, smooth: bool = True,
-                   per_segment: int = 96) -> list[list[np.ndarray]]:
+                   per_segment: int = 96, smoothing: float = 0.0) -> list[list[np.ndarray]]:
     """The art of one copy mapped exactly: per art path, per subpath, ``per_segment``
     samples of every source segment mapped through the deformation (container units)."""
     s, c = template.scale, template.outline.center
@@ -36,7 +36,7 @@ def exact_outlines(template, verts: np.ndarray, smooth: bool = True,
         return []
     allp = np.concatenate(chunks)
     if smooth:
-        W, _ = tps_weights(template.verts, allp)
+        W, _ = tps_weights(template.verts, allp, smoothing=smoothing)
     else:
         W, _ = linear_weights(template.verts, template.tris, allp)
     mapped = W @ verts

@@ -41,7 +41,7 @@ import shapely
 from ..errors import OutputError
 from ..io.svg_write import atomic_write_bytes, format_number
 from ..types import ArtPath, Container, PlacedArt, Style
-from .curves import path_data
+from .curves import decimals_for, path_data
 from .paint import CopyPaint, matrix_attr
 
 __all__ = ["packing_svg_string", "write_packing_svg"]
@@ -115,11 +115,11 @@ def _attrs(pairs) -> str:
 
 
 def _art_path_xml(art: ArtPath, stroke_scale: float, indent: str,
-                  paint: CopyPaint | None = None, suffix: str = "") -> str | None:
+                  paint: CopyPaint | None = None, suffix: str = "", decimals: int = 6) -> str | None:
     """One ``<path>``: the art's curves when it has them, else its polylines."""
     src = art.source
     if src is not None and src.curves:
-        d = path_data(src.curves, decimals=6)
+        d = path_data(src.curves, decimals=decimals)
     else:
         d = _path_d(art.subpaths, art.closed)
     if not d:
@@ -275,13 +275,15 @@ def packing_svg_string(
         lines.append(f"    <g{_attrs(g)}>")
         suffix = f"-e{index + 1}"
         paint = CopyPaint(getattr(pa, "paint_servers", None) or {}, suffix)
+        tol = getattr(pa, "tolerance", None)
+        decimals = decimals_for(tol) if tol else 6
         body = []
         for art in pa.paths:
             _check_finite(path, art.subpaths, f"element {pa.source}")
             if art.source is not None:
                 _check_finite(path, [c.ctrl.reshape(-1, 2) for c in art.source.curves],
                               f"element {pa.source}")
-            line = _art_path_xml(art, pa.stroke_scale, "      ", paint, suffix)
+            line = _art_path_xml(art, pa.stroke_scale, "      ", paint, suffix, decimals)
             if line:
                 body.append(line)
         defs = paint.defs()

@@ -95,6 +95,9 @@ class Model:
     frozen: np.ndarray  # (M,) bool: vertices of frozen elements never move
     template_index: np.ndarray  # (M,) int32 into the template list
     max_growth: np.ndarray  # (M,) growth factor at which an element reaches its nominal size
+    x_rest: np.ndarray  # (N, 2) positions at placement: each mesh's rest shape (shape matching)
+    stiffness: np.ndarray  # (M,) multiplier of the shape-keeping forces per element
+    bend_limit: np.ndarray  # (M,) largest deformation allowed (sim/shape.py), 0 = none
     kind: list[str]  # (M,) "primary" | "secondary"
     field: Field  # container signed distance
     container_area: float
@@ -104,6 +107,7 @@ class Model:
     tri_cell_size: float  # triangle grid cell width (>= the longest mesh edge)
     grid_origin: tuple[float, float]
     grid_extent: tuple[float, float]
+    inset_extra: float = 0.0  # sim units added to the boundary inset (the edge margin's share)
 
     @property
     def n_vertices(self) -> int:
@@ -261,12 +265,16 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         tri_elem=np.ascontiguousarray(np.concatenate(t_elem), dtype=np.int32),
         tri_rest=np.ascontiguousarray(tri_rest),
         vtri_ptr=vtri_ptr, vtri=vtri, vnbr_ptr=vnbr_ptr, vnbr=vnbr,
+        x_rest=x.copy(), stiffness=np.ones(M), bend_limit=np.zeros(M),
         frozen=frozen_all, template_index=tindex, max_growth=np.asarray(nominal, dtype=float), kind=kinds_all, field=fld,
         container_area=float(region_sim.area), gap=float(gap),
         corners=base[0].corners if base is not None else reflex_corners(region_sim), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
         grid_origin=(float(minx - cell_size), float(miny - cell_size)),
         grid_extent=(float(maxx - minx + 2 * cell_size), float(maxy - miny + 2 * cell_size)),
     )
+    if base is not None:
+        model.inset_extra = base[0].inset_extra
+        model.bend_limit[:m0] = base[0].bend_limit
     n_grow = np.zeros(M, np.int64)
     if base is not None:
         n_grow[:m0] = base[1].n_grow

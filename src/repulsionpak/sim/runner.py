@@ -19,11 +19,12 @@ from ..errors import DivergedError
 from ..params import SimParams
 from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
                      edge_force,
-                     inversion_force, overlap_force, project_inside, repulsion_force)
+                     inversion_force, overlap_force, project_inside, repulsion_force, shape_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas, window_change
 from .model import Model, State, element_ranges
 from .selfintersect import relax_self_intersections
+from .shape import limit_deformation
 
 MAX_NEIGHBOURS = 24
 CHUNK = 4  # skin segments per chunk in the full neighbour query
@@ -145,9 +146,11 @@ class Simulator:
         repulsion_force(x, self.active_skin, self.inside, self.nb_count, self.nb_q,
                         p.k_repulsion, p.soft, F)
         edge_force(x, m.springs, m.rest0, self.sp_ptr, self.growth, self.moving, p.k_edge, F)
+        if p.k_shape > 0:
+            shape_force(x, m.x_rest, m.elem_vstart, self.moving, m.stiffness, p.k_shape, F)
         boundary_force(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                        1.0 / m.field.h, p.k_boundary, F, self.outside,
-                       p.outside_block * m.gap, p.boundary_inset * m.gap)
+                       p.outside_block * m.gap, p.boundary_inset * m.gap + m.inset_extra)
         overlap_force(x, self.active_skin, self.inside, m.tris, m.vtri_ptr, m.vtri, self.nb_count, self.nb_d2,
                       self.nb_q, p.k_overlap, F)
         if p.min_triangle_area > 0:
@@ -160,6 +163,8 @@ class Simulator:
         if p.hard_boundary and not self.allow_growth:  # while settling
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
+        if m.bend_limit.any():
+            limit_deformation(x, m.x_rest, m.elem_vstart, self.moving, m.bend_limit)
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:

@@ -1,0 +1,355 @@
+"""Contract metrics of a finished packing (issue 10), measured on the final art only.
+
+These functions look at nothing but geometry: the container region, each placed
+element's art (as read back from the output SVG or as rendered) and the source
+element's art. They never look at the simulation's meshes or skins, so they are a
+yardstick independent of the simulation code.
+
+* :func:`edge_distances` – each element's art distance to the container's boundary.
+* :func:`outside_area` – area of art outside the container (exact polygon difference).
+* :func:`distortion` / :func:`distortions` – the area of the symmetric difference
+  between a placed copy and the best similarity transform (rotation, uniform scale,
+  translation; no reflection) of its source, divided by the copy's area.
+* :class:`ContractLimits` and :func:`check_promises` – issue 10's promises (gap median
+  and 10th percentile, zero overlap, nothing outside, edge margin, distortion p95 per
+  element category, Q_s(gap/2)/Q_s(0)) checked on an :func:`repulsionpak.evaluate.evaluate`
+  result.
+
+Nearest-neighbour gaps, overlap area, area fraction and the SCP live in
+:mod:`repulsionpak.evaluate`, which calls the functions here for its ``distortion``,
+``edge`` and ``outside_area`` entries.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import shapely
+
+from .errors import ParameterError
+from .geometry.outline import _polygonal
+
+__all__ = [
+    "edge_distances",
+    "outside_area",
+    "distortion",
+    "distortions",
+    "source_geometries",
+    "distortion_summary",
+    "ContractLimits",
+    "check_promises",
+]
+
+
+# --------------------------------------------------------------------------- container
+
+
+def edge_distances(container_region, art_geoms: Sequence) -> list[float | None]:
+    """Distance from each element's art to the container's boundary (container units).
+
+    0 for art that touches, crosses or lies outside the boundary (any art outside the
+    container, however little, counts as touching); ``None`` for an element without art.
+    Exact (shapely polygon distance).
+    """
+    region = _polygonal(container_region)
+    if region.is_empty:
+        raise ParameterError("the container has no area")
+    boundary = region.boundary
+    shapely.prepare(region)
+    out: list[float | None] = []
+    geoms = [_polygonal(g) for g in art_geoms]
+    arr = np.array(geoms, dtype=object) if geoms else np.empty(0, dtype=object)
+    if len(arr) == 0:
+        return out
+    d = shapely.distance(arr, boundary)
+    inside = shapely.contains_properly(region, arr)
+    for g, di, ok in zip(geoms, d, inside):
+        if g.is_empty:
+            out.append(None)
+        else:
+            out.append(float(di) if ok else 0.0)
+    return out
+
+
+def outside_area(container_region, art_geoms: Sequence) -> float:
+    """Total area of art lying outside the container (exact polygon difference)."""
+    region = _polygonal(container_region)
+    shapely.prepare(region)
+    total = 0.0
+    for g in art_geoms:
+        g = _polygonal(g)
+        if g.is_empty or shapely.contains(region, g):
+            continue
+        total += float(shapely.difference(g, region).area)
+    return total
+
+
+# --------------------------------------------------------------------------- distortion
+
+
+def _normalised(geom) -> tuple[shapely.Geometry, float]:
+    """``geom`` moved to its centroid and scaled to unit area; returns (geometry, scale)."""
+    c = geom.centroid
+    s = math.sqrt(geom.area)
+    return shapely.transform(geom, lambda xy: (xy - (c.x, c.y)) / s), s
+
+
+def _sym_areas(a: shapely.Geometry, b: shapely.Geometry, params: np.ndarray) -> np.ndarray:
+    """Areas of ``sym_diff(T_k(a), b)`` for the similarity transforms ``params[k] =
+    (angle, log_scale, dx, dy)`` (radians, about the origin, then shifted). Vectorised:
+    one coordinate transform and one shapely call for all k."""
+    k = len(params)
+    copies = np.full(k, a, dtype=object)
+    m = len(shapely.get_coordinates(a))
+    th = np.repeat(params[:, 0], m)
+    sc = np.exp(np.repeat(params[:, 1], m))
+    dx = np.repeat(params[:, 2], m)
+    dy = np.repeat(params[:, 3], m)
+    cos, sin = np.cos(th) * sc, np.sin(th) * sc
+
+    def move(xy):
+        x, y = xy[:, 0], xy[:, 1]
+        return np.stack([cos * x - sin * y + dx, sin * x + cos * y + dy], axis=1)
+
+    moved = shapely.transform(copies, move)
+    # |A △ B| = |A| + |B| − 2 |A ∩ B| (one overlay, cheaper than the symmetric difference)
+    inter = shapely.area(shapely.intersection(moved, b))
+    return np.maximum(a.area * np.exp(2.0 * params[:, 1]) + b.area - 2.0 * inter, 0.0)
+
+
+def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
+               return_fit: bool = False):
+    """How far ``copy`` is from a similar copy of ``source``: min over similarity
+    transforms T of area(T(source) △ copy) / area(copy).
+
+    0 for an exact rotated / scaled / translated copy; about 2 for shapes that share
+    nothing. Both are polygonal shapely geometries (holes allowed), in any units.
+
+    The fit: both shapes are centred on their centroids and brought to unit area (so
+    the uniform scale starts at sqrt(area ratio)); the rotation is searched on a grid of
+    ``coarse`` angles, then refined around the best grid angle (and a second one when
+    nearly as good) by successively
+    finer grids (to ~0.01°); with ``fit_translation`` a final Nelder–Mead search
+    refines angle, scale and translation together (it only ever lowers the value). Without it,
+    the value is the centroid-aligned, area-matched fit (an upper bound).
+    ``return_fit``: also return ``(angle_degrees, scale, dx, dy)`` of T in the copy's
+    units (``source`` rotated about its centroid, scaled, centroid moved onto the
+    copy's centroid plus (dx, dy)).
+
+    Returns ``None`` when either shape has no area.
+    """
+    a = _polygonal(source)
+    b = _polygonal(copy)
+    if a.is_empty or b.is_empty or not a.area > 0 or not b.area > 0:
+        return (None, None) if return_fit else None
+    if coarse < 8:
+        raise ParameterError(f"coarse must be at least 8 angles, got {coarse}")
+    an, sa = _normalised(a)
+    bn, sb = _normalised(b)
+    # the search runs on outlines simplified to a thousandth of the size (far fewer
+    # vertices for finely sampled curves, the optimum hardly moves); the value returned
+    # is that of the exact outlines under the transform found
+    tol = 1e-3
+    a_s, b_s = shapely.simplify(an, tol), shapely.simplify(bn, tol)
+    if a_s.is_empty or not a_s.is_valid or b_s.is_empty or not b_s.is_valid:
+        a_s, b_s = an, bn
+    step = 2 * math.pi / coarse
+    grid = np.zeros((coarse, 4))
+    grid[:, 0] = np.arange(coarse) * step
+    vals = _sym_areas(a_s, b_s, grid)
+    order = np.argsort(vals)
+    starts = [grid[order[0], 0]]
+    for i in order[1:]:  # a second, distinct local minimum when it is nearly as good
+        d = abs((grid[i, 0] - starts[0] + math.pi) % (2 * math.pi) - math.pi)
+        if d > 1.5 * step:
+            if vals[i] <= 1.25 * vals[order[0]] + 1e-3:
+                starts.append(grid[i, 0])
+            break
+    best_p, best_v = None, np.inf
+    offsets = np.linspace(-1.0, 1.0, 7)
+    stop = math.radians(0.01)
+    for t0 in starts:
+        t, half = t0, step
+        while half > stop:
+            cand = np.zeros((len(offsets), 4))
+            cand[:, 0] = t + offsets * half
+            v = _sym_areas(a_s, b_s, cand)
+            k = int(np.argmin(v))
+            t = cand[k, 0]
+            half /= 3.0
+            if v[k] < best_v:
+                best_v, best_p = float(v[k]), cand[k].copy()
+    tried = [best_p]
+    if fit_translation and best_v > 1e-4:  # below that the fit is as good as it gets
+        tried.append(_nelder_mead(a_s, b_s, best_p, best_v)[0])
+    # the search ran on the simplified outlines; the value is the exact one of the best fit
+    exact = _sym_areas(an, bn, np.array(tried))
+    k = int(np.argmin(exact))
+    best_v, best_p = float(exact[k]), tried[k]
+    value = best_v  # both normalised to unit area: the ratio to the copy's area
+    if not return_fit:
+        return value
+    ang, ls, dx, dy = best_p
+    return value, (math.degrees(ang) % 360.0, math.exp(ls) * sb / sa, dx * sb, dy * sb)
+
+
+def _nelder_mead(a, b, p, v, size: float = 0.02, tol: float = 1e-3, max_evals: int = 100):
+    """Nelder–Mead on (angle, log scale, dx, dy) from ``p`` (value ``v``), simplex of
+    edge ``size`` (unit-area shapes: 2 % of their size, ~1.1° of angle); stops when the
+    simplex is smaller than ``tol`` or after ``max_evals`` evaluations. Returns the
+    best (parameters, value) found; never worse than the start."""
+    f = lambda q: float(_sym_areas(a, b, q[None, :])[0])  # noqa: E731
+    pts = np.vstack([p, p + np.eye(4) * size])
+    vals = np.concatenate([[v], _sym_areas(a, b, pts[1:])])
+    evals = 4
+    while evals < max_evals:
+        order = np.argsort(vals)
+        pts, vals = pts[order], vals[order]
+        if np.max(np.abs(pts[1:] - pts[0])) < tol:
+            break
+        centre = pts[:-1].mean(axis=0)
+        xr = centre + (centre - pts[-1])
+        fr = f(xr)
+        evals += 1
+        if fr < vals[0]:
+            xe = centre + 2.0 * (centre - pts[-1])
+            fe = f(xe)
+            evals += 1
+            pts[-1], vals[-1] = (xe, fe) if fe < fr else (xr, fr)
+        elif fr < vals[-2]:
+            pts[-1], vals[-1] = xr, fr
+        else:
+            xc = centre + 0.5 * ((xr if fr < vals[-1] else pts[-1]) - centre)
+            fc = f(xc)
+            evals += 1
+            if fc < min(fr, vals[-1]):
+                pts[-1], vals[-1] = xc, fc
+            else:  # shrink towards the best
+                pts[1:] = pts[0] + 0.5 * (pts[1:] - pts[0])
+                vals[1:] = _sym_areas(a, b, pts[1:])
+                evals += 4
+    k = int(np.argmin(vals))
+    return (pts[k], float(vals[k])) if vals[k] < v else (p, v)
+
+
+def source_geometries(elements) -> dict[str, shapely.Geometry]:
+    """``{element.source: art area}`` of library elements (the first of equal names wins),
+    the ``sources`` :func:`distortions` and :func:`repulsionpak.evaluate.evaluate` take."""
+    from .geometry.outline import art_area
+
+    out: dict[str, shapely.Geometry] = {}
+    for e in elements:
+        out.setdefault(e.source, art_area(e.paths))
+    return out
+
+
+def distortions(art_geoms: Sequence, names: Sequence[str],
+                sources: Mapping[str, shapely.Geometry], **kw) -> list[float | None]:
+    """:func:`distortion` of each placed element against the source named by
+    ``names[i]`` (its ``data-source``); ``None`` when the source is unknown or either
+    has no area. ``kw`` goes to :func:`distortion`."""
+    if len(art_geoms) != len(names):
+        raise ParameterError(f"{len(art_geoms)} elements but {len(names)} source names")
+    out: list[float | None] = []
+    prepared = {k: _polygonal(g) for k, g in sources.items()}
+    for g, n in zip(art_geoms, names):
+        src = prepared.get(n)
+        out.append(None if src is None else distortion(src, g, **kw))
+    return out
+
+
+def distortion_summary(values: Sequence[float | None]) -> dict:
+    """``{"median", "p95", "max", "values"}`` of per-element distortions (``None``
+    entries ignored; statistics ``None`` when nothing is known)."""
+    v = np.array([x for x in values if x is not None and np.isfinite(x)], dtype=float)
+    vals = [None if x is None else float(x) for x in values]
+    if len(v) == 0:
+        return {"median": None, "p95": None, "max": None, "values": vals}
+    return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95)),
+            "max": float(v.max()), "values": vals}
+
+
+# --------------------------------------------------------------------------- promises
+
+
+@dataclass(frozen=True)
+class ContractLimits:
+    """Issue 10's promises (all dimensionless, relative to the gap or the container)."""
+
+    gap_median_low: float = 0.9  # × gap: lowest allowed median nearest-neighbour art distance
+    gap_median_high: float = 1.1  # × gap: highest allowed median
+    gap_p10: float = 0.8  # × gap: lowest allowed 10th percentile
+    overlap: float = 1e-6  # × container area: largest allowed total art–art overlap
+    outside: float = 1e-6  # × container area: largest allowed art area outside the container
+    margin: float = 0.5  # × gap: the art's promised distance from the container's edge
+    margin_tolerance: float = 0.98  # an element fails the margin when closer than this × margin
+    distortion_convex: float = 0.08  # largest p95 distortion of convex elements
+    distortion_other: float = 0.15  # largest p95 distortion of spiky, thin, holed and letter elements
+    scp_ratio: float = 0.45  # largest Q_s(gap/2) / Q_s(0)
+
+    def distortion_limit(self, category: str) -> float:
+        return self.distortion_convex if category == "convex" else self.distortion_other
+
+
+def check_promises(result: Mapping, categories: Mapping[str, str] | None = None,
+                   limits: ContractLimits = ContractLimits(),
+                   sources: Sequence[str] | None = None) -> dict:
+    """Issue 10's promises on an :func:`repulsionpak.evaluate.evaluate` result.
+
+    ``categories`` maps a ``data-source`` name to its category (``convex`` /
+    ``spiky`` / ``thin`` / ``holed`` / ``letter``); ``sources[i]`` is element i's
+    ``data-source`` (needed for per-category distortion; without them every element
+    counts as non-convex). Returns ``{promise: {"ok": bool | None, "value": ..., "limit":
+    ...}}`` for ``gap_median``, ``gap_p10``, ``overlap``, ``outside``, ``edge_margin``,
+    ``distortion`` (one entry per category present) and ``scp_ratio``, plus ``"all"``:
+    True when every promise that could be measured holds. ``ok`` is ``None`` when the
+    metric is missing (e.g. no SCP computed, fewer than two elements).
+    """
+    gap = float(result["gap"]["requested"])
+    area = float(result["container_area"])
+    out: dict = {}
+
+    def put(name, value, ok, limit):
+        out[name] = {"ok": None if ok is None else bool(ok), "value": value, "limit": limit}
+
+    med, p10 = result["gap"].get("median"), result["gap"].get("p10")
+    put("gap_median", None if med is None else med / gap,
+        None if med is None else limits.gap_median_low <= med / gap <= limits.gap_median_high,
+        [limits.gap_median_low, limits.gap_median_high])
+    put("gap_p10", None if p10 is None else p10 / gap,
+        None if p10 is None else p10 / gap >= limits.gap_p10, limits.gap_p10)
+    ov = float(result["overlap_area"]) / area
+    put("overlap", ov, ov <= limits.overlap, limits.overlap)
+    oa = result.get("outside_area")
+    put("outside", None if oa is None else oa / area, None if oa is None else oa / area <= limits.outside,
+        limits.outside)
+    edge = result.get("edge") or {}
+    emin = edge.get("min")
+    put("edge_margin", None if emin is None else emin / (limits.margin * gap),
+        None if emin is None else emin >= limits.margin_tolerance * limits.margin * gap,
+        limits.margin_tolerance)
+    dist = (result.get("distortion") or {}).get("values") or []
+    groups: dict[str, list[float]] = {}
+    for i, d in enumerate(dist):
+        if d is None:
+            continue
+        name = sources[i] if sources is not None else None
+        cat = (categories or {}).get(name, "other") if name is not None else "other"
+        groups.setdefault(cat, []).append(float(d))
+    for cat, vals in sorted(groups.items()):
+        p95 = float(np.percentile(vals, 95))
+        lim = limits.distortion_limit(cat)
+        put(f"distortion_{cat}", p95, p95 <= lim, lim)
+    ratio = result.get("scp_ratio")
+    put("scp_ratio", ratio, None if ratio is None else ratio <= limits.scp_ratio, limits.scp_ratio)
+    known = [v["ok"] for v in out.values() if v["ok"] is not None]
+    out["all"] = bool(known) and all(known)
+    return out
+
+
+def limits_dict(limits: ContractLimits = ContractLimits()) -> dict:
+    """The limits as a plain dict (for reports)."""
+    return asdict(limits)

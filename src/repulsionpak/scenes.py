@@ -1,0 +1,492 @@
+"""A suite of test scenes made from plain shapes and font glyphs (issue 10's yardstick).
+
+Everything here is generated from parameters, as plain SVG text: elements (squares,
+discs, triangles, hexagons, 5- and 8-pointed stars, bars, crosses, crescents, rings and
+letters of the DejaVu Sans font that matplotlib ships) and containers (circle, square,
+sharp star, curved band, holed square, two regions). A :class:`Scene` names one packing
+problem — container, elements, gap, count, seed, drawing scale — and
+:meth:`Scene.write` turns it into files :func:`repulsionpak.pack` / ``repulsionpak pack``
+read. :func:`suite` is the full matrix, :func:`fast_suite` a few small scenes for the
+tests.
+
+Units: a scene is drawn in a frame whose container's larger side is ``1000 × scale``
+user units; elements are drawn about ``100 × scale`` units wide (their drawn size does
+not matter to the packing, which scales them to fit, but their coordinates carry the
+scale). The gap is given as a fraction of the container's larger side.
+
+Fonts: the glyphs come from DejaVu Sans (Bitstream Vera licence with public-domain
+changes, a permissive licence) through :class:`matplotlib.textpath.TextPath`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ParameterError
+from .io.svg_write import atomic_write_bytes
+
+__all__ = [
+    "ELEMENT_KINDS",
+    "CONTAINER_KINDS",
+    "DISTORTION_LIMITS",
+    "element_category",
+    "element_svg",
+    "glyph_svg",
+    "container_svg",
+    "Scene",
+    "SceneFiles",
+    "suite",
+    "fast_suite",
+    "write_suite",
+]
+
+#: element kind -> category (the distortion promise depends on it)
+ELEMENT_KINDS: dict[str, str] = {
+    "square": "convex",
+    "disc": "convex",
+    "triangle": "convex",
+    "hexagon": "convex",
+    "star5": "spiky",
+    "star8": "spiky",
+    "bar": "thin",
+    "cross": "thin",
+    "crescent": "thin",
+    "ring": "holed",
+}
+#: glyphs whose outline has a counter (a hole)
+_HOLED_GLYPHS = set("ABDOPQRabdegopq&0689")
+CONTAINER_KINDS = ("circle", "square", "star", "band", "holed", "two")
+#: issue 10: p95 of the distortion per element category
+DISTORTION_LIMITS = {"convex": 0.08, "spiky": 0.15, "thin": 0.15, "holed": 0.15, "letter": 0.15}
+
+_COLOURS = {
+    "square": "#4e79a7", "disc": "#f28e2b", "triangle": "#e15759", "hexagon": "#76b7b2",
+    "star5": "#edc948", "star8": "#b07aa1", "bar": "#59a14f", "cross": "#9c755f",
+    "crescent": "#ff9da7", "ring": "#17becf", "glyph": "#333333",
+}
+_GLYPH_PREFIX = "glyph-"
+
+
+def element_category(name: str) -> str:
+    """Category of an element kind or file stem (``"square"``, ``"glyph-A"``, ``"ring.svg"``)."""
+    stem = Path(name).stem
+    if stem.startswith(_GLYPH_PREFIX):
+        return "letter"
+    kind = stem.split("@")[0]
+    if kind not in ELEMENT_KINDS:
+        raise ParameterError(f"unknown element kind {stem!r}; known: {', '.join(ELEMENT_KINDS)} or glyph-X")
+    return ELEMENT_KINDS[kind]
+
+
+# --------------------------------------------------------------------------- SVG text
+
+
+def _num(x: float) -> str:
+    """A coordinate with 9 significant digits (exact enough from 0.01× to 100× scales)."""
+    s = f"{float(x):.9g}"
+    return "0" if s in ("-0", "0") else s
+
+
+def _pts(points) -> str:
+    return " ".join(f"{_num(x)},{_num(y)}" for x, y in points)
+
+
+def _svg(width: float, height: float, body: str) -> str:
+    w, h = _num(width), _num(height)
+    return (f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}">\n'
+            f"{body}\n</svg>\n")
+
+
+def _star(cx: float, cy: float, r_out: float, r_in: float, n: int, phase: float = -math.pi / 2) -> np.ndarray:
+    """Vertices of an n-pointed star (tips at ``r_out``, notches at ``r_in``), first tip up."""
+    t = phase + np.arange(2 * n) * math.pi / n
+    r = np.where(np.arange(2 * n) % 2 == 0, r_out, r_in)
+    return np.stack([cx + r * np.cos(t), cy + r * np.sin(t)], axis=1)
+
+
+def _regular(cx: float, cy: float, r: float, n: int, phase: float = -math.pi / 2) -> np.ndarray:
+    t = phase + np.arange(n) * 2 * math.pi / n
+    return np.stack([cx + r * np.cos(t), cy + r * np.sin(t)], axis=1)
+
+
+def _circle_d(cx: float, cy: float, r: float, sweep: int = 1) -> str:
+    """A full circle as two SVG arcs (usable inside a compound path)."""
+    return (f"M {_num(cx - r)} {_num(cy)} A {_num(r)} {_num(r)} 0 1 {sweep} {_num(cx + r)} {_num(cy)} "
+            f"A {_num(r)} {_num(r)} 0 1 {sweep} {_num(cx - r)} {_num(cy)} Z")
+
+
+def _check_scale(scale: float, what: str = "scale") -> float:
+    scale = float(scale)
+    if not (math.isfinite(scale) and scale > 0):
+        raise ParameterError(f"{what} must be a positive number, got {scale!r}")
+    return scale
+
+
+def element_svg(kind: str, size: float = 100.0, scale: float = 1.0, fill: str | None = None) -> str:
+    """SVG text of one plain-shape element, about ``size × scale`` units across.
+
+    ``kind``: one of :data:`ELEMENT_KINDS` — ``square`` (``<rect>``), ``disc``
+    (``<circle>``), ``triangle`` / ``hexagon`` (regular ``<polygon>``), ``star5`` /
+    ``star8`` (sharp stars, inner radius 0.4 / 0.45 of the outer), ``bar`` (a 5:1
+    rectangle), ``cross`` (a plus sign with arms 0.28 wide), ``crescent`` (a disc minus
+    an offset disc, two arcs), ``ring`` (two concentric circles, ``fill-rule="evenodd"``,
+    inner radius 0.6).
+    """
+    if kind.startswith(_GLYPH_PREFIX):
+        return glyph_svg(kind[len(_GLYPH_PREFIX):], size, scale, fill)
+    if kind not in ELEMENT_KINDS:
+        raise ParameterError(f"unknown element kind {kind!r}; known: {', '.join(ELEMENT_KINDS)} or glyph-X")
+    s = float(size) * _check_scale(scale)
+    if not s > 0:
+        raise ParameterError(f"size must be positive, got {size!r}")
+    colour = fill or _COLOURS[kind]
+    c = 0.5 * s
+    r = 0.5 * s
+    paint = f'fill="{colour}"'
+    w = h = s
+    if kind == "square":
+        body = f'  <rect x="0" y="0" width="{_num(s)}" height="{_num(s)}" {paint}/>'
+    elif kind == "disc":
+        body = f'  <circle cx="{_num(c)}" cy="{_num(c)}" r="{_num(r)}" {paint}/>'
+    elif kind == "triangle":
+        tri = _regular(c, c, r, 3)  # tip up at y = 0, base at y = 0.75 s
+        body = f'  <polygon points="{_pts(tri)}" {paint}/>'
+        h = float(tri[:, 1].max())
+    elif kind == "hexagon":
+        body = f'  <polygon points="{_pts(_regular(c, c, r, 6))}" {paint}/>'
+    elif kind in ("star5", "star8"):
+        n, ratio = (5, 0.4) if kind == "star5" else (8, 0.45)
+        body = f'  <polygon points="{_pts(_star(c, c, r, ratio * r, n))}" {paint}/>'
+    elif kind == "bar":
+        h = 0.2 * s
+        body = f'  <rect x="0" y="0" width="{_num(s)}" height="{_num(h)}" {paint}/>'
+    elif kind == "cross":
+        a, b = (0.5 - 0.14) * s, (0.5 + 0.14) * s
+        pts = [(a, 0), (b, 0), (b, a), (s, a), (s, b), (b, b), (b, s), (a, s), (a, b), (0, b), (0, a), (a, a)]
+        body = f'  <path d="M {_pts(pts).replace(",", " ")} Z" {paint}/>'
+    elif kind == "crescent":
+        # outer disc radius r at (c, c) minus a disc of radius ri centred d to the right
+        ri, d = 0.8 * r, 0.45 * r
+        x = (r * r - ri * ri + d * d) / (2 * d)  # intersection abscissa, relative to the centre
+        y = math.sqrt(max(r * r - x * x, 0.0))
+        top, bot = (c + x, c - y), (c + x, c + y)
+        # outer arc top -> bottom through the left; inner arc back through the inner circle's left
+        large_out = 1 if x > 0 else 0
+        large_in = 1 if x > d else 0
+        body = (f'  <path d="M {_num(top[0])} {_num(top[1])} '
+                f'A {_num(r)} {_num(r)} 0 {large_out} 0 {_num(bot[0])} {_num(bot[1])} '
+                f'A {_num(ri)} {_num(ri)} 0 {large_in} 1 {_num(top[0])} {_num(top[1])} Z" {paint}/>')
+    else:  # ring
+        body = (f'  <path fill-rule="evenodd" d="{_circle_d(c, c, r)} {_circle_d(c, c, 0.6 * r)}" {paint}/>')
+    return _svg(w, h, body)
+
+
+def _glyph_path(char: str, size: float):
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.textpath import TextPath
+
+    if len(char) != 1 or char.isspace():
+        raise ParameterError(f"a glyph element is one visible character, got {char!r}")
+    prop = FontProperties(family="DejaVu Sans")
+    findfont(prop, fallback_to_default=False)  # raises if matplotlib's DejaVu is missing
+    return TextPath((0, 0), char, size=size, prop=prop)
+
+
+def glyph_svg(char: str, size: float = 100.0, scale: float = 1.0, fill: str | None = None) -> str:
+    """SVG text of one DejaVu Sans glyph as a compound path (``fill-rule="evenodd"``,
+    so counters are holes), curves kept as quadratic / cubic Béziers, ``size × scale``
+    the font size in user units. The glyph's box starts at (0, 0), y down."""
+    s = float(size) * _check_scale(scale)
+    path = _glyph_path(char, s)
+    v = np.asarray(path.vertices, dtype=float)
+    if len(v) == 0:
+        raise ParameterError(f"glyph {char!r} has no outline in DejaVu Sans")
+    x0, y1 = float(v[:, 0].min()), float(v[:, 1].max())
+    y0 = float(v[:, 1].min())
+    x1 = float(v[:, 0].max())
+
+    def tr(x, y):
+        return f"{_num(x - x0)} {_num(y1 - y)}"  # y up -> y down, box at the origin
+
+    parts = []
+    for verts, code in path.iter_segments(curves=True, simplify=False):
+        p = np.asarray(verts, dtype=float).reshape(-1, 2)
+        if code == 1:
+            parts.append("M " + tr(*p[0]))
+        elif code == 2:
+            parts.append("L " + tr(*p[0]))
+        elif code == 3:
+            parts.append("Q " + tr(*p[0]) + " " + tr(*p[1]))
+        elif code == 4:
+            parts.append("C " + " ".join(tr(*q) for q in p))
+        elif code == 79:
+            parts.append("Z")
+    colour = fill or _COLOURS["glyph"]
+    body = f'  <path fill-rule="evenodd" fill="{colour}" d="{" ".join(parts)}"/>'
+    return _svg(x1 - x0, y1 - y0, body)
+
+
+def container_svg(kind: str, size: float = 1000.0, scale: float = 1.0) -> str:
+    """SVG text of a container whose larger side is ``size × scale`` user units.
+
+    ``kind``: ``circle`` (a ``<circle>``), ``square`` (a ``<rect>``), ``star`` (a sharp
+    5-pointed star polygon, inner radius 0.45 of the outer), ``band`` (a curved band: an
+    annular sector of 240° with radii 0.55 and 1 of the outer, drawn with arcs),
+    ``holed`` (a square with a round hole of 0.35 of its side, ``fill-rule="evenodd"``),
+    ``two`` (two regions: a disc and a square side by side, one file).
+    """
+    s = float(size) * _check_scale(scale)
+    if not s > 0:
+        raise ParameterError(f"size must be positive, got {size!r}")
+    style = 'fill="none" stroke="#000000" stroke-width="' + _num(s / 500) + '"'
+    c, r = 0.5 * s, 0.5 * s
+    w = h = s
+    if kind == "circle":
+        body = f'  <circle cx="{_num(c)}" cy="{_num(c)}" r="{_num(r)}" {style}/>'
+    elif kind == "square":
+        body = f'  <rect x="0" y="0" width="{_num(s)}" height="{_num(s)}" {style}/>'
+    elif kind == "star":
+        pts = _star(0.0, 0.0, 1.0, 0.45, 5)
+        pts -= pts.min(axis=0)
+        pts *= s / pts.max()  # the wider side (tip to tip) is s
+        w, h = float(pts[:, 0].max()), float(pts[:, 1].max())
+        body = f'  <polygon points="{_pts(pts)}" {style}/>'
+    elif kind == "band":
+        r_in = 0.55 * r
+        t0, t1 = math.radians(150.0), math.radians(390.0)  # 240°, opening downwards (y down)
+        cy = r  # circle centre; the band's top is at y = 0
+        p = lambda rad, t: (c + rad * math.cos(t), cy + rad * math.sin(t))  # noqa: E731
+        a, b = p(r, t0), p(r, t1)
+        e, f = p(r_in, t1), p(r_in, t0)
+        body = (f'  <path d="M {_num(a[0])} {_num(a[1])} A {_num(r)} {_num(r)} 0 1 1 {_num(b[0])} {_num(b[1])} '
+                f'L {_num(e[0])} {_num(e[1])} A {_num(r_in)} {_num(r_in)} 0 1 0 {_num(f[0])} {_num(f[1])} Z" '
+                f'{style}/>')
+        h = cy + r * math.sin(math.radians(30.0))  # the band's lowest points are its two ends
+    elif kind == "holed":
+        hole = 0.35 * 0.5 * s
+        body = (f'  <path fill-rule="evenodd" d="M 0 0 H {_num(s)} V {_num(s)} H 0 Z '
+                f'{_circle_d(c, c, hole)}" {style}/>')
+    elif kind == "two":
+        h = 0.46 * s
+        rr = 0.23 * s
+        q0 = 0.52 * s
+        body = (f'  <circle cx="{_num(rr)}" cy="{_num(rr)}" r="{_num(rr)}" {style}/>\n'
+                f'  <rect x="{_num(q0)}" y="0" width="{_num(s - q0)}" height="{_num(h)}" {style}/>')
+    else:
+        raise ParameterError(f"unknown container kind {kind!r}; known: {', '.join(CONTAINER_KINDS)}")
+    return _svg(w, h, body)
+
+
+# --------------------------------------------------------------------------- scenes
+
+
+@dataclass(frozen=True)
+class SceneFiles:
+    """A scene written to disk: the files and the absolute gap to pass to ``pack``."""
+
+    scene: "Scene"
+    container: Path
+    elements: tuple[Path, ...]
+    gap: float  # container user units
+
+    def categories(self) -> dict[str, str]:
+        """``data-source`` file name -> element category."""
+        return {p.name: element_category(p.name) for p in self.elements}
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One packing problem of the suite.
+
+    ``container``: one of :data:`CONTAINER_KINDS`; ``elements``: element kinds
+    (:data:`ELEMENT_KINDS`, or ``"glyph-X"`` for the letter X); ``gap``: the gap as a
+    fraction of the container's larger side (0.005 = 0.5 %); ``count``: number of
+    primary elements; ``scale``: the drawing scale of the whole scene (container and
+    elements, 1 = a 1000-unit container); ``tags``: the categories it exercises
+    (convex / spiky / thin / holed / letter, derived from the elements).
+    """
+
+    name: str
+    container: str
+    elements: tuple[str, ...]
+    gap: float = 0.01
+    count: int = 30
+    seed: int = 1
+    scale: float = 1.0
+    tags: tuple[str, ...] = field(default=())
+
+    def __post_init__(self):
+        if not self.name or any(ch in self.name for ch in "/\\ "):
+            raise ParameterError(f"scene name {self.name!r} must be a non-empty word (no spaces or slashes)")
+        if self.container not in CONTAINER_KINDS:
+            raise ParameterError(f"scene {self.name}: unknown container {self.container!r}")
+        if not self.elements:
+            raise ParameterError(f"scene {self.name}: no elements")
+        cats = tuple(sorted({element_category(e) for e in self.elements}))
+        if not self.tags:
+            object.__setattr__(self, "tags", cats)
+        if not (0 < self.gap < 0.25):
+            raise ParameterError(f"scene {self.name}: gap must be a fraction of the container in (0, 0.25)")
+        if self.count < 1:
+            raise ParameterError(f"scene {self.name}: count must be >= 1")
+        _check_scale(self.scale, f"scene {self.name}: scale")
+
+    @property
+    def size(self) -> float:
+        """The container's larger side in user units."""
+        return 1000.0 * self.scale
+
+    @property
+    def gap_units(self) -> float:
+        """The gap in the container's user units."""
+        return float(f"{self.gap * self.size:.6g}")
+
+    @property
+    def category(self) -> str:
+        """A short label: the single category, or ``mixed``."""
+        return self.tags[0] if len(self.tags) == 1 else "mixed"
+
+    def write(self, root: str | Path) -> SceneFiles:
+        """Write the container and element SVGs under ``root/<name>/`` (atomically)."""
+        base = Path(root) / self.name
+        (base / "elements").mkdir(parents=True, exist_ok=True)
+        cont = base / f"container-{self.container}.svg"
+        atomic_write_bytes(cont, container_svg(self.container, scale=self.scale).encode())
+        files = []
+        for kind in dict.fromkeys(self.elements):  # unique, in order
+            f = base / "elements" / f"{kind}.svg"
+            atomic_write_bytes(f, element_svg(kind, scale=self.scale).encode())
+            files.append(f)
+        return SceneFiles(self, cont, tuple(files), self.gap_units)
+
+
+_CONVEX = ("square", "disc", "triangle", "hexagon")
+_SPIKY = ("star5", "star8")
+_THIN = ("bar", "cross", "crescent")
+_HOLED = ("ring", "glyph-O", "glyph-A")
+_LETTERS = tuple(f"glyph-{c}" for c in "ABORSg&")
+_MIXED = ("square", "disc", "star5", "bar", "crescent", "ring", "glyph-R")
+
+
+def suite() -> list[Scene]:
+    """The full matrix (26 scenes): convex, spiky, thin, holed, letter and mixed
+    elements in circle, square, sharp star, curved band, holed and two-region
+    containers; gaps 0.5–3 % of the container; drawing scales 0.01× to 100×; 5 to 300
+    elements."""
+    S = Scene
+    return [
+        # convex
+        S("convex-circle", "circle", _CONVEX, gap=0.01, count=40, seed=1),
+        S("squares-square", "square", ("square",), gap=0.01, count=36, seed=2),
+        S("discs-star", "star", ("disc",), gap=0.008, count=40, seed=3),
+        S("hexagons-holed", "holed", ("hexagon",), gap=0.015, count=30, seed=4),
+        S("triangles-band", "band", ("triangle",), gap=0.01, count=40, seed=5),
+        S("convex-two-300", "two", _CONVEX, gap=0.005, count=300, seed=6),
+        S("convex-circle-5", "circle", ("square", "disc"), gap=0.03, count=5, seed=7),
+        # spiky
+        S("stars-circle", "circle", _SPIKY, gap=0.01, count=40, seed=11),
+        S("stars-square-x100", "square", ("star5",), gap=0.01, count=30, seed=12, scale=100.0),
+        S("stars-band", "band", _SPIKY, gap=0.02, count=25, seed=13),
+        # thin
+        S("thin-circle", "circle", _THIN, gap=0.01, count=40, seed=21),
+        S("bars-square", "square", ("bar",), gap=0.005, count=60, seed=22),
+        S("crosses-star", "star", ("cross",), gap=0.01, count=30, seed=23),
+        S("crescents-holed-x0.01", "holed", ("crescent",), gap=0.02, count=25, seed=24, scale=0.01),
+        S("thin-two", "two", _THIN, gap=0.01, count=40, seed=25),
+        # holed
+        S("rings-circle", "circle", ("ring",), gap=0.01, count=30, seed=31),
+        S("rings-square-x10", "square", ("ring",), gap=0.03, count=12, seed=32, scale=10.0),
+        S("holed-band", "band", _HOLED, gap=0.01, count=35, seed=33),
+        # letters
+        S("letters-circle", "circle", _LETTERS, gap=0.01, count=40, seed=41),
+        S("letters-square-x0.1", "square", _LETTERS, gap=0.01, count=40, seed=42, scale=0.1),
+        S("letters-holed", "holed", _LETTERS, gap=0.015, count=30, seed=43),
+        S("letters-star", "star", ("glyph-A", "glyph-S", "glyph-g"), gap=0.008, count=40, seed=44),
+        S("letters-two-x100", "two", _LETTERS, gap=0.01, count=40, seed=45, scale=100.0),
+        # mixed
+        S("mixed-circle-120", "circle", _MIXED, gap=0.006, count=120, seed=51),
+        S("mixed-band-x0.01", "band", _MIXED, gap=0.01, count=40, seed=52, scale=0.01),
+        S("mixed-square-300", "square", _MIXED, gap=0.005, count=300, seed=53),
+    ]
+
+
+def fast_suite() -> list[Scene]:
+    """Four small scenes (5–12 elements) that pack in a few seconds each: convex, spiky
+    and thin, holed (and at 10× scale), letters in a holed container."""
+    S = Scene
+    return [
+        S("fast-convex", "circle", ("square", "disc", "hexagon"), gap=0.02, count=10, seed=101),
+        S("fast-spiky-thin", "square", ("star5", "bar", "crescent"), gap=0.02, count=10, seed=102),
+        S("fast-rings-x10", "circle", ("ring",), gap=0.03, count=6, seed=103, scale=10.0),
+        S("fast-letters", "holed", ("glyph-A", "glyph-g", "glyph-R"), gap=0.02, count=10, seed=104),
+    ]
+
+
+def write_suite(scenes, root: str | Path) -> list[SceneFiles]:
+    """Write every scene under ``root`` (one folder per scene)."""
+    names = [s.name for s in scenes]
+    if len(set(names)) != len(names):
+        raise ParameterError("scene names must be unique")
+    return [s.write(root) for s in scenes]
+
+
+# --------------------------------------------------------------------------- running
+
+
+def scp_grid(scene: Scene, pixels_per_gap: int = 10, low: int = 1000, high: int = 2400) -> int:
+    """SCP raster size for a scene: at least ``pixels_per_gap`` pixels across the gap."""
+    return int(min(high, max(low, math.ceil(pixels_per_gap / scene.gap))))
+
+
+def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None) -> dict:
+    """Issue 10's metrics of a packing of ``files`` read back from its output SVG.
+
+    The container is re-read from the scene's own file with a fine flattening tolerance
+    (gap/200), so distances and 'outside' are measured against the true curved outline,
+    not the polygon the simulation used; the sources are the scene's element files.
+    Returns the :func:`repulsionpak.evaluate.evaluate` result plus ``promises``
+    (:func:`repulsionpak.metrics.check_promises`) and ``sources`` (each element's
+    ``data-source``).
+    """
+    from .evaluate import evaluate
+    from .io import load_container, load_elements, read_packing_svg
+    from .metrics import check_promises, source_geometries
+
+    container = load_container(files.container, tolerance=files.gap / 200)
+    _, placed, _ = read_packing_svg(packing_svg)
+    sources = source_geometries(load_elements(files.elements))
+    res = evaluate(container, placed, files.gap, grid=grid or scp_grid(files.scene), sources=sources)
+    names = [p.source for p in placed]
+    res["sources"] = names
+    res["promises"] = check_promises(res, files.categories(), sources=names)
+    return res
+
+
+def run_scene(scene: Scene, workdir: str | Path, grid: int | None = None, png: bool = False) -> dict:
+    """Write ``scene`` under ``workdir``, pack it with ``repulsionpak pack``'s own code
+    path (:func:`repulsionpak.cli.run_pack`), and :func:`measure` the output SVG.
+
+    Returns ``{"scene", "files", "svg", "png", "report", "metrics", "seconds"}``
+    (``report``: what ``--report`` would hold, without the distortion, which
+    :func:`measure` computes); ``seconds`` is the wall time of the packing (reading
+    inputs to writing the SVG and PNG).
+    """
+    import time
+
+    from .cli import run_pack
+
+    files = scene.write(workdir)
+    base = files.container.parent
+    out = base / "packing.svg"
+    png_path = base / "packing.png" if png else None
+    t0 = time.perf_counter()
+    rep = run_pack(files.container, list(files.elements), out, gap=files.gap, seed=scene.seed,
+                   count=scene.count, png=png_path, progress=False)
+    seconds = time.perf_counter() - t0
+    return {"scene": scene, "files": files, "svg": out, "png": png_path, "report": rep,
+            "metrics": measure(files, out, grid), "seconds": seconds}

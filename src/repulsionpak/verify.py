@@ -1,0 +1,310 @@
+"""Final verification of a packing's promises on the art itself, and its repair.
+
+The simulation works on meshes and skins; what a user gets is the art mapped through
+them. Whatever the simulation left, :func:`verify_and_repair` checks the promises on the
+exact art polygons of every element:
+
+* no two elements' art overlap;
+* every element's art lies inside the container, at least ``margin`` from its edge;
+* every element's art is at least ``min_gap`` from every other element's art.
+
+An element that breaks one of them is first *moved* away from what it is too close to
+(local separation, a few rounds: a moved element may make room for, or crowd, its
+neighbours), then *shrunk* about its own centroid by just enough (both are similarities:
+its shape is untouched); an element that would have to shrink below ``min_scale`` is
+dropped, with a warning naming it. What remains is verified once more and reported; the CLI exits
+non-zero if anything is still violated (on valid input it never is).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from .geometry.outline import art_area, _polygonal
+from .types import PlacedArt
+
+
+@dataclass(frozen=True)
+class Verification:
+    """Result of :func:`verify_and_repair` (lengths in container units)."""
+
+    ok: bool  # every promise holds on the returned art
+    overlap_pairs: int  # pairs of elements whose art overlaps
+    outside: int  # elements with art outside the container
+    margin_violations: int  # elements closer than margin (minus tolerance) to the edge
+    gap_violations: int  # elements closer than min_gap (minus tolerance) to another
+    min_gap: float  # the gap floor enforced
+    margin: float  # the edge margin enforced
+    min_distance: float | None  # smallest art–art distance found
+    min_edge_distance: float | None  # smallest art–edge distance found (negative: outside)
+    shrunk: dict = field(default_factory=dict)  # element index -> scale applied (moved and/or shrunk)
+    dropped: list = field(default_factory=list)  # (index, source) of dropped elements
+    straightened: list = field(default_factory=list)  # elements replaced by their unbent copy
+
+    def to_dict(self) -> dict:
+        return {"ok": self.ok, "overlap_pairs": self.overlap_pairs, "outside": self.outside,
+                "margin_violations": self.margin_violations, "gap_violations": self.gap_violations,
+                "min_gap": self.min_gap, "margin": self.margin, "min_distance": self.min_distance,
+                "min_edge_distance": self.min_edge_distance,
+                "shrunk": {str(k): v for k, v in sorted(self.shrunk.items())},
+                "dropped": [{"index": i, "source": s} for i, s in self.dropped],
+                "straightened": list(self.straightened)}
+
+
+def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
+               shift: np.ndarray = np.zeros(2)) -> PlacedArt:
+    """``placed`` scaled by ``scale`` about ``centre`` (strokes scaled with it), then moved
+    by ``shift``."""
+    c = np.asarray(centre, dtype=float)
+    t = c + np.asarray(shift, dtype=float)
+    paths = tuple(p.transformed(lambda pts: t + (np.asarray(pts) - c) * scale) for p in placed.paths)
+    frame = placed.frame
+    if frame is not None:  # the same similarity, as a matrix
+        m = np.array([[scale, 0.0, t[0] - scale * c[0]], [0.0, scale, t[1] - scale * c[1]], [0.0, 0.0, 1.0]])
+        frame = m @ frame
+    return dataclasses.replace(placed, paths=paths, stroke_scale=placed.stroke_scale * scale, frame=frame)
+
+
+def _similarity(src: np.ndarray, cur: np.ndarray) -> tuple[complex, np.ndarray, np.ndarray]:
+    """Least-squares similarity z ↦ c·(z − a) + b mapping points ``src`` onto ``cur``."""
+    a, b = src.mean(axis=0), cur.mean(axis=0)
+    za = (src - a) @ np.array([1.0, 1j])
+    zb = (cur - b) @ np.array([1.0, 1j])
+    den = float(np.vdot(za, za).real)
+    c = complex(np.vdot(za, zb) / den) if den > 0 else 1.0 + 0j
+    return c, a, b
+
+
+def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
+    """The undeformed art ``rest`` moved, turned and scaled onto ``placed`` (least squares
+    over their corresponding vertices, or the meshes' similarity ``frame`` when both carry
+    one — rendered curves have no vertex correspondence): what the element would look like
+    unbent."""
+    if placed.frame is not None and rest.frame is not None:
+        m = np.asarray(placed.frame, dtype=float) @ np.linalg.inv(np.asarray(rest.frame, dtype=float))
+        rot, b = m[:2, :2], m[:2, 2]
+        paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
+        k = float(np.sqrt(abs(np.linalg.det(rot))))
+        return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k,
+                                   deformation=0.0, frame=m @ np.asarray(rest.frame, dtype=float))
+    src = np.concatenate([p for a in rest.paths for p in a.subpaths])
+    cur = np.concatenate([p for a in placed.paths for p in a.subpaths])
+    c, a, b = _similarity(src, cur)
+    rot = np.array([[c.real, -c.imag], [c.imag, c.real]])
+    paths = tuple(p.transformed(lambda pts: (np.asarray(pts) - a) @ rot.T + b) for p in rest.paths)
+    return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * abs(c), deformation=0.0)
+
+
+def distortion(art, copy) -> float:
+    """Area of the symmetric difference of two art geometries over the first's area."""
+    if art.is_empty or art.area <= 0:
+        return 0.0
+    return float(shapely.symmetric_difference(art, copy).area / art.area)
+
+
+def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarray
+               ) -> tuple[list[PlacedArt], np.ndarray, list[int]]:
+    """Keep shapes: an element whose distortion (symmetric difference with its unbent,
+    similar copy, over its area) exceeds ``limits[i]`` is replaced by that copy (the
+    repair that follows makes room for it). Returns (art, distortion of each element as
+    it is returned, indices replaced)."""
+    out, dist, replaced = [], np.zeros(len(placed)), []
+    for i, (p, r) in enumerate(zip(placed, rest)):
+        g = art_area(p.paths, p.stroke_scale)
+        copy = similar_copy(r, p)
+        d = distortion(g, art_area(copy.paths, copy.stroke_scale))
+        if d > limits[i]:
+            out.append(copy)
+            replaced.append(i)
+            d = 0.0
+        else:
+            out.append(p)
+        dist[i] = d
+    return out, dist, replaced
+
+
+def _edge_distance(region_boundary, region, g) -> float:
+    """Distance from ``g`` to the container's edge; negative when ``g`` is not inside:
+    minus the depth of its deepest point outside."""
+    if shapely.contains(region, g):
+        return float(shapely.distance(region_boundary, g))
+    out = shapely.get_coordinates(shapely.difference(g, region))
+    if len(out) == 0:
+        return 0.0
+    return -float(np.max(shapely.distance(region_boundary, shapely.points(out))))
+
+
+def _centre(g) -> np.ndarray:
+    return np.asarray(shapely.get_coordinates(shapely.centroid(g)))[0]
+
+
+def _check(geoms, alive, region, boundary, min_gap, margin, tol):
+    """What each element needs to meet the promises: ``need[i]`` how far (container
+    units) its art must get away from what it is too close to, ``push[i]`` the summed
+    directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
+    share of its size it must lose if it is shrunk about its centroid instead (of a pair
+    too close, the smaller one shrinks). Also counts of each kind of violation and the smallest art–art and
+    art–edge distances seen."""
+    n = len(geoms)
+    need = np.zeros(n)
+    rel = np.zeros(n)
+    push = np.zeros((n, 2))
+    counts = {"overlap_pairs": 0, "outside": 0, "margin": 0, "gap": 0}
+    dmin, emin = np.inf, np.inf
+    idx = [i for i in range(n) if alive[i]]
+    centres = {i: _centre(geoms[i]) for i in idx}
+    hulls = {i: geoms[i].convex_hull for i in idx}
+    if len(idx) >= 2:
+        sub = [geoms[i] for i in idx]
+        tree = shapely.STRtree(sub)
+        a, b = tree.query(sub, predicate="dwithin", distance=min_gap)
+        for p, q in zip(a, b):
+            if p >= q:
+                continue
+            i, j = idx[p], idx[q]
+            gi, gj = geoms[i], geoms[j]
+            d = float(shapely.distance(gi, gj))
+            dmin = min(dmin, d)
+            if d >= min_gap - tol:
+                continue
+            counts["gap"] += 1
+            if d <= 0.0:
+                counts["overlap_pairs"] += 1
+                inter = shapely.intersection(gi, gj)
+                depth = 2.0 * float(shapely.maximum_inscribed_circle(inter).length) if inter.area > 0 else 0.0
+                total = min_gap + depth + 2 * tol
+                pi = pj = _centre(inter) if not inter.is_empty else 0.5 * (centres[i] + centres[j])
+                u = centres[i] - centres[j]
+            else:
+                line = np.asarray(shapely.shortest_line(gi, gj).coords)
+                pi, pj = line[0], line[1]
+                total = min_gap - d + 2 * tol
+                u = pi - pj
+            nu = float(np.hypot(*u))
+            if nu > 0:
+                push[i] += 0.5 * total * u / nu
+                push[j] -= 0.5 * total * u / nu
+            need[i] = max(need[i], 0.5 * total)
+            need[j] = max(need[j], 0.5 * total)
+            # one of the two shrinks: the one poking into the other's hollow (its contact
+            # lies in the other's convex hull: shrinking the hollow's owner would close the
+            # hollow further), else the smaller one
+            in_i = hulls[j].contains(shapely.points(pi))
+            in_j = hulls[i].contains(shapely.points(pj))
+            if in_i != in_j:
+                k, pk = (i, pi) if in_i else (j, pj)
+            else:
+                k, pk = (i, pi) if gi.area <= gj.area else (j, pj)
+            rho = float(np.hypot(*(pk - centres[k])))
+            rel[k] = max(rel[k], total / rho if rho > 0 else 0.05)
+    for i in idx:
+        g = geoms[i]
+        e = _edge_distance(boundary, region, g)
+        emin = min(emin, e)
+        if e >= margin - tol:
+            continue
+        if e < 0:
+            counts["outside"] += 1
+        counts["margin"] += 1
+        deficit = margin - e + tol
+        c = centres[i]
+        if e >= 0:
+            line = np.asarray(shapely.shortest_line(g, boundary).coords)
+            pt, u = line[0], line[0] - line[1]
+        else:  # the art's point farthest outside
+            coords = np.asarray(shapely.get_coordinates(shapely.difference(g, region)))
+            pt = coords[np.argmax(((coords - c) ** 2).sum(axis=1))]
+            u = c - pt
+        nu = float(np.hypot(*u))
+        if nu > 0:
+            push[i] += deficit * u / nu
+        need[i] = max(need[i], deficit)
+        rho = float(np.hypot(*(pt - c)))
+        rel[i] = max(rel[i], deficit / rho if rho > 0 else 0.05)
+    return (need, rel, push, counts, (None if not np.isfinite(dmin) else dmin),
+            (None if not np.isfinite(emin) else emin))
+
+
+def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float,
+                      min_scale: float = 0.5, rounds: int = 24, repair: bool = True,
+                      straightened: list | None = None
+                      ) -> tuple[list[PlacedArt], Verification]:
+    """Check (and, with ``repair``, enforce) the promises on the art of ``placed``.
+
+    ``margin`` and ``min_gap`` in container units. Returns the (possibly shrunk, with
+    dropped elements removed) art and the verification of what is returned."""
+    region = _polygonal(region)
+    boundary = region.boundary
+    shapely.prepare(region)
+    tol = 1e-9 * max(1.0, float(np.ptp(np.asarray(region.bounds))))
+    n = len(placed)
+    base = [art_area(p.paths, p.stroke_scale) for p in placed]
+    centre = [np.asarray(g.centroid.coords[0]) if not g.is_empty else np.zeros(2) for g in base]
+    scale = np.ones(n)
+    alive = np.array([not g.is_empty for g in base])
+    geoms = list(base)
+    slack = 0.02 * min_gap  # aim a little beyond the floor: fewer rounds
+    shift = np.zeros((n, 2))
+    stuck = np.zeros(n, bool)  # a move made it worse: shrink from now on
+
+    def place(i):
+        geoms[i] = shapely.affinity.translate(
+            shapely.affinity.scale(base[i], scale[i], scale[i], origin=tuple(centre[i])),
+            shift[i][0], shift[i][1])
+
+    for r in range(rounds if repair else 0):
+        need, rel, push, counts, _, _ = _check(geoms, alive, region, boundary, min_gap, margin, tol)
+        bad = np.flatnonzero(need > 0)
+        if len(bad) == 0:
+            break
+        translate = r < rounds // 2  # local separation first: a move keeps shape and size
+        moved = []
+        for i in bad:
+            ln = float(np.hypot(*push[i]))
+            if translate and ln > 0 and not stuck[i]:
+                step = push[i] * min(1.0 + slack / need[i], (need[i] + slack) / ln)
+                shift[i] += step
+                moved.append((i, step))
+            else:
+                scale[i] *= max(0.85, 1.0 - rel[i] * (1.0 + slack / max(need[i], 1e-300)))
+                if scale[i] < min_scale:
+                    alive[i] = False
+                    continue
+            place(i)
+        if moved:  # keep only the moves that helped the element that made them
+            after = _check(geoms, alive, region, boundary, min_gap, margin, tol)[0]
+            for i, step in moved:
+                if after[i] >= need[i]:
+                    shift[i] -= step
+                    stuck[i] = True
+                    place(i)
+    # final verification: what is returned
+    need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol)
+    if repair:  # anything still violating after the rounds is dropped
+        for i in np.flatnonzero(need > 0):
+            alive[i] = False
+        if (need > 0).any():
+            need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol)
+    dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not base[i].is_empty]
+    for i, src in dropped:
+        warnings.warn(f"element {i} ({src}) was dropped: moving and shrinking it (to "
+                      f"{min_scale:g} of its size) could not keep the gap and the edge margin",
+                      stacklevel=2)
+    out, shrunk = [], {}
+    for i in range(n):
+        if not alive[i]:
+            continue
+        if scale[i] < 1.0 or shift[i].any():
+            shrunk[i] = float(scale[i])
+            out.append(scaled_art(placed[i], float(scale[i]), centre[i], shift[i]))
+        else:
+            out.append(placed[i])
+    ok = not (need > 0).any()
+    return out, Verification(ok, counts["overlap_pairs"], counts["outside"], counts["margin"], counts["gap"],
+                             float(min_gap), float(margin), dmin, emin, shrunk, dropped,
+                             [int(i) for i in straightened or []])
