@@ -23,6 +23,7 @@ import json
 import multiprocessing
 import os
 import platform
+import re
 import subprocess
 import sys
 import tempfile
@@ -55,7 +56,8 @@ def git_revision() -> str:
     try:
         rev = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                              text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no",
+                                "--", "src", "benchmarks"],  # the code measured, not the docs written
                                capture_output=True, text=True, check=True).stdout.strip()
         return rev + ("+dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
@@ -311,6 +313,7 @@ def main(argv=None) -> int:
         workdir = args.workdir
         workdir.mkdir(parents=True, exist_ok=True)
 
+    revision = git_revision()
     t0 = time.perf_counter()
     results: dict[str, dict] = {}
     jobs = [(s.name, str(workdir), str(pic_dir) if (pic_dir and s.name in PICTURES) or (pic_dir and partial)
@@ -336,7 +339,7 @@ def main(argv=None) -> int:
                 done(f.result())
     wall = time.perf_counter() - t0
     ordered = [results[s.name] for s in chosen]
-    meta = {"revision": git_revision(), "date": time.strftime("%Y-%m-%d"), "machine": machine(),
+    meta = {"revision": revision, "date": time.strftime("%Y-%m-%d"), "machine": machine(),
             "command": "python benchmarks/contract.py" + (f" --jobs {args.jobs}" if args.jobs > 1 else "")
             + "".join(f" --only {n}" for n in args.only) + (" --fast" if args.fast else ""),
             "jobs": args.jobs, "wall_seconds": wall}
@@ -347,7 +350,14 @@ def main(argv=None) -> int:
         from repulsionpak.metrics import limits_dict
 
         pics = [r for r in ordered if r.get("picture")]
-        atomic_write_bytes(out_dir / "quality.md", markdown(ordered, meta, pics).encode())
+        page = markdown(ordered, meta, pics)
+        old = out_dir / "quality.md"
+        if old.exists():  # sections other benchmarks own (e.g. "## Output curves") are kept
+            text = old.read_text()
+            m = re.search(r"^## Output curves\n.*?(?=^## |\Z)", text, re.S | re.M)
+            if m:
+                page = page.rstrip("\n") + "\n\n" + m.group(0).rstrip("\n") + "\n"
+        atomic_write_bytes(out_dir / "quality.md", page.encode())
         data = {"meta": meta, "limits": limits_dict(), "scenes": ordered}
         atomic_write_bytes(out_dir / "quality.json", (json.dumps(data, indent=1) + "\n").encode())
         print(f"\nwrote {out_dir / 'quality.md'}, {out_dir / 'quality.json'} and {len(pics)} picture(s)",

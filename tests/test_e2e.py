@@ -46,7 +46,8 @@ def test_heart_scene_like_the_paper(tmp_path):
     assert res.exit_code == 0, res.output
     container, placed, info = read_packing_svg(out)
     assert info["gap"] == pytest.approx(5.2)
-    assert len(placed) >= 25 and all(p.kind == "primary" for p in placed)
+    primaries = [p for p in placed if p.kind == "primary"]
+    assert len(primaries) >= 25 and len(placed) > len(primaries)  # pockets filled (secondary.auto)
     m = check_packing(load_container(SHARED / "containers" / "heart.svg"), placed, 5.2, 0.44)
     assert m["gap"]["p10"] >= 0.8 * 5.2  # the verified gap floor (0.9 gap)
     report = json.loads(rep.read_text())

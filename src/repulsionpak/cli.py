@@ -138,7 +138,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              report: Path | None = None, png: Path | None = None, count: int | None = None,
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
-             margin: float | None = None, pdf: Path | None = None) -> dict:
+             margin: float | None = None, pocket_fill: bool = True,
+             pdf: Path | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it."""
     from .evaluate import evaluate
@@ -165,6 +166,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         params = dataclasses.replace(params, gap=gap)
     if seed is not None:
         params = dataclasses.replace(params, seed=seed)
+    if not pocket_fill:
+        params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, auto=False))
     if margin is not None:
         if not margin >= 0:
             raise ParameterError(f"--margin must be a number >= 0, got {margin:g}")
@@ -306,6 +309,7 @@ def pack(
     gap: Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")] = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
     margin: Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")] = None,
+    no_pocket_fill: Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")] = False,
     config: Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")] = None,
     report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
     png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
@@ -326,7 +330,7 @@ def pack(
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
-                       margin=margin, pdf=pdf)
+                       margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:

@@ -44,10 +44,15 @@ class Packing:
 
     @property
     def n_primary(self) -> int:
+        """Primary elements in the result (after the verification, which may drop some)."""
+        if self.placed:
+            return sum(1 for p in self.placed if p.kind == "primary")
         return sum(1 for k in self.model.kind if k == "primary")
 
     @property
     def n_secondary(self) -> int:
+        if self.placed:
+            return sum(1 for p in self.placed if p.kind == "secondary")
         return sum(1 for k in self.model.kind if k == "secondary")
 
     def skins(self) -> list[np.ndarray]:
@@ -155,6 +160,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       iterations={"primary": res.iterations, "secondary": 0},
                       seconds={"preprocess": t1 - t0, "primary": t2 - t1, "secondary": 0.0},
                       stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction)
+    if not secondary and params.secondary.auto:
+        secondary = elements  # the pockets get small copies of the primaries (sec. 9)
     if secondary and res.stopped_by != "interrupted":
         from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
 
@@ -176,7 +183,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         placed, _, straightened = straighten(placed, rest_art(packing.templates, packing.model), limits)
     packing.placed, packing.verification = verify_and_repair(
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
-        min_scale=v.min_scale, repair=v.repair, straightened=straightened)
+        min_scale=v.min_scale, repair=v.repair, straightened=straightened,
+        grow_to=v.grow_to * gap, max_scale=v.max_grow)
     packing.seconds["verify"] = time.perf_counter() - t4
     packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0

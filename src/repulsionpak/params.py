@@ -144,6 +144,9 @@ class SimParams:
 class SecondaryParams:
     """Sec. 9: secondary elements."""
 
+    auto: bool = _doc(
+        True, "-", "Without secondary elements given, fill the pockets the primaries leave with "
+        "small copies of the primaries themselves (false: leave them empty).")
     d_min: float = _doc(
         1.0, "× gap", "d_min: seeds need at least this distance to the nearest mesh or the "
         "boundary (paper: 5–10 px on a 1000 px grid, about one gap).")
@@ -191,6 +194,11 @@ class VerifyParams:
         0.5, "-", "An element that would have to shrink below this share of its size is dropped "
         "(with a warning naming it).")
     repair: bool = _doc(True, "-", "Shrink or drop offenders; false: only verify and report.")
+    grow_to: float = _doc(
+        1.0, "× gap", "After the repair, elements grow (about their centroid, shape kept) into the "
+        "room around them until they are this close to a neighbour or the margin from the edge "
+        "(0: no growth).")
+    max_grow: float = _doc(1.15, "-", "An element grows to at most this multiple of its size.")
     straighten: float = _doc(
         1.25, "× sim.bend_limit", "An element whose art ends up distorted beyond this multiple of "
         "its bend limit (symmetric difference with its best rotated, scaled copy, over its "
@@ -278,6 +286,9 @@ class Params:
             (0 <= self.verify.min_gap <= 2, "verify.min_gap must be in [0, 2] (× gap)"),
             (0 < self.verify.min_scale <= 1, "verify.min_scale must be in (0, 1]"),
             (self.verify.straighten >= 0, "verify.straighten must be >= 0"),
+            (self.verify.grow_to == 0 or self.verify.grow_to >= self.verify.min_gap,
+             "verify.grow_to must be 0 or >= verify.min_gap"),
+            (self.verify.max_grow >= 1, "verify.max_grow must be >= 1"),
         ]
         for ok, msg in checks:
             if not ok:

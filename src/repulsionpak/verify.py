@@ -11,8 +11,8 @@ exact art polygons of every element:
 An element that breaks one of them is first *moved* away from what it is too close to
 (local separation, a few rounds: a moved element may make room for, or crowd, its
 neighbours), then *shrunk* about its own centroid by just enough (both are similarities:
-its shape is untouched); an element that would have to shrink below ``min_scale`` is
-dropped, with a warning naming it. What remains is verified once more and reported; the CLI exits
+its shape is untouched); an element that would have to shrink below ``min_scale`` (half
+that for secondary elements, which are small by nature) is dropped, with a warning naming it. What remains is verified once more and reported; the CLI exits
 non-zero if anything is still violated (on valid input it never is).
 """
 
@@ -42,7 +42,7 @@ class Verification:
     margin: float  # the edge margin enforced
     min_distance: float | None  # smallest art–art distance found
     min_edge_distance: float | None  # smallest art–edge distance found (negative: outside)
-    shrunk: dict = field(default_factory=dict)  # element index -> scale applied (moved and/or shrunk)
+    shrunk: dict = field(default_factory=dict)  # element index -> scale applied (moved, shrunk or grown)
     dropped: list = field(default_factory=list)  # (index, source) of dropped elements
     straightened: list = field(default_factory=list)  # elements replaced by their unbent copy
 
@@ -143,47 +143,55 @@ def _centre(g) -> np.ndarray:
     return np.asarray(shapely.get_coordinates(shapely.centroid(g)))[0]
 
 
-def _check(geoms, alive, region, boundary, min_gap, margin, tol):
+def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
     share of its size it must lose if it is shrunk about its centroid instead (of a pair
-    too close, the smaller one shrinks). Also counts of each kind of violation and the smallest art–art and
-    art–edge distances seen."""
+    too close, the smaller one shrinks). Also counts of each kind of violation and the
+    smallest art–art and art–edge distances seen (the latter only over the elements that
+    are not clearly inside ``inner``, the container shrunk by the margin, unless
+    ``exact_edges``)."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
     push = np.zeros((n, 2))
     counts = {"overlap_pairs": 0, "outside": 0, "margin": 0, "gap": 0}
     dmin, emin = np.inf, np.inf
-    idx = [i for i in range(n) if alive[i]]
-    centres = {i: _centre(geoms[i]) for i in idx}
-    hulls = {i: geoms[i].convex_hull for i in idx}
+    idx = np.flatnonzero(alive)
+    arr = np.array([geoms[i] for i in idx], dtype=object)
+    centres: dict = {}
+
+    def centre(i):
+        if i not in centres:
+            centres[i] = _centre(geoms[i])
+        return centres[i]
+
     if len(idx) >= 2:
-        sub = [geoms[i] for i in idx]
-        tree = shapely.STRtree(sub)
-        a, b = tree.query(sub, predicate="dwithin", distance=min_gap)
-        for p, q in zip(a, b):
-            if p >= q:
+        tree = shapely.STRtree(arr)
+        a, b = tree.query(arr, predicate="dwithin", distance=min_gap)
+        keep = a < b
+        a, b = a[keep], b[keep]
+        d = shapely.distance(arr[a], arr[b]) if len(a) else np.zeros(0)
+        if len(d):
+            dmin = float(d.min())
+        for p, q, dd in zip(a, b, d):
+            if dd >= min_gap - tol:
                 continue
-            i, j = idx[p], idx[q]
+            i, j = int(idx[p]), int(idx[q])
             gi, gj = geoms[i], geoms[j]
-            d = float(shapely.distance(gi, gj))
-            dmin = min(dmin, d)
-            if d >= min_gap - tol:
-                continue
             counts["gap"] += 1
-            if d <= 0.0:
+            if dd <= 0.0:
                 counts["overlap_pairs"] += 1
                 inter = shapely.intersection(gi, gj)
                 depth = 2.0 * float(shapely.maximum_inscribed_circle(inter).length) if inter.area > 0 else 0.0
                 total = min_gap + depth + 2 * tol
-                pi = pj = _centre(inter) if not inter.is_empty else 0.5 * (centres[i] + centres[j])
-                u = centres[i] - centres[j]
+                pi = pj = _centre(inter) if not inter.is_empty else 0.5 * (centre(i) + centre(j))
+                u = centre(i) - centre(j)
             else:
                 line = np.asarray(shapely.shortest_line(gi, gj).coords)
                 pi, pj = line[0], line[1]
-                total = min_gap - d + 2 * tol
+                total = min_gap - dd + 2 * tol
                 u = pi - pj
             nu = float(np.hypot(*u))
             if nu > 0:
@@ -194,15 +202,20 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol):
             # one of the two shrinks: the one poking into the other's hollow (its contact
             # lies in the other's convex hull: shrinking the hollow's owner would close the
             # hollow further), else the smaller one
-            in_i = hulls[j].contains(shapely.points(pi))
-            in_j = hulls[i].contains(shapely.points(pj))
+            in_i = gj.convex_hull.contains(shapely.points(pi))
+            in_j = gi.convex_hull.contains(shapely.points(pj))
             if in_i != in_j:
                 k, pk = (i, pi) if in_i else (j, pj)
             else:
                 k, pk = (i, pi) if gi.area <= gj.area else (j, pj)
-            rho = float(np.hypot(*(pk - centres[k])))
+            rho = float(np.hypot(*(pk - centre(k))))
             rel[k] = max(rel[k], total / rho if rho > 0 else 0.05)
-    for i in idx:
+    if exact_edges or inner is None:
+        near = idx
+    else:
+        near = idx[~shapely.contains(inner, arr)] if len(idx) else idx
+    for i in near:
+        i = int(i)
         g = geoms[i]
         e = _edge_distance(boundary, region, g)
         emin = min(emin, e)
@@ -212,7 +225,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol):
             counts["outside"] += 1
         counts["margin"] += 1
         deficit = margin - e + tol
-        c = centres[i]
+        c = centre(i)
         if e >= 0:
             line = np.asarray(shapely.shortest_line(g, boundary).coords)
             pt, u = line[0], line[0] - line[1]
@@ -230,9 +243,51 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol):
             (None if not np.isfinite(emin) else emin))
 
 
+def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
+             max_scale, tol, rounds, inner=None):
+    """Grow every element about its centroid into the room around it, never closer than
+    ``target`` to another element nor ``margin`` to the edge, and no bigger than
+    ``max_scale`` of its size: each round, an element with slack s (half the spare
+    distance to its nearest neighbour, or the spare distance to the edge) grows by
+    1 + s/R, R its largest radius, so none of its points moves further than s (all grow at
+    once, so a pair never closes more than its spare distance)."""
+    n = len(geoms)
+    idx = [i for i in range(n) if alive[i]]
+    if not idx:
+        return
+    radius = {i: float(np.sqrt(((shapely.get_coordinates(geoms[i]) - (centre[i] + shift[i])) ** 2)
+                               .sum(axis=1).max())) for i in idx}
+    for _ in range(rounds):
+        arr = np.array([geoms[i] for i in idx], dtype=object)
+        edge = shapely.distance(boundary, arr)  # inside: the rounds before made sure
+        # a round grows an element by at most 1.5 targets: neighbours farther than 4
+        # targets cannot limit it
+        slack = np.minimum(edge - margin, 1.5 * target)
+        a, b = shapely.STRtree(arr).query(arr, predicate="dwithin", distance=4.0 * target)
+        keep = a != b
+        a, b = a[keep], b[keep]
+        if len(a):
+            d = 0.5 * (shapely.distance(arr[a], arr[b]) - target)
+            np.minimum.at(slack, a, d)
+        grow = {}
+        for p, i in enumerate(idx):
+            sl = slack[p] - tol
+            if scale[i] < max_scale and sl > 1e-3 * target and radius[i] > 0:
+                grow[i] = min(1.0 + sl / radius[i], max_scale / scale[i])
+        if not grow:
+            break
+        for i, f in grow.items():
+            scale[i] *= f
+            radius[i] *= f
+            geoms[i] = shapely.affinity.translate(
+                shapely.affinity.scale(base[i], scale[i], scale[i], origin=tuple(centre[i])),
+                shift[i][0], shift[i][1])
+
+
 def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float,
                       min_scale: float = 0.5, rounds: int = 24, repair: bool = True,
-                      straightened: list | None = None
+                      straightened: list | None = None, grow_to: float = 0.0,
+                      max_scale: float = 1.15
                       ) -> tuple[list[PlacedArt], Verification]:
     """Check (and, with ``repair``, enforce) the promises on the art of ``placed``.
 
@@ -243,22 +298,34 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     shapely.prepare(region)
     tol = 1e-9 * max(1.0, float(np.ptp(np.asarray(region.bounds))))
     n = len(placed)
-    base = [art_area(p.paths, p.stroke_scale) for p in placed]
-    centre = [np.asarray(g.centroid.coords[0]) if not g.is_empty else np.zeros(2) for g in base]
+    exact = [art_area(p.paths, p.stroke_scale) for p in placed]
+    centre = [np.asarray(g.centroid.coords[0]) if not g.is_empty else np.zeros(2) for g in exact]
+    # the rounds work on outlines simplified by eps and ask eps more of every distance
+    # (exact checks are the slow part with detailed art); the final check is exact
+    eps = 0.01 * max(min_gap, gap * 0.5)
+    base = [shapely.simplify(g, eps, preserve_topology=True) for g in exact]
+    w_gap, w_margin = min_gap + 2 * eps, margin + eps
+    inner = shapely.buffer(region, -(w_margin + eps))
+    shapely.prepare(inner)
     scale = np.ones(n)
-    alive = np.array([not g.is_empty for g in base])
+    alive = np.array([not g.is_empty for g in exact])
     geoms = list(base)
     slack = 0.02 * min_gap  # aim a little beyond the floor: fewer rounds
     shift = np.zeros((n, 2))
     stuck = np.zeros(n, bool)  # a move made it worse: shrink from now on
 
+    def transform(g, i):
+        return shapely.affinity.translate(
+            shapely.affinity.scale(g, scale[i], scale[i], origin=tuple(centre[i])), shift[i][0], shift[i][1])
+
     def place(i):
-        geoms[i] = shapely.affinity.translate(
-            shapely.affinity.scale(base[i], scale[i], scale[i], origin=tuple(centre[i])),
-            shift[i][0], shift[i][1])
+        geoms[i] = transform(base[i], i)
+
+    def check(exact_edges=False):
+        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges)
 
     for r in range(rounds if repair else 0):
-        need, rel, push, counts, _, _ = _check(geoms, alive, region, boundary, min_gap, margin, tol)
+        need, rel, push, counts, _, _ = check()
         bad = np.flatnonzero(need > 0)
         if len(bad) == 0:
             break
@@ -272,34 +339,45 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 moved.append((i, step))
             else:
                 scale[i] *= max(0.85, 1.0 - rel[i] * (1.0 + slack / max(need[i], 1e-300)))
-                if scale[i] < min_scale:
+                if scale[i] < (min_scale if placed[i].kind == "primary" else 0.5 * min_scale):
                     alive[i] = False
                     continue
             place(i)
         if moved:  # keep only the moves that helped the element that made them
-            after = _check(geoms, alive, region, boundary, min_gap, margin, tol)[0]
+            after = check()[0]
             for i, step in moved:
                 if after[i] >= need[i]:
                     shift[i] -= step
                     stuck[i] = True
                     place(i)
-    # final verification: what is returned
-    need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol)
+    if repair and grow_to > 0:  # give back the room the repair (or the simulation) left
+        _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
+                 w_margin, max_scale, tol, rounds=8, inner=inner)
+    # final verification, exact, on what is returned
+    geoms = [transform(exact[i], i) for i in range(n)]
+    need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
+                                                 exact_edges=True)
     if repair:  # anything still violating after the rounds is dropped
         for i in np.flatnonzero(need > 0):
             alive[i] = False
         if (need > 0).any():
-            need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol)
-    dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not base[i].is_empty]
+            need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin,
+                                                         tol, exact_edges=True)
+    dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not exact[i].is_empty]
     for i, src in dropped:
-        warnings.warn(f"element {i} ({src}) was dropped: moving and shrinking it (to "
-                      f"{min_scale:g} of its size) could not keep the gap and the edge margin",
-                      stacklevel=2)
+        if placed[i].kind == "primary":
+            warnings.warn(f"element {i} ({src}) was dropped: moving and shrinking it (to "
+                          f"{min_scale:g} of its size) could not keep the gap and the edge margin",
+                          stacklevel=2)
+    n_sec = sum(1 for i, _ in dropped if placed[i].kind != "primary")
+    if n_sec:
+        warnings.warn(f"{n_sec} secondary element(s) dropped: their pockets could not hold them "
+                      "a gap away from everything", stacklevel=2)
     out, shrunk = [], {}
     for i in range(n):
         if not alive[i]:
             continue
-        if scale[i] < 1.0 or shift[i].any():
+        if scale[i] != 1.0 or shift[i].any():
             shrunk[i] = float(scale[i])
             out.append(scaled_art(placed[i], float(scale[i]), centre[i], shift[i]))
         else:

@@ -3,9 +3,9 @@
 The reader records, for every shape, the clip paths that apply to it (its own
 ``clip-path`` and its ancestor groups', outermost first) as :class:`ClipRef`\\ s: the
 ``<clipPath>`` id and the *user space of the referencing element* (its transform
-included) as a matrix to the file's user units. The ``<clipPath>`` definitions are
-collected once per file as :class:`ClipDef`\\ s, their children's geometry in the
-clipPath's own coordinates (its ``transform`` and the children's included).
+included; the file's user units for the root ``<svg>``) as a matrix to the file's user
+units. The ``<clipPath>`` definitions are collected once per file as
+:class:`ClipDef`\\ s: their children's geometry, and the clipPath's own ``transform``.
 
 :class:`ClipResolver` turns a shape's refs into one clip region (the intersection of
 the refs' regions, file user units) following SVG's rules:
@@ -13,7 +13,8 @@ the refs' regions, file user units) following SVG's rules:
 * ``clipPathUnits="userSpaceOnUse"`` (default): the children's coordinates are in the
   referencing element's user space; ``"objectBoundingBox"``: fractions of that
   element's bounding box (its geometry, strokes excluded; for a group, the union over
-  its shapes).
+  its shapes). The clipPath's ``transform`` applies after that box mapping, as Gecko
+  and Blink do: user space <- clipPath transform <- box <- child.
 * Each child's raw geometry counts whatever its fill and stroke (every subpath closed),
   filled by its ``clip-rule``; children with ``display:none`` (never parsed) or
   ``visibility:hidden`` do not; a ``clip-path`` on the ``<clipPath>`` itself or on a
@@ -239,6 +240,8 @@ class ClipResolver:
         self.path, self.defs, self.shapes = path, defs, shapes
         self.flatten, self.region_of, self.warn = flatten, region, warn
         self._ref_regions: dict[int, shapely.Geometry | None] = {}
+        self._by_place: dict[tuple, shapely.Geometry | None] = {}
+        self._owners: dict[int, list] | None = None
         self._flat: dict[int, list] = {}
         self._missing: set[str] = set()
 
@@ -248,7 +251,15 @@ class ClipResolver:
         for ref in refs:
             g = self._ref_regions.get(id(ref), False)
             if g is False:
-                g = self._resolve(ref.clip_id, ref.matrix, lambda ref=ref: self._ref_bbox(ref), 0)
+                # shapes clipped one by one by the same clip path in the same user space
+                # share the region, unless it depends on their bounding boxes
+                key = (ref.clip_id, ref.matrix.tobytes())
+                if key in self._by_place:
+                    g = self._by_place[key]
+                else:
+                    g = self._resolve(ref.clip_id, ref.matrix, lambda ref=ref: self._ref_bbox(ref), 0)
+                    if not self._uses_bbox(ref.clip_id):
+                        self._by_place[key] = g
                 self._ref_regions[id(ref)] = g
             if g is None:
                 continue
@@ -265,10 +276,27 @@ class ClipResolver:
             self._flat[key] = self.flatten(sh.segments, sh.matrix)
         return self._flat[key]
 
+    def _uses_bbox(self, clip_id: str) -> bool:
+        """Whether the region of ``clip_id`` depends on the referencing element's box."""
+        seen = set()
+        while clip_id is not None and clip_id not in seen:
+            seen.add(clip_id)
+            cd = self.defs.get(clip_id)
+            if cd is None:
+                return False
+            if cd.bbox_units:
+                return True
+            clip_id = cd.clip_id_of_clip
+        return False
+
     def _ref_bbox(self, ref: ClipRef):
         """Bounding box (x0, y0, x1, y1) of the shapes under ``ref`` in its user space."""
-        pts = [p for sh in self.shapes if any(r is ref for r in sh.clips)
-               for p, _ in self._flat_shape(sh)]
+        if self._owners is None:
+            self._owners = {}
+            for sh in self.shapes:
+                for r in sh.clips:
+                    self._owners.setdefault(id(r), []).append(sh)
+        pts = [p for sh in self._owners.get(id(ref), []) for p, _ in self._flat_shape(sh)]
         return _bbox_in(pts, ref.matrix)
 
     def _resolve(self, clip_id: str, matrix: np.ndarray, bbox_fn, depth: int):
