@@ -461,7 +461,7 @@ def test_unpainted_container_packs(tmp_path):
     out = tmp_path / "o.svg"
     res = CliRunner().invoke(app, ["pack", str(bare), str(APPLE), "-o", str(out),
                                    "--count", "3", "--max-iterations", "200", "--gap", "1",
-                                   "--seed", "1", "-q"])
+                                   "--seed", "1", "-q", "--no-pocket-fill"])
     assert res.exit_code == 0, res.stderr
     from repulsionpak.io import read_packing_svg
 

@@ -139,6 +139,17 @@ def _edge_distance(region_boundary, region, g) -> float:
     return -float(np.max(shapely.distance(region_boundary, shapely.points(out))))
 
 
+def _thickness(g) -> float:
+    """Width of an overlap (the shorter side of its minimum rotated rectangle): how far
+    the two elements must move apart to clear it (cheap; exact for a lens or a strip)."""
+    if g.is_empty or g.area <= 0:
+        return 0.0
+    c = np.asarray(shapely.get_coordinates(shapely.minimum_rotated_rectangle(g)))
+    if len(c) < 4:
+        return 0.0
+    return float(min(np.hypot(*(c[1] - c[0])), np.hypot(*(c[2] - c[1]))))
+
+
 def _centre(g) -> np.ndarray:
     return np.asarray(shapely.get_coordinates(shapely.centroid(g)))[0]
 
@@ -184,7 +195,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             if dd <= 0.0:
                 counts["overlap_pairs"] += 1
                 inter = shapely.intersection(gi, gj)
-                depth = 2.0 * float(shapely.maximum_inscribed_circle(inter).length) if inter.area > 0 else 0.0
+                depth = _thickness(inter)
                 total = min_gap + depth + 2 * tol
                 pi = pj = _centre(inter) if not inter.is_empty else 0.5 * (centre(i) + centre(j))
                 u = centre(i) - centre(j)
