@@ -133,32 +133,15 @@ class _StopFlag:
             signal.signal(sig, old)
 
 
-def run_pack(container: Path, elements: list[Path], output: Path, secondary: list[Path] | None = None,
-             gap: float | None = None, seed: int | None = None, config: Path | None = None,
-             report: Path | None = None, png: Path | None = None, count: int | None = None,
-             max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
-             checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
-             margin: float | None = None, pocket_fill: bool = True,
-             pdf: Path | None = None) -> dict:
-    """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
-    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it."""
-    from .evaluate import evaluate
-    from .io import load_container, load_elements, render_png, write_packing_svg
-    from .pack import pack
+def resolve_params(config: Path | None = None, gap: float | None = None, seed: int | None = None,
+                   count: int | None = None, max_iterations: int | None = None, margin: float | None = None,
+                   pocket_fill: bool = True):
+    """:class:`Params` from ``--config`` with the options ``--gap``, ``--seed``, ``--count``,
+    ``--max-iterations``, ``--margin`` and ``--no-pocket-fill`` on top, validated; errors
+    name the option. The seed and the gap stay None when neither the config nor the
+    options give them."""
     from .params import Params, load_config
 
-    t_start = time.perf_counter()
-    inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
-    _check_outputs([output, report, png, checkpoint, pdf], inputs + ([resume] if resume else []))
-    if checkpoint_every < 1:
-        raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
-    resumed = None
-    if resume is not None:
-        from .checkpoint import load_checkpoint
-
-        resumed = load_checkpoint(resume)
-        if seed is None:  # the seed of the interrupted run
-            seed = int(next(iter(resumed.values()))["seed"])
     params = load_config(config) if config else Params()
     if gap is not None:
         if not gap > 0:
@@ -172,8 +155,6 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         if not margin >= 0:
             raise ParameterError(f"--margin must be a number >= 0, got {margin:g}")
         params = dataclasses.replace(params, margin=margin)
-    if params.seed is None:
-        params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     for option, value, low in (("--count", count, 1), ("--max-iterations", max_iterations, 1), ("--seed", seed, 0)):
         if value is not None and value < low:  # name the option, not the config key
             raise ParameterError(f"{option} must be >= {low}, got {value}")
@@ -181,7 +162,38 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
     if max_iterations is not None:
         params = dataclasses.replace(params, sim=dataclasses.replace(params.sim, max_iterations=max_iterations))
-    params.validate()
+    return params.validate()
+
+
+def run_pack(container: Path, elements: list[Path], output: Path, secondary: list[Path] | None = None,
+             gap: float | None = None, seed: int | None = None, config: Path | None = None,
+             report: Path | None = None, png: Path | None = None, count: int | None = None,
+             max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
+             checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
+             margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None) -> dict:
+    """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
+    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it."""
+    from .evaluate import evaluate
+    from .io import load_container, load_elements, render_png
+    from .io.svg_write import atomic_write_bytes
+    from .pack import pack
+    from .packing_output import invariants, packing_svg_text
+
+    t_start = time.perf_counter()
+    inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
+    _check_outputs([output, report, png, checkpoint, pdf], inputs + ([resume] if resume else []))
+    if checkpoint_every < 1:
+        raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
+    resumed = None
+    if resume is not None:
+        from .checkpoint import load_checkpoint
+
+        resumed = load_checkpoint(resume)
+        if seed is None:  # the seed of the interrupted run
+            seed = int(next(iter(resumed.values()))["seed"])
+    params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill)
+    if params.seed is None:
+        params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     from .pack import default_gap
 
     # the container's curves are flattened finely (gap/100; without a gap, read twice:
@@ -206,6 +218,11 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         if checkpoint is not None:
             def on_checkpoint(states: dict) -> None:
                 save_checkpoint(checkpoint, {k: dict(v, seed=params.seed) for k, v in states.items()}, fp)
+    if progress:
+        from .sim.kernels import cache_is_cold
+
+        if cache_is_cold():
+            typer.echo("compiling the simulation kernels, first run only…", err=True)
     with _Progress(progress) as prog, _StopFlag() as stop:
         packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
                        on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every, resume=resumed)
@@ -214,22 +231,15 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     metrics = evaluate(cont, packing.placed, g, with_scp=False,
                        sources=[*elems, *secs] if report is not None else None)
     checks = invariants(packing, metrics)
-    attrs = {"seed": str(params.seed), "iterations": str(sum(packing.iterations.values())),
-             "area-fraction": f"{metrics['area_fraction']:.4f}"}
-    meta = {"generator": "repulsionpak", "seed": params.seed, "partial": packing.partial,
-            "stopped_by": packing.stopped_by, "invariants": checks}
-    debug = {"skins": packing.skins()} if debug_layers else None
-    svg_options = dict(attrs=attrs, debug_layers=debug, partial=packing.partial, metadata=meta)
+    text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
+    if output.suffix.lower() == ".pdf" or pdf is not None:
+        from .render.pdf import pdf_bytes
     if output.suffix.lower() == ".pdf":
-        from .render.pdf import write_packing_pdf
-
-        write_packing_pdf(output, cont, packing.placed, g, **svg_options)
+        atomic_write_bytes(output, pdf_bytes(text, output))
     else:
-        write_packing_svg(output, cont, packing.placed, g, **svg_options)
+        atomic_write_bytes(output, text.encode("utf-8"))
     if pdf is not None:
-        from .render.pdf import write_packing_pdf
-
-        write_packing_pdf(pdf, cont, packing.placed, g, **svg_options)
+        atomic_write_bytes(pdf, pdf_bytes(text, pdf))
     if png is not None:
         render_png(png, cont, packing.placed)
     seconds = dict(packing.seconds)
@@ -265,21 +275,6 @@ def _expand(paths: list[Path]) -> list[Path]:
     return out
 
 
-def invariants(packing, metrics: dict) -> dict:
-    """End-of-run checks of the promises, on the art as written (never silently ignored):
-    the final verification (``verify.py``: overlap, outside, edge margin, gap floor) and the
-    exact overlap area measured independently by ``evaluate``."""
-    ver = packing.verification.to_dict() if packing.verification is not None else {}
-    art_ok = bool(metrics["overlap_area"] <= 1e-9 * packing.container.area)
-    return {
-        **ver,
-        "art_overlap_area": float(metrics["overlap_area"]),
-        "art_overlap_ok": art_ok,
-        "elements_outside": int(metrics.get("n_outside", 0)),
-        "ok": bool(ver.get("ok", True) and art_ok and not metrics.get("n_outside", 0)),
-    }
-
-
 def _write_json_atomic(path: Path, data: dict) -> None:
     from .io.svg_write import atomic_write_bytes
 
@@ -298,29 +293,40 @@ def _summary(rep: dict, output: Path) -> str:
 
 
 DebugOpt = Annotated[bool, typer.Option("--debug", help="Show Python tracebacks on errors.")]
+# options shared by `pack` and `batch`
+ContainerArg = Annotated[Path, typer.Argument(help="Container: SVG or .path file; every closed path is a region.")]
+ElementsArg = Annotated[list[Path], typer.Argument(help="Element files (SVG or .path) or directories of them.")]
+SecondaryOpt = Annotated[Optional[list[Path]], typer.Option("--secondary", help="Secondary element files or directories.")]
+GapOpt = Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")]
+ConfigOpt = Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")]
+CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")]
+MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")]
+QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
+MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
+NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")]
 
 
 @app.command()
 def pack(
-    container: Annotated[Path, typer.Argument(help="Container: SVG or .path file; every closed path is a region.")],
-    elements: Annotated[list[Path], typer.Argument(help="Element files (SVG or .path) or directories of them.")],
+    container: ContainerArg,
+    elements: ElementsArg,
     output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG (or a vector PDF when it ends in .pdf).")],
-    secondary: Annotated[Optional[list[Path]], typer.Option("--secondary", help="Secondary element files or directories.")] = None,
-    gap: Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")] = None,
+    secondary: SecondaryOpt = None,
+    gap: GapOpt = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
-    margin: Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")] = None,
-    no_pocket_fill: Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")] = False,
-    config: Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")] = None,
+    margin: MarginOpt = None,
+    no_pocket_fill: NoPocketFillOpt = False,
+    config: ConfigOpt = None,
     report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
     png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
     pdf: Annotated[Optional[Path], typer.Option(help="Also write the packing as a vector PDF (for print).")] = None,
-    count: Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")] = None,
-    max_iterations: Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")] = None,
+    count: CountOpt = None,
+    max_iterations: MaxIterationsOpt = None,
     debug_layers: Annotated[bool, typer.Option("--debug-layers", help="Add hidden skin layers to the SVG.")] = False,
     checkpoint: Annotated[Optional[Path], typer.Option(help="Save the simulation state to this file periodically.")] = None,
     checkpoint_every: Annotated[int, typer.Option(help="Iterations between checkpoints.")] = 500,
     resume: Annotated[Optional[Path], typer.Option(help="Continue an interrupted run from its checkpoint (same inputs and options).")] = None,
-    quiet: Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")] = False,
+    quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
     """Pack CONTAINER with deformed copies of ELEMENTS and write OUTPUT (SVG)."""
@@ -382,6 +388,130 @@ def evaluate(
             plot_scp([(p.stem, r) for p, r in results], plot, gap=results[0][1]["gap"]["requested"])
 
 
+class _BatchProgress:
+    """Progress of a batch: a bar on a terminal, else one line per finished job."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled
+        self.tty = enabled and sys.stderr.isatty()
+        self._live = None
+        self._task = None
+        self.n = self.done = self.failed = 0
+
+    def start(self, n_jobs: int, client) -> None:
+        self.n = n_jobs
+        if not self.enabled:
+            return
+        workers = client.scheduler_info().get("workers", {})
+        typer.echo(f"repulsionpak: {n_jobs} packings on {len(workers)} Dask workers ({client.scheduler.address})",
+                   err=True)
+        if not workers:
+            typer.echo("repulsionpak: no worker yet: start some with `dask worker ADDRESS`", err=True)
+        if self.tty:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, \
+                TimeRemainingColumn
+
+            self._live = Progress(TextColumn("[bold]batch"), BarColumn(), MofNCompleteColumn(),
+                                  TextColumn("{task.fields[failed]} failed"), TimeElapsedColumn(),
+                                  TimeRemainingColumn(), transient=True, console=Console(stderr=True))
+            self._live.__enter__()
+            self._task = self._live.add_task("batch", total=n_jobs, failed=0)
+
+    def __call__(self, i: int, job, result) -> None:
+        self.done += 1
+        self.failed += not result.ok
+        if self.enabled:
+            for w in result.warnings:
+                line = f"repulsionpak: warning: {job.name}: {w}"
+                if self._live is not None:
+                    self._live.console.print(line, markup=False, highlight=False)
+                else:
+                    typer.echo(line, err=True)
+        if self._live is not None:
+            self._live.update(self._task, advance=1, failed=self.failed)
+        elif self.enabled:
+            m = result.metrics or {}
+            what = (f"area {m['area_fraction']:.3f}, Q_s(gap/2) {result.scp_half_gap:.4f}"
+                    if result.ok and result.scp_half_gap is not None else f"failed: {result.error}")
+            typer.echo(f"[{self.done}/{self.n}] {job.name}: {what} ({result.seconds:.1f} s)", err=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self._live is not None:
+            self._live.__exit__(*exc)
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM ends a batch like Ctrl-C does (cancel, write what finished, exit 130)."""
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        old = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not in the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+@app.command()
+def batch(
+    container: ContainerArg,
+    elements: ElementsArg,
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output directory (created if missing).")],
+    seeds: Annotated[str, typer.Option(help="Seeds: A-B (inclusive), N, or a comma list of them.")],
+    set_: Annotated[Optional[list[str]], typer.Option(
+        "--set", help="SECTION.NAME=V1,V2,...: one job per value, combined with every seed and every other "
+                      "--set (names as in `repulsionpak params`).")] = None,
+    workers: Annotated[Optional[int], typer.Option(help="Worker processes of the local Dask cluster (default: one per core).")] = None,
+    scheduler: Annotated[Optional[str], typer.Option(help="Run on this Dask scheduler (tcp://HOST:PORT) instead of a local cluster.")] = None,
+    secondary: SecondaryOpt = None,
+    gap: GapOpt = None,
+    count: CountOpt = None,
+    max_iterations: MaxIterationsOpt = None,
+    margin: MarginOpt = None,
+    no_pocket_fill: NoPocketFillOpt = False,
+    config: ConfigOpt = None,
+    quiet: QuietOpt = False,
+    debug: DebugOpt = False,
+) -> None:
+    """Run one packing per seed × --set value as Dask tasks; write OUTDIR/*.svg, results.csv,
+    best.svg (lowest Q_s(gap/2)) and contact-sheet.png."""
+    global _DEBUG
+    _DEBUG = debug
+    from .batch import run_batch
+
+    with _errors():
+        base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill)
+        with _BatchProgress(not quiet) as prog, _sigterm_as_interrupt():
+            summary = run_batch(container, elements, output, seeds, set_ or [], base, secondary or [],
+                                workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog)
+        n = len(summary.jobs)
+        if not quiet:
+            best = summary.best
+            typer.echo(f"{output}: {summary.n_done} of {n} packings done, {summary.n_failed} failed, in "
+                       f"{summary.seconds:.1f} s; "
+                       + (f"best {best.name}.svg (Q_s(gap/2) {best.scp_half_gap:.4f}) -> best.svg"
+                          if best is not None else "no best.svg (nothing finished)"), err=True)
+        if summary.interrupted:
+            typer.echo(f"repulsionpak: interrupted: {n - summary.n_done - summary.n_failed} packings cancelled; "
+                       "results.csv lists what finished", err=True)
+            raise typer.Exit(130)
+        if summary.n_failed:
+            codes = {r.exit_code for r in summary.results if r is not None and not r.ok}
+            code = codes.pop() if summary.n_done == 0 and len(codes) == 1 else 1
+            typer.echo(f"repulsionpak: error: {summary.n_failed} of {n} packings failed; see the error column "
+                       f"of {output / 'results.csv'}", err=True)
+            raise typer.Exit(code)
+
+
 @app.command()
 def demo(
     output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG (a PNG is written beside it).")] = Path("repulsionpak-demo.svg"),
@@ -390,7 +520,7 @@ def demo(
     quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Pack the example library shipped with repulsionpak (SVG + PNG, about half a minute)."""
+    """Pack the example library shipped with repulsionpak (SVG + PNG, a few seconds; the first run also compiles the simulation kernels)."""
     global _DEBUG
     _DEBUG = debug
     from . import examples
@@ -415,10 +545,13 @@ def study(
     runs: Annotated[int, typer.Option(help="Packings per k_e (paper: 10).")] = 10,
     seed: Annotated[int, typer.Option(help="Base seed.")] = 0,
     json_out: Annotated[Optional[Path], typer.Option("--json", help="Also write all results as JSON.")] = None,
+    workers: Annotated[Optional[int], typer.Option(help="Worker processes of the local Dask cluster (default: one per core).")] = None,
+    scheduler: Annotated[Optional[str], typer.Option(help="Run on this Dask scheduler (tcp://HOST:PORT) instead of a local cluster.")] = None,
     quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
     debug: DebugOpt = False,
 ) -> None:
-    """The paper's deformation study (Fig. 10): SCP of packings with weak to stiff springs."""
+    """The paper's deformation study (Fig. 10): SCP of packings with weak to stiff springs,
+    run as Dask tasks like `batch`."""
     global _DEBUG
     _DEBUG = debug
     from . import examples
@@ -445,7 +578,8 @@ def study(
                 typer.echo(f"k_e={k:g} run {i + 1}/{runs}: area {r['area_fraction']:.3f}, "
                            f"Q_s(gap/2)/Q_s(0) {r['scp_ratio']:.3f}", err=True)
 
-        res = deformation_study(cont, elems, g, ks, runs=runs, seed=seed, on_run=on_run)
+        res = deformation_study(cont, elems, g, ks, runs=runs, seed=seed, on_run=on_run,
+                                workers=workers, scheduler=scheduler)
         plot_scp_bands(res["groups"], output, g)
         if json_out is not None:
             slim = {"gap": g, "summary": res["summary"],

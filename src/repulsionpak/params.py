@@ -44,7 +44,7 @@ class PreprocessParams:
     interior_points: bool = _doc(
         True, "-", "Allow Steiner points inside the skin for a quality triangulation.")
     min_angle: float = _doc(
-        20.0, "degrees", "Minimum triangle angle of the quality triangulation (Triangle's q switch).")
+        20.0, "degrees", "Smallest triangle angle the mesh refinement aims at (at most 34).")
     flatten_tolerance: float = _doc(
         0.25, "× gap", "Maximum chord error when flattening curves (at most gap/4).")
     min_boundary_vertices: int = _doc(

@@ -1,5 +1,5 @@
 """Moved to :mod:`repulsionpak.render.png` (kept importable from here)."""
 
-from ..render.png import render_png
+from ..render.png import contact_sheet_png, png_bytes, render_png
 
-__all__ = ["render_png"]
+__all__ = ["contact_sheet_png", "png_bytes", "render_png"]

@@ -15,7 +15,7 @@ from ..types import ArtPath, Container, PlacedArt
 from ..io.svg_read import RegionTooComplex, rings_to_region
 from ..io.svg_write import atomic_write_bytes
 
-__all__ = ["render_png"]
+__all__ = ["contact_sheet_png", "png_bytes", "render_png"]
 
 _DPI = 100
 _CAPS = {"butt": "butt", "round": "round", "square": "projecting"}
@@ -127,6 +127,18 @@ def render_png(
     matplotlib fills by winding); stroke widths are in data units. ``background``
     None or ``"none"`` gives a transparent image. Deterministic; written atomically.
     """
+    atomic_write_bytes(path, png_bytes(container, placed, size_px, background, show_container, path=path))
+
+
+def png_bytes(
+    container: Container,
+    placed: list[PlacedArt],
+    size_px: int = 1200,
+    background: str | None = "white",
+    show_container: bool = True,
+    path: str | Path = "<png>",
+) -> bytes:
+    """The PNG file :func:`render_png` writes, as bytes (``path`` only names it in errors)."""
     try:
         size_px = int(size_px)
     except (TypeError, ValueError):
@@ -207,4 +219,68 @@ def render_png(
 
     buf = io.BytesIO()
     canvas.print_png(buf, metadata={"Software": "repulsionpak"})
-    atomic_write_bytes(path, buf.getvalue())
+    return buf.getvalue()
+
+
+def contact_sheet_png(
+    tiles: list[bytes | None],
+    labels: list[str],
+    tile_px: int,
+    columns: int | None = None,
+    label_px: int = 18,
+) -> bytes:
+    """A grid of thumbnails as one PNG, each tile with a one-line label under it.
+
+    ``tiles[i]`` is a PNG (as :func:`png_bytes` makes, longer side at most ``tile_px``)
+    or None for an empty tile (a failed job: only its label shows). Tiles run left to
+    right, top to bottom, ``columns`` per row (default: ceil(sqrt(n))). The sheet is
+    exactly ``columns * tile_px`` wide and ``rows * (tile_px + label_px)`` high, so the
+    tile count can be read back from its size. Deterministic.
+    """
+    if len(tiles) != len(labels):
+        raise ValueError("need one label per tile")
+    n = len(tiles)
+    if n == 0:
+        raise ValueError("no tiles")
+    if not 16 <= tile_px <= 4000:
+        raise ParameterError(f"tile_px must be between 16 and 4000, got {tile_px}")
+    cols = columns or math.ceil(math.sqrt(n))
+    rows = math.ceil(n / cols)
+    cell_h = tile_px + label_px
+    W, H = cols * tile_px, rows * cell_h
+    import matplotlib
+
+    if "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")
+    import matplotlib.image as mimage
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(W / _DPI, H / _DPI), dpi=_DPI)
+    canvas = FigureCanvasAgg(fig)
+    fig.patch.set_facecolor("white")
+    font_pt = max(4.0, 0.62 * label_px * 72.0 / _DPI)
+    for i, (tile, label) in enumerate(zip(tiles, labels)):
+        r, c = divmod(i, cols)
+        x0, y_top = c * tile_px, r * cell_h  # pixels, y down
+        if tile is not None:
+            img = mimage.imread(io.BytesIO(tile), format="png")
+            th, tw = img.shape[:2]
+            if th > tile_px or tw > tile_px:
+                raise ValueError(f"tile {i} is {tw}x{th} px, larger than {tile_px}")
+            # figimage places the image's lower-left corner, in pixels from the bottom
+            xo = x0 + (tile_px - tw) // 2
+            yo = H - (y_top + (tile_px - th) // 2 + th)
+            fig.figimage(img, xo=xo, yo=yo, origin="upper")
+        else:  # an empty tile shows as a light square
+            from matplotlib.patches import Rectangle
+
+            pad = max(2, tile_px // 40)
+            fig.add_artist(Rectangle(((x0 + pad) / W, 1.0 - (y_top + tile_px - pad) / H),
+                                     (tile_px - 2 * pad) / W, (tile_px - 2 * pad) / H,
+                                     transform=fig.transFigure, facecolor="#f0f0f0", edgecolor="none"))
+        fig.text((x0 + tile_px / 2) / W, 1.0 - (y_top + tile_px + label_px / 2) / H, label,
+                 ha="center", va="center", fontsize=font_pt, color="#222222" if tile is not None else "#b00020")
+    buf = io.BytesIO()
+    canvas.print_png(buf, metadata={"Software": "repulsionpak"})
+    return buf.getvalue()
