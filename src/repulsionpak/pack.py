@@ -177,7 +177,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
-    placed = placed_art(packing.templates, packing.model, packing.state, frame)
+    placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
     t4 = time.perf_counter()
     v = params.verify
     straightened: list[int] = []
