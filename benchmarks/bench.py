@@ -2,8 +2,11 @@
 
     python benchmarks/bench.py iteration [--plot docs/images/bench-scaling.png]  # ms/iteration vs vertices
     python benchmarks/bench.py preprocess           # preprocessing time per element
-    python benchmarks/bench.py heart                # whole `repulsionpak pack` on ../shared/data (5 runs)
+    python benchmarks/bench.py heart                # whole `repulsionpak pack` on ../shared/data, animals only (5 runs)
+    python benchmarks/bench.py pockets              # the default command: pockets filled with small animals
     python benchmarks/bench.py secondary            # the same with secondary cats (seeding time)
+    python benchmarks/bench.py mesh                 # skin mesh quality (angles, counts)
+    python benchmarks/bench.py firstrun             # `repulsionpak demo` with an empty kernel cache, twice
     python benchmarks/bench.py all
 
 Fixed seeds; results are printed as Markdown table rows for docs/benchmarks.md.
@@ -75,9 +78,9 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
                                    cell_size=max(params.sim.cell_size * size, 3 * gap / frame.unit),
                                    gap=gap / frame.unit)
         sim = Simulator(model, state, params.sim)
-        import numba
+        from repulsionpak.sim.kernels import set_threads
 
-        numba.set_num_threads(sim.threads())
+        set_threads(sim.threads())
         for _ in range(warmup):  # grow them a while so neighbours interact, then time
             sim.step()
         t0 = time.perf_counter()
@@ -122,7 +125,7 @@ def bench_preprocess() -> None:
     print(f"preprocess: {dt * 1e3:.1f} ms per element ({n} elements, gap 5, ~60 units across)")
 
 
-def bench_heart(runs: int = 5, secondary: bool = False) -> None:
+def bench_heart(runs: int = 5, secondary: bool = False, pockets: bool = False) -> None:
     """Whole ``repulsionpak pack`` processes on the paper's heart scene (the kernels are
     compiled by a first, untimed run if the cache is cold); min / median / max wall time."""
     import json
@@ -134,6 +137,8 @@ def bench_heart(runs: int = 5, secondary: bool = False) -> None:
            "-o", "/tmp/bench-heart.svg", "--gap", "5.2", "--seed", "1", "--report", "/tmp/bench-heart.json", "-q"]
     if secondary:
         cmd += ["--secondary", str(SHARED / "secondary" / "small_cat.svg")]
+    elif not pockets:  # the animals alone, as the paper's Fig. 3d (comparable with the C++)
+        cmd += ["--no-pocket-fill"]
     subprocess.run(cmd, check=True)  # warm the kernel cache
     walls = []
     for k in range(runs):
@@ -152,9 +157,71 @@ def bench_heart(runs: int = 5, secondary: bool = False) -> None:
           f"max {max(walls):.2f} s over {runs} runs")
 
 
+def bench_mesh() -> None:
+    """Skin meshes as the packings build them: the shipped examples at the demo's scale
+    (heart, gap 5) and the paper's animals at the heart scene's (gap 5.2). Smallest angle
+    (over all triangles, and the 1st percentile of the per-triangle smallest angle),
+    vertex and triangle counts, triangulation time."""
+    from repulsionpak import examples
+    from repulsionpak.geometry import triangulate
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.pack import prepare
+    from repulsionpak.params import Params
+
+    scenes = [("examples", examples.container_file("heart"), examples.element_files(), 5.0)]
+    if SHARED.exists():
+        scenes.append(("animals", SHARED / "containers" / "heart.svg",
+                       sorted((SHARED / "animals").glob("*.svg")), 5.2))
+    print("| skins | elements | min angle | 1st percentile | vertices | boundary | triangles | triangulation ms |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for name, cont, files, gap in scenes:
+        spent = [0.0]
+        inner = triangulate.triangulate_polygon
+
+        def timed(*a, **k):
+            t0 = time.perf_counter()
+            out = inner(*a, **k)
+            spent[0] += time.perf_counter() - t0
+            return out
+
+        import repulsionpak.preprocess as pp
+        pp.triangulate_polygon = timed
+        try:
+            templates, _, _ = prepare(load_container(cont), load_elements(files), Params(gap=gap, seed=1),
+                                      np.random.default_rng(1))
+        finally:
+            pp.triangulate_polygon = inner
+        q = np.degrees(np.concatenate([triangulate.min_angles(t.verts, t.tris) for t in templates]))
+        nv = sum(len(t.verts) for t in templates)
+        nb = sum(t.n_skin for t in templates)
+        nt = sum(len(t.tris) for t in templates)
+        print(f"| {name} | {len(templates)} | {q.min():.1f}° | {np.percentile(q, 1):.1f}° | {nv} | {nb} | {nt} "
+              f"| {spent[0] * 1e3:.0f} |")
+
+
+def bench_firstrun() -> None:
+    """``repulsionpak demo`` twice with an empty numba cache (NUMBA_CACHE_DIR in a fresh
+    temporary folder): the first run compiles the kernels, the second loads them. Wall
+    and CPU time of the whole process."""
+    import os
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
+        for label in ("first run (cold cache)", "second run"):
+            t0 = time.perf_counter()
+            r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+            subprocess.run([sys.executable, "-m", "repulsionpak.cli", "demo", "-o", os.path.join(tmp, "d.svg")],
+                           check=True, env=env, stderr=subprocess.DEVNULL)
+            r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+            print(f"demo, {label}: wall {time.perf_counter() - t0:.1f} s, CPU {cpu:.1f} s", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["iteration", "preprocess", "heart", "secondary", "all"])
+    ap.add_argument("what", choices=["iteration", "preprocess", "heart", "pockets", "secondary", "mesh",
+                                     "firstrun", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
@@ -163,8 +230,14 @@ def main() -> None:
         bench_preprocess()
     if a.what in ("heart", "all"):
         bench_heart()
+    if a.what in ("pockets", "all"):  # the default command: pockets filled with small animals
+        bench_heart(runs=2, pockets=True)
     if a.what in ("secondary", "all"):
         bench_heart(runs=2, secondary=True)
+    if a.what in ("mesh", "all"):
+        bench_mesh()
+    if a.what in ("firstrun", "all"):
+        bench_firstrun()
     if a.what in ("iteration", "all"):
         bench_iteration(plot=a.plot)
 

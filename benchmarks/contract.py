@@ -23,6 +23,7 @@ import json
 import multiprocessing
 import os
 import platform
+import re
 import subprocess
 import sys
 import tempfile
@@ -349,7 +350,14 @@ def main(argv=None) -> int:
         from repulsionpak.metrics import limits_dict
 
         pics = [r for r in ordered if r.get("picture")]
-        atomic_write_bytes(out_dir / "quality.md", markdown(ordered, meta, pics).encode())
+        page = markdown(ordered, meta, pics)
+        old = out_dir / "quality.md"
+        if old.exists():  # sections other benchmarks own (e.g. "## Output curves") are kept
+            text = old.read_text()
+            m = re.search(r"^## Output curves\n.*?(?=^## |\Z)", text, re.S | re.M)
+            if m:
+                page = page.rstrip("\n") + "\n\n" + m.group(0).rstrip("\n") + "\n"
+        atomic_write_bytes(out_dir / "quality.md", page.encode())
         data = {"meta": meta, "limits": limits_dict(), "scenes": ordered}
         atomic_write_bytes(out_dir / "quality.json", (json.dumps(data, indent=1) + "\n").encode())
         print(f"\nwrote {out_dir / 'quality.md'}, {out_dir / 'quality.json'} and {len(pics)} picture(s)",

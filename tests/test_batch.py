@@ -150,9 +150,11 @@ def test_batch_cli_on_the_local_cluster(tmp_path, local_client):
             continue
         assert r["error"] == "" and int(r["iterations"]) == 600 and float(r["seconds"]) > 0
         m = evaluate_file(out / r["file"])  # the CSV describes the file written
-        assert float(r["area_fraction"]) == pytest.approx(m["area_fraction"], rel=1e-4)
-        assert float(r["scp_half_gap"]) == pytest.approx(m["scp_at_half_gap"], rel=1e-3, abs=1e-4)
-        assert float(r["gap_median"]) == pytest.approx(m["gap"]["median"], rel=1e-3)
+        # (the file holds the art as fitted curves, within render's tolerance of the
+        # polylines the metrics were computed on)
+        assert float(r["area_fraction"]) == pytest.approx(m["area_fraction"], rel=3e-3)
+        assert float(r["scp_half_gap"]) == pytest.approx(m["scp_at_half_gap"], rel=1e-2, abs=1e-3)
+        assert float(r["gap_median"]) == pytest.approx(m["gap"]["median"], rel=1e-2)
         assert float(r["overlap_area"]) == pytest.approx(m["overlap_area"], abs=1e-6)
     ok = [r for r in rows if r["file"]]
     best = min(ok, key=lambda r: float(r["scp_half_gap"]))

@@ -368,7 +368,8 @@ def test_resample_adaptive_clusters_samples_at_a_sharp_corner():
         return int((np.hypot(out[:, 0] - p[0], out[:, 1] - p[1]) <= r).sum())
 
     # a chord may cut a corner by at most the tolerance: a sample lands right next to it
-    for corner in ring:
+    np.testing.assert_array_equal(out[0], ring[0])  # the first corner is the first sample
+    for corner in ring[1:]:
         assert count_near(corner) >= 2
         assert np.hypot(*(out - corner).T).min() <= 2 * 0.05
     for mid in [(a / 2, 0), (a, a / 2), (a / 2, a), (0, a / 2)]:
@@ -382,6 +383,25 @@ def test_resample_adaptive_keeps_spike_tip_within_tolerance():
     out = resample_adaptive(spike, 3.0, tol)
     tip_gap = shapely.LinearRing(out).distance(Point(20.0, 0.5))
     assert tip_gap <= 2 * tol  # even allowing the dense-sampling slack (step ≤ tol)
+
+
+def test_resample_adaptive_has_no_sliver_at_the_seam():
+    # the greedy pass used to end a sliver short of the first sample (a 0.25 edge between
+    # 5-unit edges, in a quarter of these ellipses), which gave the skin meshes their
+    # smallest angles
+    rng = np.random.default_rng(7)
+    for _ in range(40):
+        k, rx, aspect = int(rng.integers(40, 400)), rng.uniform(5, 100), rng.uniform(0.3, 1.0)
+        spacing, tol = rng.uniform(0.05, 0.5) * rx, rng.uniform(0.002, 0.05) * rx
+        t = rng.uniform(0, 2 * np.pi) + np.linspace(0, 2 * np.pi, k, endpoint=False)
+        ring = np.column_stack([rx * np.cos(t), aspect * rx * np.sin(t)])
+        out = resample_adaptive(ring, spacing, tol)
+        edges = np.hypot(*(np.roll(out, -1, axis=0) - out).T)
+        assert edges[-1] >= 0.5 * edges[-2] * (1 - 1e-9)
+        np.testing.assert_allclose(out[0], ring[0], atol=1e-12)
+        dev, arc = chord_deviation(ring, out)
+        assert arc <= spacing * (1 + 1e-6)
+        assert dev <= tol * (1 + max_turn(ring)) + 1e-9 * rx
 
 
 def test_resample_adaptive_rejects_bad_arguments():

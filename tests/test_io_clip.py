@@ -266,7 +266,7 @@ def test_packing_a_clipped_element_places_discs(tmp_path):
     out = tmp_path / "o.svg"
     res = CliRunner().invoke(app, ["pack", str(circle), str(CLIP / "square_disc.svg"), "-o", str(out),
                                    "--count", "4", "--max-iterations", "200", "--gap", "10",
-                                   "--seed", "1", "-q"])
+                                   "--seed", "1", "-q", "--no-pocket-fill"])
     assert res.exit_code == 0, res.stderr
     _, placed, _ = read_packing_svg(out)
     assert len(placed) == 4

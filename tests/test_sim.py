@@ -61,7 +61,9 @@ CONTAINER = Container("square.svg", box(0, 0, SIDE, SIDE))
 
 
 def scene_params(seed=1, max_iterations=None, settle=None, count=8) -> Params:
+    """The primary phase alone (no pocket filling): these tests are about its physics."""
     p = Params(seed=seed, gap=GAP)
+    p = replace(p, secondary=replace(p.secondary, auto=False))
     sim = p.sim if max_iterations is None else replace(p.sim, max_iterations=max_iterations)
     if settle is not None:
         sim = replace(sim, settle_iterations=settle, min_iterations=min(sim.min_iterations, max_iterations))

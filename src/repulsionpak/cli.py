@@ -170,8 +170,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              report: Path | None = None, png: Path | None = None, count: int | None = None,
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
-             margin: float | None = None, pocket_fill: bool = True) -> dict:
-    """Everything ``repulsionpak pack`` does; returns the report dict."""
+             margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None) -> dict:
+    """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
+    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png
     from .io.svg_write import atomic_write_bytes
@@ -180,7 +181,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
     t_start = time.perf_counter()
     inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
-    _check_outputs([output, report, png, checkpoint], inputs + ([resume] if resume else []))
+    _check_outputs([output, report, png, checkpoint, pdf], inputs + ([resume] if resume else []))
     if checkpoint_every < 1:
         raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
     resumed = None
@@ -217,6 +218,11 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         if checkpoint is not None:
             def on_checkpoint(states: dict) -> None:
                 save_checkpoint(checkpoint, {k: dict(v, seed=params.seed) for k, v in states.items()}, fp)
+    if progress:
+        from .sim.kernels import cache_is_cold
+
+        if cache_is_cold():
+            typer.echo("compiling the simulation kernels, first run only…", err=True)
     with _Progress(progress) as prog, _StopFlag() as stop:
         packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
                        on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every, resume=resumed)
@@ -226,7 +232,14 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
                        sources=[*elems, *secs] if report is not None else None)
     checks = invariants(packing, metrics)
     text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
-    atomic_write_bytes(output, text.encode("utf-8"))
+    if output.suffix.lower() == ".pdf" or pdf is not None:
+        from .render.pdf import pdf_bytes
+    if output.suffix.lower() == ".pdf":
+        atomic_write_bytes(output, pdf_bytes(text, output))
+    else:
+        atomic_write_bytes(output, text.encode("utf-8"))
+    if pdf is not None:
+        atomic_write_bytes(pdf, pdf_bytes(text, pdf))
     if png is not None:
         render_png(png, cont, packing.placed)
     seconds = dict(packing.seconds)
@@ -297,7 +310,7 @@ NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without
 def pack(
     container: ContainerArg,
     elements: ElementsArg,
-    output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG (or a vector PDF when it ends in .pdf).")],
     secondary: SecondaryOpt = None,
     gap: GapOpt = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
@@ -306,6 +319,7 @@ def pack(
     config: ConfigOpt = None,
     report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
     png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
+    pdf: Annotated[Optional[Path], typer.Option(help="Also write the packing as a vector PDF (for print).")] = None,
     count: CountOpt = None,
     max_iterations: MaxIterationsOpt = None,
     debug_layers: Annotated[bool, typer.Option("--debug-layers", help="Add hidden skin layers to the SVG.")] = False,
@@ -322,7 +336,7 @@ def pack(
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
-                       margin=margin, pocket_fill=not no_pocket_fill)
+                       margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:
@@ -506,7 +520,7 @@ def demo(
     quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Pack the example library shipped with repulsionpak (SVG + PNG, about half a minute)."""
+    """Pack the example library shipped with repulsionpak (SVG + PNG, a few seconds; the first run also compiles the simulation kernels)."""
     global _DEBUG
     _DEBUG = debug
     from . import examples

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -162,6 +163,11 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction)
     if not secondary and params.secondary.auto:
         secondary = elements  # the pockets get small copies of the primaries (sec. 9)
+        cap = 5 * len(placement.template_index)
+        mc = params.secondary.max_count
+        params = dataclasses.replace(params, secondary=dataclasses.replace(
+            params.secondary, max_count=cap if mc is None else min(mc, cap)))
+        packing.params = params
     if secondary and res.stopped_by != "interrupted":
         from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
 
@@ -171,7 +177,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
-    placed = placed_art(packing.templates, packing.model, packing.state, frame)
+    placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
     t4 = time.perf_counter()
     v = params.verify
     straightened: list[int] = []

@@ -44,7 +44,7 @@ class PreprocessParams:
     interior_points: bool = _doc(
         True, "-", "Allow Steiner points inside the skin for a quality triangulation.")
     min_angle: float = _doc(
-        20.0, "degrees", "Minimum triangle angle of the quality triangulation (Triangle's q switch).")
+        20.0, "degrees", "Smallest triangle angle the mesh refinement aims at (at most 34).")
     flatten_tolerance: float = _doc(
         0.25, "× gap", "Maximum chord error when flattening curves (at most gap/4).")
     min_boundary_vertices: int = _doc(
@@ -158,6 +158,32 @@ class SecondaryParams:
 
 
 @dataclass(frozen=True)
+class RenderParams:
+    """Output curves: the deformation map and the curve fitting (``render`` package)."""
+
+    smooth_map: bool = _doc(
+        True, "-", "Map the art with a thin-plate spline through the mesh vertices (smooth); "
+        "false: the paper's per-triangle barycentric map (kinks at triangle edges).")
+    curve_tolerance: float = _doc(
+        1e-3, "× element size", "Largest distance between the written curves and the exact "
+        "mapped outline, relative to the copy's bounding-box diagonal.")
+    max_gap_share: float = _doc(
+        0.02, "× gap", "The curve tolerance never exceeds this share of the gap, so fitting "
+        "cannot eat into the gap between neighbours.")
+    angle_tolerance: float = _doc(
+        1.0, "degrees", "Largest angle between the written curve's direction and the exact "
+        "mapped outline's at any sample: keeps the curvature of the fit close to the exact "
+        "one, so smooth art has no visible bends at the joints of the fitted pieces.")
+    smoothing: float = _doc(
+        0.0, "-", "λ of a smoothing thin-plate spline (coordinates scaled to the element's "
+        "size): 0 passes exactly through every mesh vertex; ~1e-3 irons out spots where the "
+        "simulation crumpled the skin, moving the art up to a few % of the gap off the mesh.")
+    samples: float = _doc(
+        8.0, "per mesh spacing", "Samples of each source segment per mesh edge length when "
+        "mapping it (curves get 8 to 128 samples, lines 3 to 128).")
+
+
+@dataclass(frozen=True)
 class VerifyParams:
     """The final check of the promises on the art, and its repair (``verify.py``)."""
 
@@ -192,6 +218,7 @@ class Params:
     placement: PlacementParams = field(default_factory=PlacementParams)
     sim: SimParams = field(default_factory=SimParams)
     secondary: SecondaryParams = field(default_factory=SecondaryParams)
+    render: RenderParams = field(default_factory=RenderParams)
     verify: VerifyParams = field(default_factory=VerifyParams)
 
     def validate(self) -> "Params":
@@ -251,6 +278,11 @@ class Params:
             (64 <= sec.grid <= 10_000, "secondary.grid must be in [64, 10000]"),
             (sec.max_count is None or sec.max_count >= 0, "secondary.max_count must be >= 0"),
             (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
+            (1e-7 <= self.render.curve_tolerance <= 0.05, "render.curve_tolerance must be in [1e-7, 0.05]"),
+            (0 < self.render.max_gap_share <= 0.5, "render.max_gap_share must be in (0, 0.5]"),
+            (1 <= self.render.samples <= 64, "render.samples must be in [1, 64]"),
+            (0 <= self.render.smoothing <= 1, "render.smoothing must be in [0, 1]"),
+            (0.05 <= self.render.angle_tolerance <= 45, "render.angle_tolerance must be in [0.05, 45] degrees"),
             (0 <= self.verify.min_gap <= 2, "verify.min_gap must be in [0, 2] (× gap)"),
             (0 < self.verify.min_scale <= 1, "verify.min_scale must be in (0, 1]"),
             (self.verify.straighten >= 0, "verify.straighten must be >= 0"),
@@ -271,7 +303,8 @@ class Params:
 MAX_COUNT = 100_000
 
 _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
-             "sim": SimParams, "secondary": SecondaryParams, "verify": VerifyParams}
+             "sim": SimParams, "secondary": SecondaryParams, "render": RenderParams,
+             "verify": VerifyParams}
 
 
 def _check_type(value, tp, where: str, source: str):

@@ -26,7 +26,8 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
     Distance transform of the negative space on a grid of ``params.grid`` pixels along
     the container's longer side; candidates are pixels whose distance is above
     d_min = ``params.d_min``·gap, taken by decreasing distance and kept when no kept seed
-    is within d_sep = ``params.d_sep``·gap (sec. 9).
+    is within d_sep = ``params.d_sep``·gap (sec. 9) nor within its own pocket (the disc of
+    its distance): a large pocket gets one seed that grows to fill it.
 
     Returns (seeds (K, 2), distances (K,)) in container units.
     """
@@ -44,33 +45,24 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
         return np.zeros((0, 2)), np.zeros(0)
     d = dist[iy, ix]
     order = np.argsort(-d, kind="stable")
-    pts = np.column_stack([info["x0"] + (ix[order] + 0.5) * h, info["y0"] + (iy[order] + 0.5) * h])
-    d = d[order]
-    # greedy: a candidate is kept when no kept seed is within d_sep; a coarse hash of kept
-    # seeds keeps this O(candidates)
-    cell = d_sep
-    kept: dict[tuple[int, int], list[int]] = {}
+    iy, ix, d = iy[order], ix[order], d[order]
+    pts = np.column_stack([info["x0"] + (ix + 0.5) * h, info["y0"] + (iy + 0.5) * h])
+    # greedy, deepest first: a kept seed claims the disc of its own pocket (radius its
+    # distance, at least d_sep), so a large pocket gets one seed, not a crowd of them
+    blocked = np.zeros(dist.shape, bool)
+    ny, nx = dist.shape
     out = []
-    d_sep2 = d_sep * d_sep
-    for k in range(len(pts)):
-        px, py = pts[k]
-        cx, cy = int(px // cell), int(py // cell)
-        ok = True
-        for gx in (cx - 1, cx, cx + 1):
-            for gy in (cy - 1, cy, cy + 1):
-                for j in kept.get((gx, gy), ()):
-                    if (pts[j, 0] - px) ** 2 + (pts[j, 1] - py) ** 2 < d_sep2:
-                        ok = False
-                        break
-                if not ok:
-                    break
-            if not ok:
-                break
-        if ok:
-            kept.setdefault((cx, cy), []).append(k)
-            out.append(k)
-            if params.max_count is not None and len(out) >= params.max_count:
-                break
+    for k in range(len(d)):
+        if blocked[iy[k], ix[k]]:
+            continue
+        out.append(k)
+        if params.max_count is not None and len(out) >= params.max_count:
+            break
+        r = max(d_sep, float(d[k])) / h
+        y0, y1 = max(0, int(iy[k] - r)), min(ny, int(iy[k] + r) + 1)
+        x0, x1 = max(0, int(ix[k] - r)), min(nx, int(ix[k] + r) + 1)
+        yy, xx = np.ogrid[y0:y1, x0:x1]
+        blocked[y0:y1, x0:x1] |= (yy - iy[k]) ** 2 + (xx - ix[k]) ** 2 < r * r
     out = np.asarray(out, dtype=np.int64)
     return pts[out], d[out]
 

@@ -6,6 +6,7 @@ in the user units of the file they came from.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -41,6 +42,86 @@ class Style:
         return has_fill or has_stroke
 
 
+def _affine_of(fn) -> np.ndarray | None:
+    """The (3, 3) matrix of ``fn`` on (K, 2) point arrays if it is affine, else None."""
+    probe = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.37, -1.91]])
+    try:
+        out = np.asarray(fn(probe.copy()), dtype=float)
+    except Exception:  # noqa: BLE001  (fn may only accept real subpaths)
+        return None
+    if out.shape != (4, 2) or not np.all(np.isfinite(out)):
+        return None
+    m = np.eye(3)
+    m[:2, 0] = out[1] - out[0]
+    m[:2, 1] = out[2] - out[0]
+    m[:2, 2] = out[0]
+    scale = 1.0 + float(np.abs(out).max())
+    if np.abs(probe[3] @ m[:2, :2].T + m[:2, 2] - out[3]).max() > 1e-9 * scale:
+        return None
+    return m
+
+
+@dataclass(frozen=True, eq=False)
+class CurveSubpath:
+    """One subpath as drawn: a chain of line, quadratic and cubic Bézier segments.
+
+    ``order[i]`` is 1 (line), 2 (quadratic) or 3 (cubic); ``ctrl[i]`` (4, 2) holds the
+    segment's ``order + 1`` control points followed by copies of its end point. Segment
+    i ends where segment i + 1 starts; a closed subpath's last segment ends at the first
+    segment's start (an explicit closing line is included when the drawing has one).
+    Arcs are stored as cubics (at most 45° each, error < 1e-5 of the radius).
+    """
+
+    order: np.ndarray  # (n,) int8
+    ctrl: np.ndarray  # (n, 4, 2) float64
+    closed: bool
+
+    def __post_init__(self):
+        order = np.asarray(self.order, dtype=np.int8).reshape(-1)
+        ctrl = np.asarray(self.ctrl, dtype=float).reshape(-1, 4, 2)
+        if len(order) != len(ctrl) or len(order) == 0 or not ((order >= 1) & (order <= 3)).all():
+            raise ValueError("CurveSubpath needs n >= 1 segments with order 1, 2 or 3 and ctrl of shape (n, 4, 2)")
+        object.__setattr__(self, "order", order)
+        object.__setattr__(self, "ctrl", ctrl)
+
+    @property
+    def start(self) -> np.ndarray:
+        return self.ctrl[0, 0]
+
+    def end_points(self) -> np.ndarray:
+        """(n, 2) end point of every segment."""
+        return self.ctrl[np.arange(len(self.order)), self.order]
+
+    def transformed(self, matrix: np.ndarray) -> "CurveSubpath":
+        """The subpath under the affine map ``matrix`` (3, 3) (exact for Béziers)."""
+        m = np.asarray(matrix, dtype=float)
+        return CurveSubpath(self.order, self.ctrl @ m[:2, :2].T + m[:2, 2], self.closed)
+
+
+@dataclass(frozen=True, eq=False)
+class ShapeSource:
+    """What a shape looked like in its SVG file, beyond its flattened outline.
+
+    ``curves``: the exact outline (user units of the file, or container units for
+    placed art). ``tag`` and ``attrs``: the shape's own markup (geometry attributes and
+    resolved presentation attributes, without ``transform``), and ``matrix`` (3, 3) the
+    composed transform from its local coordinates to user units — the container group of
+    the output redraws its shapes from these. ``fill_paint``/``stroke_paint``: id of the
+    gradient or pattern the shape is painted with (a key of the element's
+    ``paint_servers``), ``local_bbox`` (x0, y0, x1, y1) its bounding box in local
+    coordinates (for ``objectBoundingBox`` units); ``id`` its own id, if any.
+    """
+
+    curves: tuple[CurveSubpath, ...]
+    tag: str = "path"
+    attrs: tuple[tuple[str, str], ...] = ()
+    matrix: np.ndarray = field(default_factory=lambda: np.eye(3))
+    fill_paint: str | None = None
+    stroke_paint: str | None = None
+    local_bbox: tuple[float, float, float, float] | None = None
+    id: str | None = None
+
+
 @dataclass(frozen=True, eq=False)
 class ArtPath:
     """One drawable SVG shape: one or more flattened subpaths painted with one style.
@@ -52,10 +133,21 @@ class ArtPath:
     subpaths: tuple[np.ndarray, ...]
     closed: tuple[bool, ...]
     style: Style = field(default_factory=Style)
+    source: ShapeSource | None = None  # exact curves and markup, when known (SVG input, rendered art)
 
     def transformed(self, fn) -> "ArtPath":
-        """Return a copy whose every subpath is ``fn(points) -> points``."""
-        return ArtPath(tuple(np.asarray(fn(p), dtype=float) for p in self.subpaths), self.closed, self.style)
+        """Return a copy whose every subpath is ``fn(points) -> points``.
+
+        When ``fn`` is affine (checked on four points) the curve-level ``source`` moves
+        with it (curves and paint transform); otherwise it is dropped."""
+        subs = tuple(np.asarray(fn(p), dtype=float) for p in self.subpaths)
+        src = self.source
+        if src is not None:
+            m = _affine_of(fn)
+            src = None if m is None else dataclasses.replace(
+                src, curves=tuple(c.transformed(m) for c in src.curves),
+                matrix=m @ np.asarray(src.matrix, dtype=float))
+        return ArtPath(subs, self.closed, self.style, source=src)
 
     @property
     def n_points(self) -> int:
@@ -69,6 +161,8 @@ class Element:
     name: str  # e.g. "cat"
     source: str  # file name written to data-source, e.g. "cat.svg"
     paths: tuple[ArtPath, ...]
+    #: gradients and patterns the paths refer to: id -> self-contained SVG markup
+    paint_servers: dict = field(default_factory=dict)
 
     def all_points(self) -> np.ndarray:
         """All art vertices stacked, shape (P, 2)."""
@@ -88,6 +182,8 @@ class Container:
     region: shapely.Geometry
     paths: tuple[ArtPath, ...] = ()
     svg_root: dict = field(default_factory=dict)
+    #: gradients and patterns the outlines refer to: id -> self-contained SVG markup
+    paint_servers: dict = field(default_factory=dict)
 
     @property
     def area(self) -> float:
@@ -106,6 +202,9 @@ class PlacedArt:
     ``paths`` (the element's overall scale from its file units to the container's).
     ``deformation`` is a dimensionless measure of how far the element's mesh is from a
     similarity transform of its rest shape (0 = rigid); ``None`` if unknown.
+    When the art was rendered as curves, each path's ``source.curves`` are the curves
+    written and its ``subpaths`` a fine flattening of them (so metrics see exactly what is
+    written); ``paint_servers`` are the copy's own gradients and patterns (ids unique).
     """
 
     source: str
@@ -113,3 +212,10 @@ class PlacedArt:
     paths: tuple[ArtPath, ...]
     stroke_scale: float = 1.0
     deformation: float | None = None
+    paint_servers: dict = field(default_factory=dict)
+    #: (3, 3) similarity from the element's rest frame (its template: centred, at the
+    #: template's scale) to container units, least squares over the mesh; None if unknown
+    frame: np.ndarray | None = None
+    #: the curve tolerance the art was fitted to (container units); the writer rounds the
+    #: coordinates of curves to match it (to tol/5); None: 6 decimals
+    tolerance: float | None = None

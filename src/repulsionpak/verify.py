@@ -18,6 +18,7 @@ non-zero if anything is still violated (on valid input it never is).
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from dataclasses import dataclass, field
 
@@ -62,7 +63,11 @@ def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
     c = np.asarray(centre, dtype=float)
     t = c + np.asarray(shift, dtype=float)
     paths = tuple(p.transformed(lambda pts: t + (np.asarray(pts) - c) * scale) for p in placed.paths)
-    return PlacedArt(placed.source, placed.kind, paths, placed.stroke_scale * scale, placed.deformation)
+    frame = placed.frame
+    if frame is not None:  # the same similarity, as a matrix
+        m = np.array([[scale, 0.0, t[0] - scale * c[0]], [0.0, scale, t[1] - scale * c[1]], [0.0, 0.0, 1.0]])
+        frame = m @ frame
+    return dataclasses.replace(placed, paths=paths, stroke_scale=placed.stroke_scale * scale, frame=frame)
 
 
 def _similarity(src: np.ndarray, cur: np.ndarray) -> tuple[complex, np.ndarray, np.ndarray]:
@@ -77,13 +82,22 @@ def _similarity(src: np.ndarray, cur: np.ndarray) -> tuple[complex, np.ndarray, 
 
 def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
     """The undeformed art ``rest`` moved, turned and scaled onto ``placed`` (least squares
-    over their corresponding vertices): what the element would look like unbent."""
+    over their corresponding vertices, or the meshes' similarity ``frame`` when both carry
+    one — rendered curves have no vertex correspondence): what the element would look like
+    unbent."""
+    if placed.frame is not None and rest.frame is not None:
+        m = np.asarray(placed.frame, dtype=float) @ np.linalg.inv(np.asarray(rest.frame, dtype=float))
+        rot, b = m[:2, :2], m[:2, 2]
+        paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
+        k = float(np.sqrt(abs(np.linalg.det(rot))))
+        return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k,
+                                   deformation=0.0, frame=m @ np.asarray(rest.frame, dtype=float))
     src = np.concatenate([p for a in rest.paths for p in a.subpaths])
     cur = np.concatenate([p for a in placed.paths for p in a.subpaths])
     c, a, b = _similarity(src, cur)
     rot = np.array([[c.real, -c.imag], [c.imag, c.real]])
     paths = tuple(p.transformed(lambda pts: (np.asarray(pts) - a) @ rot.T + b) for p in rest.paths)
-    return PlacedArt(placed.source, placed.kind, paths, rest.stroke_scale * abs(c), 0.0)
+    return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * abs(c), deformation=0.0)
 
 
 def distortion(art, copy) -> float:
@@ -123,6 +137,17 @@ def _edge_distance(region_boundary, region, g) -> float:
     if len(out) == 0:
         return 0.0
     return -float(np.max(shapely.distance(region_boundary, shapely.points(out))))
+
+
+def _thickness(g) -> float:
+    """Width of an overlap (the shorter side of its minimum rotated rectangle): how far
+    the two elements must move apart to clear it (cheap; exact for a lens or a strip)."""
+    if g.is_empty or g.area <= 0:
+        return 0.0
+    c = np.asarray(shapely.get_coordinates(shapely.minimum_rotated_rectangle(g)))
+    if len(c) < 4:
+        return 0.0
+    return float(min(np.hypot(*(c[1] - c[0])), np.hypot(*(c[2] - c[1]))))
 
 
 def _centre(g) -> np.ndarray:
@@ -170,7 +195,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             if dd <= 0.0:
                 counts["overlap_pairs"] += 1
                 inter = shapely.intersection(gi, gj)
-                depth = 2.0 * float(shapely.maximum_inscribed_circle(inter).length) if inter.area > 0 else 0.0
+                depth = _thickness(inter)
                 total = min_gap + depth + 2 * tol
                 pi = pj = _centre(inter) if not inter.is_empty else 0.5 * (centre(i) + centre(j))
                 u = centre(i) - centre(j)

@@ -3,59 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
-import triangle as tr
 
+from .triangulate import triangulate_polygon
 
-def triangulate_polygon(boundary: np.ndarray, max_area: float | None = None,
-                        min_angle: float = 20.0, interior: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """Constrained quality triangulation of a simple polygon.
-
-    Parameters
-    ----------
-    boundary : (K, 2) polygon vertices (no repeated closing vertex).
-    max_area : largest triangle area allowed (None: no limit).
-    min_angle : minimum angle in degrees for the quality refinement.
-    interior : allow Steiner points inside the polygon (never on its boundary).
-
-    Returns
-    -------
-    verts : (N, 2), the first K rows are ``boundary`` unchanged and in order.
-    tris : (T, 3) int32 vertex indices, counter-clockwise (y up), every triangle inside
-        the polygon (the triangulation is constrained to the boundary, so it never
-        crosses a concavity).
-    """
-    boundary = np.asarray(boundary, dtype=float)
-    k = len(boundary)
-    segs = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
-    # triangulate in normalised coordinates: Triangle parses the area switch as plain
-    # digits, so "a1.3e+14" would silently become 1.3 (and refine until memory runs out)
-    centre = boundary.mean(axis=0)
-    size = float(np.ptp(boundary, axis=0).max()) or 1.0
-    unit = (boundary - centre) / size
-    opts = "pQY"  # PSLG, quiet, no Steiner points on the boundary
-    if interior:
-        opts += f"q{min_angle:g}"
-        if max_area is not None:
-            opts += f"a{max(max_area / size ** 2, 1e-10):.12f}"
-    out = tr.triangulate({"vertices": unit, "segments": segs}, opts)
-    verts = np.asarray(out["vertices"], dtype=float) * size + centre
-    tris = np.asarray(out["triangles"], dtype=np.int32)
-    if not np.allclose(verts[:k], boundary, rtol=1e-9, atol=1e-9 * size):
-        raise RuntimeError("triangulation reordered the boundary vertices")
-    verts[:k] = boundary  # exactly the input boundary
-    # keep only triangles with positive area; orient counter-clockwise
-    a = verts[tris]
-    cross = (a[:, 1, 0] - a[:, 0, 0]) * (a[:, 2, 1] - a[:, 0, 1]) - (a[:, 1, 1] - a[:, 0, 1]) * (a[:, 2, 0] - a[:, 0, 0])
-    tris = tris[np.abs(cross) > 1e-12 * max(1.0, float(np.ptp(boundary)) ** 2)]
-    cross = cross[np.abs(cross) > 1e-12 * max(1.0, float(np.ptp(boundary)) ** 2)]
-    flip = cross < 0
-    tris[flip] = tris[flip][:, [0, 2, 1]]
-    # drop vertices no triangle uses (keeps boundary vertices first)
-    used = np.zeros(len(verts), bool)
-    used[tris.ravel()] = True
-    used[:k] = True
-    remap = np.cumsum(used) - 1
-    return np.ascontiguousarray(verts[used]), np.ascontiguousarray(remap[tris].astype(np.int32))
+__all__ = ["triangulate_polygon", "mesh_springs", "barycentric", "bind_points", "apply_binding"]
 
 
 def mesh_springs(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

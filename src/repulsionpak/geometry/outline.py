@@ -363,12 +363,49 @@ def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_po
     m = max(int(np.ceil(perimeter / step)), 4 * min_points)
     t = np.linspace(0.0, perimeter, m, endpoint=False)
     dense = np.column_stack([np.interp(t, cum, closed[:, 0]), np.interp(t, cum, closed[:, 1])])
-    keep = _greedy_chords(np.vstack([dense, dense[:1]]), np.concatenate([t, [perimeter]]),
-                          spacing * (1 + 1e-9), tolerance)
+    arc = np.concatenate([t, [perimeter]])
+    closed_dense = np.vstack([dense, dense[:1]])
+    keep = _greedy_chords(closed_dense, arc, spacing * (1 + 1e-9), tolerance)
+    keep = _balance_seam(closed_dense, arc, keep, tolerance, spacing * (1 + 1e-9))
     out = dense[keep]
     if len(out) < min_points:
         return resample_closed(ring, perimeter / min_points, min_points)
     return out
+
+
+def _balance_seam(pts: np.ndarray, arc: np.ndarray, keep: np.ndarray, tolerance: float,
+                  spacing: float) -> np.ndarray:
+    """The greedy pass ends wherever the perimeter runs out, often a sliver of a chord
+    before the first sample (a 0.25 edge between 5-unit edges: the mesh's smallest angles
+    sat there). Re-place the last sample so the last two chords are as even as the
+    tolerance allows, or drop it when one chord can close the ring."""
+    if len(keep) < 3:
+        return keep
+    n = len(pts) - 1
+    a, b = int(keep[-2]), int(keep[-1])
+    if arc[n] - arc[b] >= 0.5 * (arc[b] - arc[a]):
+        return keep
+    if len(keep) > 3 and arc[n] - arc[a] <= spacing and _chord_deviation(pts, a, n) <= tolerance:
+        return keep[:-1]
+    best, best_short = b, arc[n] - arc[b]
+    for m in range(a + 1, n):
+        short = min(arc[m] - arc[a], arc[n] - arc[m])
+        if (short > best_short and _chord_deviation(pts, a, m) <= tolerance
+                and _chord_deviation(pts, m, n) <= tolerance):
+            best, best_short = m, short
+    out = keep.copy()
+    out[-1] = best
+    return out
+
+
+def _chord_deviation(pts: np.ndarray, i: int, j: int) -> float:
+    """Largest distance of pts[i+1:j] from the segment pts[i]–pts[j]."""
+    if j - i < 2:
+        return 0.0
+    a, ab = pts[i], pts[j] - pts[i]
+    p = pts[i + 1:j] - a
+    t = np.clip(p @ ab / max(float(ab @ ab), 1e-300), 0.0, 1.0)
+    return float(np.sqrt(((p - t[:, None] * ab) ** 2).sum(axis=1).max()))
 
 
 def ring_coords(poly: Polygon) -> np.ndarray:

@@ -671,6 +671,15 @@ def _gradient_colours(root: ET.Element) -> dict[str, str]:
                 break
             ref = _href(el)
             el = grads.get(ref[1:]) if ref and ref.startswith("#") else None
+    for el in root.iter():  # patterns: the first plain fill of their content, else grey
+        if _local(el.tag) == "pattern" and el.get("id") and el.get("id") not in out:
+            colour = "#808080"
+            for c in el.iter():
+                f = c.get("fill")
+                if c is not el and f and not f.strip().startswith("url(") and f.strip() != "none":
+                    colour = f.strip()
+                    break
+            out[el.get("id")] = colour
     return out
 
 
@@ -697,6 +706,7 @@ class SvgShape:
     clips: tuple = ()
     #: ``visibility:hidden``/``collapse`` (``display:none`` shapes are never parsed)
     hidden: bool = False
+    node: object = None  # the svgelements shape (resolved presentation values, tag)
 
 
 @dataclass
@@ -707,6 +717,7 @@ class SvgDocument:
     metadata_text: str | None = None
     #: the ``<clipPath>`` definitions (:class:`~.svg_clip.ClipDef` by id), if any shape is clipped
     clip_defs: dict = field(default_factory=dict)
+    xml: object = None  # the (sanitised) ElementTree root, for paint servers
 
 
 def _matrix_to_np(m) -> np.ndarray:
@@ -749,8 +760,7 @@ def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None,
     if s.lower().startswith("url("):
         m = re.match(r"url\(\s*['\"]?#([^)'\"]+)['\"]?\s*\)\s*(.*)$", s, re.IGNORECASE)
         fallback = m.group(2).strip() if m else ""
-        if m and m.group(1) in gradients:
-            notes.add("gradient (drawn with its first stop colour)")
+        if m and m.group(1) in gradients:  # kept in the output; the outline uses a colour
             s = gradients[m.group(1)]
         elif fallback:
             s = fallback
@@ -891,7 +901,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 vis = str(child.values.get("visibility", "visible")).strip().lower()
                 shapes.append(
                     SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups,
-                             clips + own_clips, vis in ("hidden", "collapse"))
+                             clips + own_clips, vis in ("hidden", "collapse"), node=child)
                 )
             elif isinstance(child, (se.Group, se.Use)):
                 attrs = own(child)
@@ -918,7 +928,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     defs = clip_defs(doc, inv_viewport, notes) if any(s.clips for s in shapes) else {}
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
-    return SvgDocument(shapes, svg_root, root_attrs, metadata_text, defs)
+    return SvgDocument(shapes, svg_root, root_attrs, metadata_text, defs, xml=root_xml)
 
 
 # --------------------------------------------------------------------------- flattening
@@ -1129,6 +1139,20 @@ def flatten_shape(
 # --------------------------------------------------------------------------- public API
 
 
+def shape_source(path, sh: SvgShape):
+    """Curve-level data of a shape (see :mod:`.svg_source`); None if it cannot be built."""
+    from .svg_source import shape_source as _shape_source
+
+    return _shape_source(path, sh)
+
+
+def paint_servers(path, xml, arts) -> dict:
+    """Self-contained markup of the gradients and patterns ``arts`` are painted with."""
+    from .svg_source import paint_servers as _paint_servers
+
+    return _paint_servers(path, xml, arts)
+
+
 def shape_clipper(path, doc: SvgDocument, tol: float, budget: PointBudget):
     """``clip(shape) -> region | None``: the clip region of a shape of ``doc`` in file
     user units (the intersection of its own and its groups' ``clip-path``), or None when
@@ -1161,9 +1185,10 @@ def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
     for sh in shapes:
         subs = flatten_shape(path, sh, tol, budget)
         if subs:
-            art = ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style)
+            art = ArtPath(tuple(p for p, _ in subs), tuple(c for _, c in subs), sh.style,
+                          source=shape_source(path, sh))
             region = clip(sh)
-            kept = [art] if region is None else clip_art(art, region)
+            kept = [art] if region is None else clip_art(art, region)  # clipped: polygons
             n_clipped_away += not kept
             arts.extend(kept)
     if not arts:
@@ -1176,7 +1201,8 @@ def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
             path,
             f"has no visible geometry ({why}); an element needs at least one visible path",
         )
-    return Element(name=path.stem, source=path.name, paths=tuple(arts))
+    return Element(name=path.stem, source=path.name, paths=tuple(arts),
+                   paint_servers=paint_servers(path, doc.xml, arts))
 
 
 def container_from_shapes(
@@ -1186,6 +1212,7 @@ def container_from_shapes(
     budget: PointBudget,
     svg_root: dict,
     clip=None,
+    xml=None,
 ) -> Container:
     """Build a Container from SVG shapes (closed subpaths only; holes subtracted).
 
@@ -1223,7 +1250,8 @@ def container_from_shapes(
         (holes if sh.hole else outer).append(geom)
         if not sh.style.visible and not sh.hole:
             unpainted.append(geom)
-        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), style))
+        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), style,
+                            source=None if region_clip is not None else shape_source(path, sh)))
     if n_open:
         warn(
             path,
@@ -1262,6 +1290,7 @@ def container_from_shapes(
         region=region,
         paths=tuple(arts),
         svg_root=dict(svg_root),
+        paint_servers=paint_servers(path, xml, arts),
     )
 
 
@@ -1290,7 +1319,7 @@ def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Containe
     tol = flattening_tolerance(shapes, tolerance)
     budget = PointBudget(path)
     clip = shape_clipper(path, doc, tol, budget)
-    return container_from_shapes(path, shapes, tol, budget, doc.svg_root, clip)
+    return container_from_shapes(path, shapes, tol, budget, doc.svg_root, clip, doc.xml)
 
 
 def load_element(path: str | Path, tolerance: float | None = None) -> Element:

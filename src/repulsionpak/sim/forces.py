@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit, prange
 
 from .grid import cell_of
+from .kernels import parallel_kernel
 
 
 @njit(cache=True, inline="always")
@@ -66,7 +67,7 @@ def _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
     return best, qx, qy, s
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def contact_query(x, active, vert_elem,
                   seg_xy, seg_elem, seg_start, seg_order, sox, soy, sinv, sgx, sgy,
                   tri_xy, tri_elem, tri_start, tox, toy, tinv, tgx, tgy,
@@ -159,7 +160,7 @@ def contact_query(x, active, vert_elem,
         nb_count[i] = cnt
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris, vtri_ptr, vtri,
                    near2, far2, inside, nb_count, nb_d2, nb_q, nb_seg):
     """Cheap refresh of :func:`contact_query`'s results between full queries.
@@ -205,7 +206,7 @@ def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris,
         inside[i] = hit
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def repulsion_force(x, active, inside, nb_count, nb_q, k_r, soft, F):
     """Eq. 2: F_r = k_r Σ_i u/|u| · 1/(ς + |u|²), u = x − x_i, over neighbouring meshes;
     zero for a vertex inside another mesh."""
@@ -228,7 +229,7 @@ def repulsion_force(x, active, inside, nb_count, nb_q, k_r, soft, F):
         F[i, 1] += k_r * fy
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def overlap_force(x, active, inside, tris, vtri_ptr, vtri, nb_count, nb_d2, nb_q, k_o, F):
     """Eq. 4: F_o = k_o Σ (p_i − x) over the centroids p_i of the triangles incident to x,
     for vertices inside another mesh — plus, beyond the paper, k_o (q − x) towards the
@@ -276,7 +277,7 @@ def _spring(x, springs, rest0, g, k_e, F, s):
     F[b, 1] -= mag * uy
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def edge_force(x, springs, rest0, sp_ptr, growth, moving, k_e, F):
     """Eq. 3: F_e = k_e · u/|u| · s(|u| − ℓ)², u = x_b − x_a, applied +F to x_a and −F
     to x_b; ℓ = rest0 · growth[element] (sec. 6). Element e's springs are
@@ -322,7 +323,7 @@ def _field_sample(values, ox, oy, inv_h, px, py):
     return val, gx, gy
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_depth, inset):
     """Eq. 5: F_b = k_b (p_b − x) for a vertex outside the container, p_b the closest
     boundary point, from the signed distance field: p_b − x = −sdf · ∇sdf/|∇sdf|.
@@ -345,7 +346,7 @@ def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_
         F[i, 1] -= k_b * d * gy / n
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def inversion_force(x, tris, tri_ptr, tri_rest, growth, moving, min_fraction, k, F):
     """Beyond the paper (whose sec. 12 notes folded, unaesthetic bends): a triangle whose
     signed area falls below ``min_fraction`` of its (grown) rest area pushes its vertices
@@ -383,7 +384,7 @@ def _unfold(x, tris, tri_rest, g, min_fraction, k, F, t):
             F[v, 1] += mag * gy / n
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def project_inside(x, active_all, values, ox, oy, inv_h, limit):
     """Hard constraint after the Euler step (beyond the paper): a vertex more than
     ``limit`` outside the container is moved back to that distance along the field's
@@ -457,7 +458,7 @@ def outside_distance(x, values, ox, oy, inv_h, out):
         out[i] = d
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def shape_force(x, x_rest, elem_vstart, moving, stiffness, k_s, F):
     """Beyond the paper: shape matching [Müller et al. 2005] as a force. Each moving
     element is pulled towards the best similarity transform (rotation, uniform scale,

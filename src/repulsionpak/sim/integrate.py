@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from .kernels import parallel_kernel
 
-@njit(cache=True, parallel=True)
+
+@parallel_kernel
 def euler_step(x, v, F, active_all, dt, vmax):
     """v += F·Δt; |v| capped at vmax; x += v·Δt — for the vertices in ``active_all``.
     Returns nothing; NaN shows up in the area fraction."""

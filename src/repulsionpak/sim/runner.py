@@ -22,6 +22,7 @@ from .forces import (boundary_force, contact_query, contact_update, corner_candi
                      inversion_force, overlap_force, project_inside, repulsion_force, shape_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas, window_change
+from .kernels import set_threads
 from .model import Model, State, element_ranges
 from .selfintersect import relax_self_intersections
 from .shape import limit_deformation
@@ -233,8 +234,7 @@ class Simulator:
         """
         p, st = self.params, self.state
         self.refresh_growth()
-        threads = numba.get_num_threads()
-        numba.set_num_threads(self.threads())
+        threads = set_threads(self.threads())
         hist = st.area_history
         w = p.stop_window
         a = hist[-1] if hist else 0.0
@@ -286,7 +286,7 @@ class Simulator:
         except KeyboardInterrupt:
             self.stopped_by = "interrupted"
         finally:
-            numba.set_num_threads(threads)
+            set_threads(threads)
         if on_snapshot is not None:
             on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
                                  self.n_inside, st, done=True))

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from .kernels import parallel_kernel
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def relax_self_intersections(x, elem_vstart, elem_nskin, moving, sp_start, sp_nedge, springs,
                              vnbr_ptr, vnbr, passes, fraction, order):
     """For each moving element: ℓ̄ = mean current length of its edge springs; every pair of

@@ -14,10 +14,12 @@ mesh measure.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from .kernels import parallel_kernel
 
 
-@njit(cache=True, parallel=True)
+@parallel_kernel
 def limit_deformation(x, x_rest, elem_vstart, moving, limit):
     """Project every moving element e onto RMS deviation ≤ ``limit[e]`` × its RMS radius
     from the least-squares similarity of ``x_rest``. Returns the number of elements

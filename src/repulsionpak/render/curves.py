@@ -1,0 +1,190 @@
+"""Bézier segments as arrays: evaluation, derivatives, flattening, SVG path data.
+
+A chain of segments is a :class:`~repulsionpak.types.CurveSubpath`: ``order`` (n,) with
+1 = line, 2 = quadratic, 3 = cubic and ``ctrl`` (n, 4, 2) control points (unused rows
+repeat the end point).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numba import njit
+
+from ..types import CurveSubpath
+
+__all__ = ["bezier", "bezier_deriv", "decimals_for", "flatten_subpath", "path_data",
+           "round_curves", "segment_count"]
+
+
+def bezier(ctrl: np.ndarray, order: int, t: np.ndarray) -> np.ndarray:
+    """Points (m, 2) of one segment ``ctrl`` (4, 2) of ``order`` at parameters ``t`` (m,)."""
+    t = np.asarray(t, dtype=float)[:, None]
+    s = 1.0 - t
+    p = ctrl
+    if order == 1:
+        return s * p[0] + t * p[1]
+    if order == 2:
+        return s * s * p[0] + 2 * s * t * p[1] + t * t * p[2]
+    return s**3 * p[0] + 3 * s * s * t * p[1] + 3 * s * t * t * p[2] + t**3 * p[3]
+
+
+def bezier_deriv(ctrl: np.ndarray, order: int, t: np.ndarray) -> np.ndarray:
+    """Derivatives d/dt (m, 2) of one segment at parameters ``t`` (m,)."""
+    t = np.asarray(t, dtype=float)[:, None]
+    s = 1.0 - t
+    p = ctrl
+    if order == 1:
+        return np.broadcast_to(p[1] - p[0], (len(t), 2)).copy()
+    if order == 2:
+        return 2 * s * (p[1] - p[0]) + 2 * t * (p[2] - p[1])
+    return 3 * s * s * (p[1] - p[0]) + 6 * s * t * (p[2] - p[1]) + 3 * t * t * (p[3] - p[2])
+
+
+@njit(cache=True)
+def _flatten(order, ctrl, tol):
+    """Points of every segment, uniform pieces with chord error <= tol (h²/8 · max|B''|)."""
+    n = len(order)
+    counts = np.ones(n, np.int64)
+    for k in range(n):
+        c = ctrl[k]
+        if order[k] == 2:
+            bound = 2.0 * math.hypot(c[0, 0] - 2 * c[1, 0] + c[2, 0], c[0, 1] - 2 * c[1, 1] + c[2, 1])
+        elif order[k] == 3:
+            bound = 6.0 * max(math.hypot(c[0, 0] - 2 * c[1, 0] + c[2, 0], c[0, 1] - 2 * c[1, 1] + c[2, 1]),
+                              math.hypot(c[1, 0] - 2 * c[2, 0] + c[3, 0], c[1, 1] - 2 * c[2, 1] + c[3, 1]))
+        else:
+            bound = 0.0
+        if bound > 0:
+            counts[k] = max(1, min(4096, int(math.ceil(math.sqrt(bound / (8.0 * tol))))))
+    out = np.empty((1 + counts.sum(), 2))
+    out[0] = ctrl[0, 0]
+    j = 1
+    for k in range(n):
+        c = ctrl[k]
+        m = counts[k]
+        for i in range(1, m + 1):
+            t = i / m
+            s = 1.0 - t
+            if order[k] == 1:
+                x, y = s * c[0, 0] + t * c[1, 0], s * c[0, 1] + t * c[1, 1]
+            elif order[k] == 2:
+                x = s * s * c[0, 0] + 2 * s * t * c[1, 0] + t * t * c[2, 0]
+                y = s * s * c[0, 1] + 2 * s * t * c[1, 1] + t * t * c[2, 1]
+            else:
+                x = s * s * s * c[0, 0] + 3 * s * s * t * c[1, 0] + 3 * s * t * t * c[2, 0] + t * t * t * c[3, 0]
+                y = s * s * s * c[0, 1] + 3 * s * s * t * c[1, 1] + 3 * s * t * t * c[2, 1] + t * t * t * c[3, 1]
+            out[j, 0], out[j, 1] = x, y
+            j += 1
+    return out
+
+
+def flatten_subpath(sub: CurveSubpath, tol: float) -> np.ndarray:
+    """Polyline (K, 2) within ``tol`` of the curves; no repeated points or closing point."""
+    out = _flatten(sub.order.astype(np.int64), np.ascontiguousarray(sub.ctrl), float(tol))
+    eps = 1e-12 * (1.0 + float(np.abs(out).max()))
+    if len(out) > 1:
+        out = out[np.concatenate([[True], np.abs(np.diff(out, axis=0)).max(axis=1) > eps])]
+    if sub.closed and len(out) > 2 and np.abs(out[-1] - out[0]).max() <= eps:
+        out = out[:-1]
+    return out
+
+
+def decimals_for(tol: float) -> int:
+    """Decimals of written coordinates: rounding moves a control point (and so the
+    curve) by at most tol/5 (half a unit of the last decimal, in x and y)."""
+    if not (tol > 0 and math.isfinite(tol)):
+        return 4
+    return int(min(8, max(0, math.ceil(-math.log10(tol / 5.0 / math.sqrt(0.5))))))
+
+
+def round_curves(curves: Sequence[CurveSubpath], decimals: int) -> tuple[CurveSubpath, ...]:
+    """The curves with every control point rounded as it is written."""
+    return tuple(CurveSubpath(c.order, np.round(c.ctrl, decimals), c.closed) for c in curves)
+
+
+def _num(x: float, decimals: int) -> str:
+    s = f"{x:.{decimals}f}"
+    if "." in s:
+        s = s.rstrip("0").rstrip(".")
+    if s.startswith("0."):
+        s = s[1:]
+    elif s.startswith("-0."):
+        s = "-" + s[2:]
+    return "0" if s in ("", "-0", "-") else s
+
+
+def _join(nums: list[str]) -> str:
+    """Numbers with the fewest separators SVG allows."""
+    out = []
+    prev = ""
+    for s in nums:
+        if out and not (s.startswith("-") or (s.startswith(".") and "." in prev)):
+            out.append(" ")
+        out.append(s)
+        prev = s
+    return "".join(out)
+
+
+def path_data(curves: Sequence[CurveSubpath], decimals: int = 4, relative: bool = True) -> str:
+    """Compact SVG path data of curve subpaths (coordinates rounded to ``decimals``).
+
+    Relative commands are computed from the rounded absolute coordinates, so they add up
+    exactly to the rounded curve (no drift). A closed subpath's final line back to its
+    start becomes ``z``.
+    """
+    parts: list[str] = []
+    cur = np.zeros(2)
+    last_cmd = ""
+    for sub in curves:
+        ctrl = np.round(sub.ctrl, decimals)
+        order = sub.order
+        start = ctrl[0, 0]
+        rel = relative and bool(parts)
+        p = start - cur if rel else start
+        parts.append(("m" if rel else "M") + _join([_num(p[0], decimals), _num(p[1], decimals)]))
+        last_cmd = "l" if rel else "L"  # implicit command after a move
+        cur = start
+        n = len(order)
+        if sub.closed and n > 1 and order[-1] == 1 and np.abs(ctrl[-1, 1] - start).max() == 0:
+            n -= 1
+        for k in range(n):
+            o = int(order[k])
+            c = ctrl[k]
+            base = cur if relative else np.zeros(2)
+            pts = c[1 : o + 1] - base
+            if o == 1:
+                d = c[1] - cur
+                if d[1] == 0 and d[0] != 0:
+                    cmd, nums = "h", [_num(pts[0, 0], decimals)]
+                elif d[0] == 0 and d[1] != 0:
+                    cmd, nums = "v", [_num(pts[0, 1], decimals)]
+                elif d[0] == 0 and d[1] == 0:
+                    continue
+                else:
+                    cmd, nums = "l", [_num(v, decimals) for v in pts.ravel()]
+            else:
+                cmd = "q" if o == 2 else "c"
+                nums = [_num(v, decimals) for v in pts.ravel()]
+            if not relative:
+                cmd = cmd.upper()
+            body = _join(nums)
+            if cmd == last_cmd:
+                parts.append(("" if body.startswith("-") else " ") + body)
+            else:
+                parts.append(cmd + body)
+            last_cmd = cmd
+            cur = c[o]
+        if sub.closed:
+            parts.append("z")
+            last_cmd = ""
+            cur = start
+    return "".join(parts)
+
+
+def segment_count(curves: Sequence[CurveSubpath]) -> dict[str, int]:
+    """Number of written segments by kind: ``{"line": .., "quadratic": .., "cubic": ..}``."""
+    o = np.concatenate([c.order for c in curves]) if curves else np.zeros(0, int)
+    return {"line": int((o == 1).sum()), "quadratic": int((o == 2).sum()), "cubic": int((o == 3).sum())}

@@ -1,0 +1,307 @@
+"""The deformation map: from an element's rest mesh to its deformed copy.
+
+The simulation moves mesh vertices only; the art between them follows a map that is
+fixed by the rest mesh and linear in the deformed vertex positions::
+
+    f(p) = Σ_j w_j(p) · x_j          (x_j: deformed vertex j, container units)
+
+Two choices of weights ``w_j``:
+
+* ``smooth`` (default): thin-plate-spline interpolation of the mesh vertices (the
+  polyharmonic spline φ(r) = r² log r plus an affine part, rest vertices as centres).
+  The weights sum to one, reproduce every affine map exactly (so a copy that is only
+  moved, turned and scaled is exact), interpolate every vertex (skin and interior), and
+  are C∞ away from the vertices and C¹ at them: a bent element looks bent, not faceted.
+* ``linear``: the paper's barycentric coordinates in the enclosing rest triangle
+  (piecewise affine: kinks wherever an outline crosses a triangle edge).
+
+A :class:`MapPlan` samples a template's art curves densely once (in the template's rest
+coordinates) and holds the weights of every sample and of the derivative along its
+segment, so mapping a copy is two small matrix products.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..geometry.mesh import bind_points
+from ..types import CurveSubpath
+
+__all__ = ["MapPlan", "art_curves", "map_plan", "tps_weights", "linear_weights"]
+
+#: samples are dense enough that the source curve is within this share of the element's
+#: size of the chords between them (a quarter of the default curve tolerance)
+SAMPLE_TOLERANCE = 2.5e-4
+
+
+def _kernel(r2: np.ndarray) -> np.ndarray:
+    """φ(r) = r² log r written with r²: ½ r² log r²; 0 at r = 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = 0.5 * r2 * np.log(r2)
+    return np.where(r2 > 0, k, 0.0)
+
+
+def _kernel_grad_factor(r2: np.ndarray) -> np.ndarray:
+    """∇φ = (p - c) · (log r² + 1); returns the factor (log r² + 1), 0 at r = 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g = np.log(r2) + 1.0
+    return np.where(r2 > 0, g, 0.0)
+
+
+@njit(cache=True)
+def _solve(a, b):
+    """Solve a x = b by Gaussian elimination with partial pivoting (NaN if singular).
+
+    The systems are small (mesh vertices + 3); a compiled loop is as fast as LAPACK here
+    and, unlike a threaded BLAS on a busy machine, never waits for other threads."""
+    n = a.shape[0]
+    m = a.copy()
+    x = b.copy()
+    scale = np.abs(m).max()
+    for k in range(n):
+        p = k
+        for i in range(k + 1, n):
+            if abs(m[i, k]) > abs(m[p, k]):
+                p = i
+        if abs(m[p, k]) <= 1e-13 * scale:
+            x[:, :] = np.nan
+            return x
+        if p != k:
+            for j in range(n):
+                m[k, j], m[p, j] = m[p, j], m[k, j]
+            for j in range(x.shape[1]):
+                x[k, j], x[p, j] = x[p, j], x[k, j]
+        inv = 1.0 / m[k, k]
+        for i in range(k + 1, n):
+            f = m[i, k] * inv
+            if f != 0.0:
+                for j in range(k, n):
+                    m[i, j] -= f * m[k, j]
+                for j in range(x.shape[1]):
+                    x[i, j] -= f * x[k, j]
+    for k in range(n - 1, -1, -1):
+        inv = 1.0 / m[k, k]
+        for j in range(x.shape[1]):
+            s = x[k, j]
+            for i in range(k + 1, n):
+                s -= m[k, i] * x[i, j]
+            x[k, j] = s * inv
+    return x
+
+
+def tps_weights(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
+                chunk: int = 4096, smoothing: float = 0.0) -> tuple[np.ndarray, np.ndarray | None]:
+    """Thin-plate-spline weights (see :func:`tps_factors`): ``W`` (P, N) and ``D``."""
+    B, DB, coef = tps_factors(rest, points, directions, chunk, smoothing)
+    return B @ coef, (None if DB is None else DB @ coef)
+
+
+def tps_factors(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
+                chunk: int = 4096, smoothing: float = 0.0) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+    """Thin-plate-spline weights of ``points`` (P, 2) w.r.t. the centres ``rest`` (N, 2).
+
+    Returns ``(B, DB, C)``: ``W = B @ C`` (P, N) gives ``f(points) = W @ x`` for deformed
+    centres ``x`` (N, 2), and, when ``directions`` (P, 2) are given, ``D = DB @ C`` gives
+    ``Df(points)·directions = D @ x``. Rows of W sum to 1 and rows of D to 0 (affine maps
+    are reproduced exactly). ``smoothing`` > 0 gives the smoothing spline (λ added to the
+    kernel's diagonal, coordinates scaled to the rest mesh's size): it no longer passes
+    exactly through the vertices but irons out crumpled spots. ``B``, ``DB`` (P, N + 3) are the kernel rows, ``C``
+    (N + 3, N) the spline coefficients of each unit vertex: mapping a copy as
+    ``B @ (C @ x)`` avoids ever forming the (P, N) product.
+    """
+    rest = np.asarray(rest, dtype=float)
+    points = np.asarray(points, dtype=float)
+    n = len(rest)
+    c0 = rest.mean(axis=0)
+    s = float(np.ptp(rest, axis=0).max()) or 1.0
+    q = (rest - c0) / s
+    a = np.zeros((n + 3, n + 3))
+    a[:n, :n] = _kernel(((q[:, None, :] - q[None, :, :]) ** 2).sum(-1)) + smoothing * np.eye(n)
+    a[:n, n] = 1.0
+    a[:n, n + 1 :] = q
+    a[n, :n] = 1.0
+    a[n + 1 :, :n] = q.T
+    rhs = np.zeros((n + 3, n))
+    rhs[:n] = np.eye(n)
+    coef = _solve(a, rhs)  # (N+3, N): spline coefficients per unit vertex
+    if not np.all(np.isfinite(coef)):  # coincident centres: least-squares solution
+        coef = np.linalg.lstsq(a, rhs, rcond=None)[0]
+    W = np.empty((len(points), n + 3))
+    D = None if directions is None else np.empty((len(points), n + 3))
+    qq = (q * q).sum(axis=1)
+    for i in range(0, len(points), chunk):
+        p = (points[i : i + chunk] - c0) / s
+        r2 = np.maximum((p * p).sum(axis=1)[:, None] + qq[None, :] - 2.0 * (p @ q.T), 0.0)
+        b = np.concatenate([_kernel(r2), np.ones((len(p), 1)), p], axis=1)
+        W[i : i + chunk] = b
+        if D is not None:
+            d = np.asarray(directions[i : i + chunk], dtype=float) / s
+            proj = (p * d).sum(axis=1)[:, None] - d @ q.T  # (p - q_j) · d
+            g = _kernel_grad_factor(r2) * proj
+            db = np.concatenate([g, np.zeros((len(p), 1)), d], axis=1)
+            D[i : i + chunk] = db
+    return W, D, coef
+
+
+def linear_weights(rest: np.ndarray, tris: np.ndarray, points: np.ndarray,
+                   directions: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+    """Barycentric weights (the paper's map) in the same form as :func:`tps_weights`."""
+    rest = np.asarray(rest, dtype=float)
+    tri, bary = bind_points(points, rest, tris)
+    n, m = len(rest), len(points)
+    W = np.zeros((m, n))
+    rows = np.repeat(np.arange(m), 3)
+    np.add.at(W, (rows, tris[tri].ravel()), bary.ravel())
+    if directions is None:
+        return W, None
+    a = rest[tris[tri, 0]]
+    e = np.stack([rest[tris[tri, 1]] - a, rest[tris[tri, 2]] - a], axis=2)  # (m, 2, 2) columns
+    inv = np.linalg.pinv(e)  # rows: gradients of bary 1 and 2
+    g12 = np.einsum("mij,mj->mi", inv, directions)
+    g = np.column_stack([-g12.sum(axis=1), g12])
+    D = np.zeros((m, n))
+    np.add.at(D, (rows, tris[tri].ravel()), g.ravel())
+    return W, D
+
+
+def art_curves(art) -> tuple[CurveSubpath, ...]:
+    """The curves of an ArtPath: its exact source curves, else its polylines as lines."""
+    if art.source is not None and art.source.curves:
+        return art.source.curves
+    out = []
+    for pts, closed in zip(art.subpaths, art.closed):
+        pts = np.asarray(pts, dtype=float)
+        if len(pts) < 2:
+            continue
+        ends = np.vstack([pts, pts[:1]]) if closed else pts
+        a, b = ends[:-1], ends[1:]
+        ctrl = np.stack([a, b, b, b], axis=1)
+        out.append(CurveSubpath(np.ones(len(a), np.int8), ctrl, bool(closed)))
+    return tuple(out)
+
+
+@dataclass(frozen=True, eq=False)
+class MapPlan:
+    """Dense samples of a template's art (rest coordinates) and their map weights.
+
+    ``curves[a][s]`` is subpath s of art path a in rest (template) coordinates;
+    ``seg_start[a][s]`` (n_seg + 1,) indexes the samples of each of its segments
+    (segment k owns samples ``seg_start[k] .. seg_start[k+1] - 1``, at t = 0, 1/n, ...,
+    1: both end points included). ``t`` (P,) are the samples' segment parameters,
+    ``W``/``D`` (P, K) the position and derivative (d/dt) weights, applied to
+    ``R @ verts`` (``R`` (K, N): the spline coefficients; None for the barycentric map).
+    """
+
+    curves: tuple[tuple[CurveSubpath, ...], ...]
+    seg_start: tuple[tuple[np.ndarray, ...], ...]
+    t: np.ndarray
+    points: np.ndarray
+    W: np.ndarray
+    D: np.ndarray
+    smooth: bool
+    R: np.ndarray | None = None
+
+    def apply(self, verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Mapped samples (P, 2) and their derivatives d/dt (P, 2) for deformed ``verts``."""
+        x = verts if self.R is None else self.R @ verts
+        return self.W @ x, self.D @ x
+
+
+def _as_cubics(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
+    """Every segment as cubic control points (n, 4, 2), same parametrisation (lines and
+    quadratics are degree-elevated exactly)."""
+    c = ctrl.copy()
+    q = order == 2
+    c[q, 1] = ctrl[q, 0] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 0])
+    c[q, 2] = ctrl[q, 2] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 2])
+    c[q, 3] = ctrl[q, 2]
+    ln = order == 1
+    c[ln, 1] = ctrl[ln, 0] + (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
+    c[ln, 2] = ctrl[ln, 0] + 2.0 * (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
+    c[ln, 3] = ctrl[ln, 1]
+    return c
+
+
+def _samples_per_segment(order: np.ndarray, cubic: np.ndarray, spacing: float, density: float,
+                         tol: float) -> np.ndarray:
+    """Intervals per segment: ``density`` per mesh spacing along it, and enough that the
+    source curve is within ``tol`` of the chords between samples; curves 8 to 128,
+    lines 3 to 128 (a line's map only varies at the mesh's scale)."""
+    length = np.hypot(*np.diff(cubic, axis=1).transpose(2, 0, 1)).sum(axis=1)
+    n = density * length / spacing
+    d1 = np.hypot(*(cubic[:, 0] - 2 * cubic[:, 1] + cubic[:, 2]).T)
+    d2 = np.hypot(*(cubic[:, 1] - 2 * cubic[:, 2] + cubic[:, 3]).T)
+    bound = 6.0 * np.maximum(d1, d2)
+    if tol > 0:
+        n = np.maximum(n, np.sqrt(bound / (8.0 * tol)))
+    low = np.where(order == 1, 3, 8)
+    return np.minimum(128, np.maximum(low, np.ceil(n))).astype(np.int64)
+
+
+def _sample_chain(order: np.ndarray, ctrl: np.ndarray, spacing: float, density: float, tol: float):
+    """Samples of one subpath: points, derivatives d/dt, parameters, segment starts."""
+    c = _as_cubics(order, ctrl)
+    n = _samples_per_segment(order, c, spacing, density, tol)
+    seg = np.repeat(np.arange(len(order)), n + 1)
+    first = np.concatenate([[0], np.cumsum(n + 1)])
+    t = (np.arange(len(seg)) - first[seg]) / n[seg]
+    cc = c[seg]
+    tt = t[:, None]
+    s = 1.0 - tt
+    pts = s**3 * cc[:, 0] + 3 * s * s * tt * cc[:, 1] + 3 * s * tt * tt * cc[:, 2] + tt**3 * cc[:, 3]
+    der = 3 * s * s * (cc[:, 1] - cc[:, 0]) + 6 * s * tt * (cc[:, 2] - cc[:, 1]) + 3 * tt * tt * (cc[:, 3] - cc[:, 2])
+    return pts, der, t, first
+
+
+def build_plan(template, smooth: bool = True, density: float = 8.0, smoothing: float = 0.0) -> MapPlan:
+    """Sample ``template``'s art and compute the weights (see :class:`MapPlan`)."""
+    verts, tris = template.verts, template.tris
+    e = verts[np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])]
+    spacing = float(np.median(np.hypot(*(e[:, 1] - e[:, 0]).T))) or 1.0
+    to_rest = np.array([[template.scale, 0.0, -template.scale * template.outline.center[0]],
+                        [0.0, template.scale, -template.scale * template.outline.center[1]],
+                        [0.0, 0.0, 1.0]])
+    pts, ders, ts = [], [], []
+    curves_out, starts_out = [], []
+    count = 0
+    rest_curves = [[sub.transformed(to_rest) for sub in art_curves(art)] for art in template.element.paths]
+    ends = [sub.ctrl.reshape(-1, 2) for subs in rest_curves for sub in subs]
+    size = float(np.hypot(*np.ptp(np.concatenate(ends), axis=0))) if ends else 1.0
+    tol = SAMPLE_TOLERANCE * size
+    for subs_in in rest_curves:
+        subs, starts = [], []
+        for sub in subs_in:
+            p_, d_, t_, first = _sample_chain(sub.order, sub.ctrl, spacing, density, tol)
+            pts.append(p_)
+            ders.append(d_)
+            ts.append(t_)
+            starts.append(first + count)
+            count += len(t_)
+            subs.append(sub)
+        curves_out.append(tuple(subs))
+        starts_out.append(tuple(starts))
+    points = np.concatenate(pts) if pts else np.zeros((0, 2))
+    dirs = np.concatenate(ders) if ders else np.zeros((0, 2))
+    t = np.concatenate(ts) if ts else np.zeros(0)
+    if smooth:
+        W, D, R = tps_factors(verts, points, dirs, smoothing=smoothing)
+    else:
+        (W, D), R = linear_weights(verts, tris, points, dirs), None
+    return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth, R)
+
+
+_PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def map_plan(template, smooth: bool = True, density: float = 8.0, smoothing: float = 0.0) -> MapPlan:
+    """:func:`build_plan`, cached per template (plans depend on the rest shape only)."""
+    per = _PLANS.setdefault(template, {})
+    key = (bool(smooth), float(density), float(smoothing))
+    if key not in per:
+        per[key] = build_plan(template, smooth, density, smoothing)
+    return per[key]

@@ -1,0 +1,345 @@
+"""Fit Bézier segments to densely mapped source segments, within a tolerance.
+
+Every source segment is fitted on its own, so corners of the source stay corners and
+its smooth joints stay smooth: the end tangents of a fitted piece are the exact
+derivatives of the mapped source curve (``Df · c'(t)``), which are parallel on both
+sides of a smooth joint. A source line stays a line when its mapped samples are within
+the tolerance of the chord (and a curve meeting it at a smooth joint takes the line's
+direction as its end tangent); any segment becomes a quadratic when one fits (its control
+point where the two end tangents meet: two numbers fewer than a cubic); otherwise a cubic Hermite piece (the end
+derivatives), then a least-squares cubic with the same tangent directions, and if
+neither is within the tolerance the piece is split at its middle sample.
+
+The distance checked is an upper bound of the true one: each sample's distance to the
+curve point at a Newton-refined parameter. Compiled with numba (one call per subpath).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..types import CurveSubpath
+
+__all__ = ["fit_subpath"]
+
+#: a joint whose mapped tangents differ by less than this (radians) is smooth: the
+#: curve beside a straight line then takes the line's direction as its end tangent
+SNAP_ANGLE = math.radians(2.0)
+MAX_DEPTH = 10
+
+
+@njit(cache=True)
+def _eval(c, u):
+    s = 1.0 - u
+    b0, b1, b2, b3 = s * s * s, 3.0 * s * s * u, 3.0 * s * u * u, u * u * u
+    return (b0 * c[0, 0] + b1 * c[1, 0] + b2 * c[2, 0] + b3 * c[3, 0],
+            b0 * c[0, 1] + b1 * c[1, 1] + b2 * c[2, 1] + b3 * c[3, 1])
+
+
+@njit(cache=True)
+def _max_error(c, u, q, lo, hi):
+    """Largest distance of samples q[lo:hi] from cubic c (refines u in place)."""
+    worst = 0.0
+    for i in range(lo, hi):
+        k = i - lo
+        x, y = _eval(c, u[k])
+        best = (x - q[i, 0]) ** 2 + (y - q[i, 1]) ** 2
+        uu = u[k]
+        for _ in range(3):
+            s = 1.0 - uu
+            d1x = 3.0 * (s * s * (c[1, 0] - c[0, 0]) + 2.0 * s * uu * (c[2, 0] - c[1, 0]) + uu * uu * (c[3, 0] - c[2, 0]))
+            d1y = 3.0 * (s * s * (c[1, 1] - c[0, 1]) + 2.0 * s * uu * (c[2, 1] - c[1, 1]) + uu * uu * (c[3, 1] - c[2, 1]))
+            d2x = 6.0 * (s * (c[2, 0] - 2.0 * c[1, 0] + c[0, 0]) + uu * (c[3, 0] - 2.0 * c[2, 0] + c[1, 0]))
+            d2y = 6.0 * (s * (c[2, 1] - 2.0 * c[1, 1] + c[0, 1]) + uu * (c[3, 1] - 2.0 * c[2, 1] + c[1, 1]))
+            bx, by = _eval(c, uu)
+            rx, ry = bx - q[i, 0], by - q[i, 1]
+            num = rx * d1x + ry * d1y
+            den = d1x * d1x + d1y * d1y + rx * d2x + ry * d2y
+            if abs(den) < 1e-300:
+                break
+            un = min(1.0, max(0.0, uu - num / den))
+            nx, ny = _eval(c, un)
+            e = (nx - q[i, 0]) ** 2 + (ny - q[i, 1]) ** 2
+            if e < best:
+                best = e
+                uu = un
+            else:
+                break
+        u[k] = uu
+        if best > worst:
+            worst = best
+    return math.sqrt(worst)
+
+
+@njit(cache=True)
+def _forward(c, u, g, lo, hi, cos_tol):
+    """True when the cubic c heads the way the mapped curve does at every sample: the
+    angle between B'(u_i) and g_i is below the angle tolerance. A fitted piece then never
+    doubles back, loops, or bends sharply where the exact curve does not."""
+    for i in range(lo, hi):
+        uu = u[i - lo]
+        s = 1.0 - uu
+        dx = 3.0 * (s * s * (c[1, 0] - c[0, 0]) + 2.0 * s * uu * (c[2, 0] - c[1, 0]) + uu * uu * (c[3, 0] - c[2, 0]))
+        dy = 3.0 * (s * s * (c[1, 1] - c[0, 1]) + 2.0 * s * uu * (c[2, 1] - c[1, 1]) + uu * uu * (c[3, 1] - c[2, 1]))
+        dot = dx * g[i, 0] + dy * g[i, 1]
+        n = math.hypot(dx, dy) * math.hypot(g[i, 0], g[i, 1])
+        if dot <= 0.0 or (n > 0 and dot < cos_tol * n):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _line_error(q, lo, hi):
+    """Largest distance of q[lo:hi] from the chord q[lo] -> q[hi-1] (as a segment)."""
+    ax, ay = q[lo, 0], q[lo, 1]
+    vx, vy = q[hi - 1, 0] - ax, q[hi - 1, 1] - ay
+    c2 = vx * vx + vy * vy
+    worst = 0.0
+    for i in range(lo, hi):
+        px, py = q[i, 0] - ax, q[i, 1] - ay
+        w = 0.0 if c2 <= 0 else min(1.0, max(0.0, (px * vx + py * vy) / c2))
+        d = (px - w * vx) ** 2 + (py - w * vy) ** 2
+        if d > worst:
+            worst = d
+    return math.sqrt(worst)
+
+
+@njit(cache=True)
+def _lsq(q, u, lo, hi, c):
+    """Least-squares tangent lengths for cubic c (ends and unit tangents fixed); in place."""
+    p0x, p0y, p3x, p3y = c[0, 0], c[0, 1], c[3, 0], c[3, 1]
+    t0x, t0y = c[1, 0] - p0x, c[1, 1] - p0y
+    t3x, t3y = c[2, 0] - p3x, c[2, 1] - p3y
+    n0 = math.hypot(t0x, t0y)
+    n3 = math.hypot(t3x, t3y)
+    if n0 <= 0 or n3 <= 0:
+        return
+    t0x, t0y, t3x, t3y = t0x / n0, t0y / n0, t3x / n3, t3y / n3
+    m00 = m01 = m11 = v0 = v1 = 0.0
+    for i in range(lo, hi):
+        uu = u[i - lo]
+        s = 1.0 - uu
+        b0, b1, b2, b3 = s * s * s, 3.0 * s * s * uu, 3.0 * s * uu * uu, uu * uu * uu
+        a1x, a1y = b1 * t0x, b1 * t0y
+        a2x, a2y = b2 * t3x, b2 * t3y
+        rx = q[i, 0] - (b0 + b1) * p0x - (b2 + b3) * p3x
+        ry = q[i, 1] - (b0 + b1) * p0y - (b2 + b3) * p3y
+        m00 += a1x * a1x + a1y * a1y
+        m01 += a1x * a2x + a1y * a2y
+        m11 += a2x * a2x + a2y * a2y
+        v0 += a1x * rx + a1y * ry
+        v1 += a2x * rx + a2y * ry
+    det = m00 * m11 - m01 * m01
+    chord = math.hypot(p3x - p0x, p3y - p0y)
+    if abs(det) < 1e-300:
+        alpha = beta = chord / 3.0
+    else:
+        alpha = (v0 * m11 - v1 * m01) / det
+        beta = (m00 * v1 - m01 * v0) / det
+        if not (alpha > 1e-6 * chord and beta > 1e-6 * chord and alpha < 1e6 * (chord + 1e-300)
+                and beta < 1e6 * (chord + 1e-300)):
+            alpha = beta = chord / 3.0
+    c[1, 0], c[1, 1] = p0x + alpha * t0x, p0y + alpha * t0y
+    c[2, 0], c[2, 1] = p3x + beta * t3x, p3y + beta * t3y
+
+
+@njit(cache=True)
+def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey, use_te, out_o, out_c,
+               n_out):
+    """Fit samples [lo, hi) (ends included); appends pieces; returns the new count."""
+    # explicit stack of pieces (lo, hi, depth, use_ts, use_te), processed left to right
+    stack = np.empty((2 * MAX_DEPTH + 4, 5), np.int64)
+    top = 0
+    stack[0, 0], stack[0, 1], stack[0, 2], stack[0, 3], stack[0, 4] = lo, hi, 0, use_ts, use_te
+    top = 1
+    c = np.empty((4, 2))
+    best = np.empty((4, 2))
+    u = np.empty(hi - lo)
+    while top > 0:
+        top -= 1
+        a, b, depth, us, ue = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4]
+        m = b - a
+        p0x, p0y = q[a, 0], q[a, 1]
+        p3x, p3y = q[b - 1, 0], q[b - 1, 1]
+        ext = 0.0
+        big = 0.0
+        for i in range(a, b):
+            ext = max(ext, math.hypot(q[i, 0] - p0x, q[i, 1] - p0y))
+            big = max(big, abs(q[i, 0]), abs(q[i, 1]))
+        if ext <= 1e-12 * (1.0 + big):
+            continue  # zero-length piece
+        chord = math.hypot(p3x - p0x, p3y - p0y)
+        if order == 1 and chord > 0 and _line_error(q, a, b) <= tol:
+            out_o[n_out] = 1
+            out_c[n_out, 0, 0], out_c[n_out, 0, 1] = p0x, p0y
+            for r in range(1, 4):
+                out_c[n_out, r, 0], out_c[n_out, r, 1] = p3x, p3y
+            n_out += 1
+            continue
+        span = t[b - 1] - t[a]
+        for i in range(a, b):
+            u[i - a] = (t[i] - t[a]) / span if span > 0 else (i - a) / max(1, m - 1)
+        d0x, d0y = g[a, 0] * span, g[a, 1] * span
+        d3x, d3y = g[b - 1, 0] * span, g[b - 1, 1] * span
+        n0 = math.hypot(d0x, d0y)
+        n3 = math.hypot(d3x, d3y)
+        if us == 1:
+            d0x, d0y = tsx * n0, tsy * n0
+        if ue == 1:
+            d3x, d3y = tex * n3, tey * n3
+        if n0 <= 1e-300:  # degenerate derivative: direction to the next sample
+            d0x, d0y = q[a + 1, 0] - p0x, q[a + 1, 1] - p0y
+            n0 = math.hypot(d0x, d0y)
+        if n3 <= 1e-300:
+            d3x, d3y = p3x - q[b - 2, 0], p3y - q[b - 2, 1]
+            n3 = math.hypot(d3x, d3y)
+        if n0 <= 1e-300 or n3 <= 1e-300:
+            out_o[n_out] = 1
+            out_c[n_out, 0, 0], out_c[n_out, 0, 1] = p0x, p0y
+            for r in range(1, 4):
+                out_c[n_out, r, 0], out_c[n_out, r, 1] = p3x, p3y
+            n_out += 1
+            continue
+        t0x, t0y, t3x, t3y = d0x / n0, d0y / n0, d3x / n3, d3y / n3
+        best_err = 1e300
+        if order == 2:  # a quadratic when one fits (fewer numbers): control point where the end tangents meet
+            det = t0x * t3y - t3x * t0y  # p0 + al·t0 = p3 - be·t3
+            if abs(det) > 1e-9:
+                vx, vy = p3x - p0x, p3y - p0y
+                al = (vx * t3y - t3x * vy) / det
+                be = (t0x * vy - t0y * vx) / det
+                if al > 0 and be > 0 and al < 4 * chord and be < 4 * chord:
+                    cx, cy = p0x + al * t0x, p0y + al * t0y
+                    c[0, 0], c[0, 1] = p0x, p0y
+                    c[1, 0], c[1, 1] = p0x + 2.0 / 3.0 * (cx - p0x), p0y + 2.0 / 3.0 * (cy - p0y)
+                    c[2, 0], c[2, 1] = p3x + 2.0 / 3.0 * (cx - p3x), p3y + 2.0 / 3.0 * (cy - p3y)
+                    c[3, 0], c[3, 1] = p3x, p3y
+                    err = _max_error(c, u, q, a, b)
+                    if not _forward(c, u, g, a, b, cos_tol):
+                        err = 1e300
+                    if err <= tol:
+                        out_o[n_out] = 2
+                        out_c[n_out, 0, 0], out_c[n_out, 0, 1] = p0x, p0y
+                        out_c[n_out, 1, 0], out_c[n_out, 1, 1] = cx, cy
+                        out_c[n_out, 2, 0], out_c[n_out, 2, 1] = p3x, p3y
+                        out_c[n_out, 3, 0], out_c[n_out, 3, 1] = p3x, p3y
+                        n_out += 1
+                        continue
+                    best[:, :] = c
+                    best_err = err
+                    for i in range(a, b):
+                        u[i - a] = (t[i] - t[a]) / span if span > 0 else (i - a) / max(1, m - 1)
+        # cubic Hermite with the exact end derivatives
+        c[0, 0], c[0, 1] = p0x, p0y
+        c[1, 0], c[1, 1] = p0x + d0x / 3.0, p0y + d0y / 3.0
+        c[2, 0], c[2, 1] = p3x - d3x / 3.0, p3y - d3y / 3.0
+        c[3, 0], c[3, 1] = p3x, p3y
+        err = _max_error(c, u, q, a, b)
+        if not _forward(c, u, g, a, b, cos_tol):
+            err = 1e299
+        done = err <= tol
+        if err < best_err:
+            best[:, :] = c
+            best_err = err
+        if not done:  # least squares, same tangent directions, refined parameters
+            for _ in range(2):
+                _lsq(q, u, a, b, c)
+                err = _max_error(c, u, q, a, b)
+                if not _forward(c, u, g, a, b, cos_tol):
+                    err = 1e299
+                if err < best_err:
+                    best[:, :] = c
+                    best_err = err
+                if err <= tol:
+                    done = True
+                    break
+        if done or m < 3 or depth >= MAX_DEPTH:
+            out_o[n_out] = 3
+            out_c[n_out, :, :] = best
+            n_out += 1
+            continue
+        k = a + m // 2  # split at the middle sample (shared by both halves)
+        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4] = k, b, depth + 1, 0, ue
+        top += 1
+        stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4] = a, k + 1, depth + 1, us, 0
+        top += 1
+    return n_out
+
+
+@njit(cache=True)
+def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
+    n = len(order)
+    straight = np.zeros(n, np.bool_)
+    for k in range(n):
+        if order[k] == 1:
+            a, b = seg_start[k], seg_start[k + 1]
+            if math.hypot(q[b - 1, 0] - q[a, 0], q[b - 1, 1] - q[a, 1]) > 0:
+                straight[k] = _line_error(q, a, b) <= tol
+    ts = np.zeros((n, 2))
+    te = np.zeros((n, 2))
+    use_ts = np.zeros(n, np.int64)
+    use_te = np.zeros(n, np.int64)
+    cos_snap = math.cos(snap)
+    for k in range(n):
+        if not straight[k]:
+            continue
+        a, b = seg_start[k], seg_start[k + 1]
+        dx, dy = q[b - 1, 0] - q[a, 0], q[b - 1, 1] - q[a, 1]
+        nd = math.hypot(dx, dy)
+        dx, dy = dx / nd, dy / nd
+        if k > 0 or closed:
+            j = (k - 1) % n
+            if not straight[j]:
+                e = seg_start[j + 1] - 1
+                gn = math.hypot(g[e, 0], g[e, 1])
+                if gn > 0 and (g[e, 0] * dx + g[e, 1] * dy) / gn > cos_snap:
+                    te[j, 0], te[j, 1] = dx, dy
+                    use_te[j] = 1
+        if k < n - 1 or closed:
+            j = (k + 1) % n
+            if not straight[j]:
+                s = seg_start[j]
+                gn = math.hypot(g[s, 0], g[s, 1])
+                if gn > 0 and (g[s, 0] * dx + g[s, 1] * dy) / gn > cos_snap:
+                    ts[j, 0], ts[j, 1] = dx, dy
+                    use_ts[j] = 1
+    cap = 0
+    for k in range(n):
+        cap += max(1, seg_start[k + 1] - seg_start[k])
+    out_o = np.empty(cap, np.int8)
+    out_c = np.empty((cap, 4, 2))
+    n_out = 0
+    for k in range(n):
+        n_out = _fit_piece(order[k], q, g, t, seg_start[k], seg_start[k + 1], tol, cos_tol,
+                           ts[k, 0], ts[k, 1], use_ts[k], te[k, 0], te[k, 1], use_te[k],
+                           out_o, out_c, n_out)
+    return out_o[:n_out], out_c[:n_out]
+
+
+def fit_subpath(order: np.ndarray, seg_start: np.ndarray, closed: bool, q: np.ndarray,
+                g: np.ndarray, t: np.ndarray, tol: float, angle_tol: float = 1.0) -> CurveSubpath | None:
+    """Fit every segment of one mapped subpath; returns the written curves (or None).
+
+    ``order`` (n,) source segment orders, ``seg_start`` (n + 1,) sample ranges into the
+    mapped samples ``q`` (P, 2) with derivatives ``g`` (P, 2) (d/dt) at segment
+    parameters ``t`` (P,) (see ``MapPlan``); ``tol`` the largest distance allowed,
+    ``angle_tol`` (degrees) the largest angle between the fitted and the exact curve's
+    direction at any sample.
+    """
+    orders, ctrl = _fit_chain(np.asarray(order, np.int64), np.asarray(seg_start, np.int64),
+                              bool(closed), np.ascontiguousarray(q, dtype=float),
+                              np.ascontiguousarray(g, dtype=float), np.ascontiguousarray(t, dtype=float),
+                              float(tol), math.cos(math.radians(angle_tol)), SNAP_ANGLE)
+    if len(orders) == 0:
+        return None
+    ctrl = ctrl.copy()
+    for k in range(1, len(ctrl)):  # exact joints
+        ctrl[k, 0] = ctrl[k - 1, orders[k - 1]]
+    if closed:
+        ctrl[-1, orders[-1]:] = ctrl[0, 0]
+    for k in range(len(ctrl)):  # unused rows repeat the end point
+        ctrl[k, orders[k] + 1:] = ctrl[k, orders[k]]
+    return CurveSubpath(orders, ctrl, bool(closed))

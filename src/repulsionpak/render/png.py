@@ -1,0 +1,286 @@
+"""Raster preview of a packing (matplotlib Agg, no pyplot state)."""
+
+from __future__ import annotations
+
+import io
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import shapely
+
+from ..errors import OutputError, ParameterError
+from ..types import ArtPath, Container, PlacedArt
+from ..io.svg_read import RegionTooComplex, rings_to_region
+from ..io.svg_write import atomic_write_bytes
+
+__all__ = ["contact_sheet_png", "png_bytes", "render_png"]
+
+_DPI = 100
+_CAPS = {"butt": "butt", "round": "round", "square": "projecting"}
+_JOINS = {"miter": "miter", "round": "round", "bevel": "bevel"}
+
+
+def _fill_path(art: ArtPath):
+    """matplotlib Path filling ``art`` like an SVG renderer (nonzero fill in matplotlib)."""
+    from matplotlib.path import Path as MPath
+
+    rings = [np.asarray(p, dtype=float) for p in art.subpaths if len(p) >= 3]
+    if not rings:
+        return None
+    if art.style.fill_rule == "evenodd":
+        try:
+            region = rings_to_region(rings, "evenodd")
+        except RegionTooComplex:  # pathological outline: draw it with the nonzero rule
+            region = None
+    else:
+        region = None
+    if region is not None:
+        polys = [
+            g
+            for g in shapely.get_parts(region)
+            if isinstance(g, shapely.Polygon) and not g.is_empty
+        ]
+        rings = []
+        for poly in polys:
+            poly = shapely.geometry.polygon.orient(poly, 1.0)  # exterior CCW, holes CW
+            rings.append(np.asarray(poly.exterior.coords)[:-1])
+            rings.extend(np.asarray(r.coords)[:-1] for r in poly.interiors)
+        if not rings:
+            return None
+    verts, codes = [], []
+    for r in rings:
+        verts.append(r)
+        verts.append(r[:1])
+        codes.append(
+            np.concatenate(
+                [[MPath.MOVETO], np.full(len(r) - 1, MPath.LINETO), [MPath.CLOSEPOLY]]
+            )
+        )
+    return MPath(np.concatenate(verts), np.concatenate(codes).astype(MPath.code_type))
+
+
+def _stroke_path(art: ArtPath):
+    from matplotlib.path import Path as MPath
+
+    verts, codes = [], []
+    for pts, closed in zip(art.subpaths, art.closed):
+        pts = np.asarray(pts, dtype=float)
+        if len(pts) < 2:
+            continue
+        verts.append(pts)
+        c = [MPath.MOVETO] + [MPath.LINETO] * (len(pts) - 1)
+        if closed:
+            verts.append(pts[:1])
+            c.append(MPath.CLOSEPOLY)
+        codes.append(np.asarray(c))
+    if not verts:
+        return None
+    return MPath(np.concatenate(verts), np.concatenate(codes).astype(MPath.code_type))
+
+
+def _draw_art(ax, art: ArtPath, stroke_scale: float, pt_per_unit: float) -> None:
+    from matplotlib.colors import to_rgba
+    from matplotlib.patches import PathPatch
+
+    st = art.style
+    if st.fill is not None and st.opacity * st.fill_opacity > 0:
+        fp = _fill_path(art)
+        if fp is not None:
+            ax.add_patch(
+                PathPatch(
+                    fp,
+                    facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity),
+                    edgecolor="none",
+                    linewidth=0,
+                )
+            )
+    width = st.stroke_width * stroke_scale * pt_per_unit
+    if st.stroke is not None and st.opacity * st.stroke_opacity > 0 and width > 0:
+        sp = _stroke_path(art)
+        if sp is not None:
+            ax.add_patch(
+                PathPatch(
+                    sp,
+                    facecolor="none",
+                    edgecolor=to_rgba(st.stroke, st.opacity * st.stroke_opacity),
+                    linewidth=width,
+                    capstyle=_CAPS.get(st.stroke_linecap, "butt"),
+                    joinstyle=_JOINS.get(st.stroke_linejoin, "miter"),
+                )
+            )
+
+
+def render_png(
+    path: str | Path,
+    container: Container,
+    placed: list[PlacedArt],
+    size_px: int = 1200,
+    background: str | None = "white",
+    show_container: bool = True,
+) -> None:
+    """Render the packing to a PNG whose longer side is ``size_px`` pixels.
+
+    Tight to the container's bounds plus a 2 % margin, y down, equal aspect, no axes.
+    Fill rules are honoured (evenodd fills are rebuilt as oriented polygons, since
+    matplotlib fills by winding); stroke widths are in data units. ``background``
+    None or ``"none"`` gives a transparent image. Deterministic; written atomically.
+    """
+    atomic_write_bytes(path, png_bytes(container, placed, size_px, background, show_container, path=path))
+
+
+def png_bytes(
+    container: Container,
+    placed: list[PlacedArt],
+    size_px: int = 1200,
+    background: str | None = "white",
+    show_container: bool = True,
+    path: str | Path = "<png>",
+) -> bytes:
+    """The PNG file :func:`render_png` writes, as bytes (``path`` only names it in errors)."""
+    try:
+        size_px = int(size_px)
+    except (TypeError, ValueError):
+        raise ParameterError(f"size_px must be an integer, got {size_px!r}") from None
+    if not 16 <= size_px <= 20000:
+        raise ParameterError(f"size_px must be between 16 and 20000, got {size_px}")
+    import matplotlib
+
+    if (
+        "matplotlib.pyplot" not in sys.modules
+    ):  # never switch the backend under a running pyplot
+        matplotlib.use("Agg")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    x0, y0, x1, y1 = container.bounds
+    if not all(math.isfinite(v) for v in (x0, y0, x1, y1)):
+        raise OutputError(
+            f"{path}: the container has non-finite bounds; nothing was rendered"
+        )
+    w, h = max(x1 - x0, 1e-12), max(y1 - y0, 1e-12)
+    m = 0.02 * max(w, h)
+    x0, y0, w, h = x0 - m, y0 - m, w + 2 * m, h + 2 * m
+    if w >= h:
+        W, H = size_px, max(1, round(size_px * h / w))
+    else:
+        W, H = max(1, round(size_px * w / h)), size_px
+    # grow the shorter data extent so that data and pixel aspect ratios agree exactly
+    upp = max(w / W, h / H)  # data units per pixel
+    cx, cy = x0 + w / 2, y0 + h / 2
+    w, h = W * upp, H * upp
+    x0, y0 = cx - w / 2, cy - h / 2
+    pt_per_unit = (1.0 / upp) * 72.0 / _DPI
+
+    fig = Figure(figsize=(W / _DPI, H / _DPI), dpi=_DPI)
+    canvas = FigureCanvasAgg(fig)
+    transparent = background is None or str(background).lower() == "none"
+    if not transparent:
+        from matplotlib.colors import is_color_like
+
+        if not is_color_like(background):
+            raise ParameterError(
+                f"background {background!r} is not a colour; use e.g. 'white', '#ffffff' or None"
+            )
+    fig.patch.set_facecolor("none" if transparent else background)
+    fig.patch.set_alpha(0.0 if transparent else 1.0)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_axis_off()
+    ax.patch.set_visible(False)
+    ax.set_xlim(x0, x0 + w)
+    ax.set_ylim(y0 + h, y0)  # y down
+    ax.set_aspect(
+        "equal"
+    )  # data and pixel aspect agree, so the axes keep the whole figure
+
+    if show_container:
+        if container.paths:
+            for art in container.paths:
+                _draw_art(ax, art, 1.0, pt_per_unit)
+        else:
+            from matplotlib.patches import PathPatch
+            from matplotlib.path import Path as MPath
+
+            for poly in shapely.get_parts(container.region):
+                if isinstance(poly, shapely.Polygon) and not poly.is_empty:
+                    for ring in [poly.exterior, *poly.interiors]:
+                        ax.add_patch(
+                            PathPatch(
+                                MPath(np.asarray(ring.coords)),
+                                facecolor="none",
+                                edgecolor="black",
+                                linewidth=0.8,
+                            )
+                        )
+    for pa in placed:
+        for art in pa.paths:
+            _draw_art(ax, art, pa.stroke_scale, pt_per_unit)
+
+    buf = io.BytesIO()
+    canvas.print_png(buf, metadata={"Software": "repulsionpak"})
+    return buf.getvalue()
+
+
+def contact_sheet_png(
+    tiles: list[bytes | None],
+    labels: list[str],
+    tile_px: int,
+    columns: int | None = None,
+    label_px: int = 18,
+) -> bytes:
+    """A grid of thumbnails as one PNG, each tile with a one-line label under it.
+
+    ``tiles[i]`` is a PNG (as :func:`png_bytes` makes, longer side at most ``tile_px``)
+    or None for an empty tile (a failed job: only its label shows). Tiles run left to
+    right, top to bottom, ``columns`` per row (default: ceil(sqrt(n))). The sheet is
+    exactly ``columns * tile_px`` wide and ``rows * (tile_px + label_px)`` high, so the
+    tile count can be read back from its size. Deterministic.
+    """
+    if len(tiles) != len(labels):
+        raise ValueError("need one label per tile")
+    n = len(tiles)
+    if n == 0:
+        raise ValueError("no tiles")
+    if not 16 <= tile_px <= 4000:
+        raise ParameterError(f"tile_px must be between 16 and 4000, got {tile_px}")
+    cols = columns or math.ceil(math.sqrt(n))
+    rows = math.ceil(n / cols)
+    cell_h = tile_px + label_px
+    W, H = cols * tile_px, rows * cell_h
+    import matplotlib
+
+    if "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")
+    import matplotlib.image as mimage
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(W / _DPI, H / _DPI), dpi=_DPI)
+    canvas = FigureCanvasAgg(fig)
+    fig.patch.set_facecolor("white")
+    font_pt = max(4.0, 0.62 * label_px * 72.0 / _DPI)
+    for i, (tile, label) in enumerate(zip(tiles, labels)):
+        r, c = divmod(i, cols)
+        x0, y_top = c * tile_px, r * cell_h  # pixels, y down
+        if tile is not None:
+            img = mimage.imread(io.BytesIO(tile), format="png")
+            th, tw = img.shape[:2]
+            if th > tile_px or tw > tile_px:
+                raise ValueError(f"tile {i} is {tw}x{th} px, larger than {tile_px}")
+            # figimage places the image's lower-left corner, in pixels from the bottom
+            xo = x0 + (tile_px - tw) // 2
+            yo = H - (y_top + (tile_px - th) // 2 + th)
+            fig.figimage(img, xo=xo, yo=yo, origin="upper")
+        else:  # an empty tile shows as a light square
+            from matplotlib.patches import Rectangle
+
+            pad = max(2, tile_px // 40)
+            fig.add_artist(Rectangle(((x0 + pad) / W, 1.0 - (y_top + tile_px - pad) / H),
+                                     (tile_px - 2 * pad) / W, (tile_px - 2 * pad) / H,
+                                     transform=fig.transFigure, facecolor="#f0f0f0", edgecolor="none"))
+        fig.text((x0 + tile_px / 2) / W, 1.0 - (y_top + tile_px + label_px / 2) / H, label,
+                 ha="center", va="center", fontsize=font_pt, color="#222222" if tile is not None else "#b00020")
+    buf = io.BytesIO()
+    canvas.print_png(buf, metadata={"Software": "repulsionpak"})
+    return buf.getvalue()

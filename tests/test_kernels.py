@@ -1,0 +1,92 @@
+"""The serial/parallel kernel builds (repulsionpak.sim.kernels) and the CLI's first-run
+message."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numba
+import numpy as np
+
+from repulsionpak.sim import kernels
+from repulsionpak.sim.forces import edge_force
+from repulsionpak.sim.integrate import euler_step
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = ROOT / "src" / "repulsionpak" / "examples"
+
+
+def _springs_scene(seed: int = 0):
+    rng = np.random.default_rng(seed)
+    n_el, per = 6, 12
+    x = rng.normal(size=(n_el * per, 2))
+    springs, sp_ptr = [], [0]
+    for e in range(n_el):
+        base = e * per
+        for i in range(per):
+            springs.append((base + i, base + (i + 1) % per))
+            springs.append((base + i, base + (i + 5) % per))
+        sp_ptr.append(len(springs))
+    springs = np.array(springs, np.int32)
+    rest0 = rng.uniform(0.5, 1.5, len(springs))
+    growth = rng.uniform(1.0, 1.3, n_el)
+    moving = np.array([True, True, False, True, True, True])
+    return x, springs, rest0, np.array(sp_ptr, np.int64), growth, moving
+
+
+def test_set_threads_switches_builds_and_both_give_the_same_forces():
+    x, springs, rest0, sp_ptr, growth, moving = _springs_scene()
+    f_serial = np.zeros_like(x)
+    old = kernels.set_threads(1)
+    try:
+        assert not kernels.uses_parallel_builds()
+        edge_force(x, springs, rest0, sp_ptr, growth, moving, 3.0, f_serial)
+        assert edge_force.serial.signatures  # the serial build ran
+        kernels.set_threads(2)
+        assert kernels.uses_parallel_builds() and numba.get_num_threads() == 2
+        f_par = np.zeros_like(x)
+        edge_force(x, springs, rest0, sp_ptr, growth, moving, 3.0, f_par)
+        assert edge_force.parallel.signatures  # the parallel build ran
+    finally:
+        kernels.set_threads(old if old > 0 else 1)
+    assert not np.allclose(f_serial, 0.0)
+    np.testing.assert_array_equal(f_serial, f_par)  # bit-identical, element by element
+    # frozen element 2 (vertices 24..35) gets no force
+    assert np.all(f_serial[24:36] == 0.0)
+
+
+def test_parallel_build_has_its_own_cache_files():
+    ser = euler_step.serial._cache._cache_file._index_name
+    par = euler_step.parallel._cache._cache_file._index_name
+    assert ser != par and "euler_step" in ser and "euler_step__parallel" in par
+
+
+def test_kernels_keep_the_python_function():
+    # tests and tools read the parameter names of the Python function
+    assert edge_force.py_func.__name__ == "edge_force"
+    assert edge_force.__doc__ == edge_force.py_func.__doc__
+
+
+def _pack(tmp: Path, cache: Path) -> subprocess.CompletedProcess:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT / "src"))
+    cmd = [sys.executable, "-m", "repulsionpak.cli", "pack", str(EXAMPLES / "containers" / "circle.svg"),
+           str(EXAMPLES / "elements" / "apple.svg"), "-o", str(tmp / "o.svg"), "--seed", "1",
+           "--count", "3", "--max-iterations", "60"]
+    return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=900)
+
+
+def test_cli_says_once_that_it_compiles_on_a_cold_cache_only(tmp_path):
+    """An empty numba cache: the message appears once on stderr (nothing on stdout);
+    with the cache filled by that run it does not appear again."""
+    cache = tmp_path / "numba-cache"
+    msg = "compiling the simulation kernels, first run only"
+    first = _pack(tmp_path, cache)
+    assert first.returncode == 0, first.stderr
+    assert first.stderr.count(msg) == 1 and msg not in first.stdout
+    second = _pack(tmp_path, cache)
+    assert second.returncode == 0, second.stderr
+    assert msg not in second.stderr
+    assert any(cache.rglob("*.nbi"))

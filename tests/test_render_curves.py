@@ -1,0 +1,278 @@
+"""Output curves: source curves, the smooth deformation map, Bézier fitting, path data."""
+
+from __future__ import annotations
+
+import io
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from curve_scenes import BADGE, DISC, SQUARE, letter_svg
+from repulsionpak.io import load_element
+from repulsionpak.io.svg_source import arc_to_cubics
+from repulsionpak.params import RenderParams
+from repulsionpak.preprocess import build_template, outline_of
+from repulsionpak.render import render_copy
+from repulsionpak.render.curves import bezier, decimals_for, flatten_subpath, path_data
+from repulsionpak.render.deform import map_plan, tps_weights
+from repulsionpak.render.fit import fit_subpath
+from repulsionpak.render.quality import (curve_share, dense_polyline, deviation, exact_outlines,
+                                        kink_stats)
+from repulsionpak.types import CurveSubpath
+
+GAP = 4.0
+
+
+def _element(tmp_path, text, name="e.svg"):
+    f = tmp_path / name
+    f.write_text(text)
+    return load_element(f)
+
+
+def _template(el, scale=1.0):
+    return build_template(outline_of(el), scale, GAP)
+
+
+def _bend(verts, amount=0.004, jitter=0.0, seed=0):
+    """A smooth bend (a parabola along x), rotation and scale, plus optional vertex jitter."""
+    rng = np.random.default_rng(seed)
+    x, y = verts[:, 0], verts[:, 1]
+    out = np.column_stack([x, y + amount * x * x])
+    a = 0.6
+    rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    out = out @ rot.T * 1.3 + [200.0, 150.0]
+    return out + jitter * rng.standard_normal(out.shape)
+
+
+def _squeeze(verts, amount=4.0, seed=0):
+    """A smooth but strong deformation (waves of ~75 units, like a copy pressed by its
+    neighbours) on top of :func:`_bend`."""
+    rng = np.random.default_rng(seed)
+    ph = rng.uniform(0, 6, 2)
+    return _bend(verts + amount * np.sin(verts[:, ::-1] / 12 + ph), amount=0.004)
+
+
+def _corners(sub: CurveSubpath, angle_deg: float = 10.0) -> int:
+    """Joints of a closed written subpath whose tangent turns by more than angle_deg."""
+    def tangent(o, c, end):
+        pts = c[: o + 1]
+        d = (pts[-1] - pts[-2]) if end else (pts[1] - pts[0])
+        return d / np.hypot(*d)
+    n = len(sub.order)
+    count = 0
+    for k in range(n):
+        j = (k + 1) % n
+        a = tangent(int(sub.order[k]), sub.ctrl[k], True)
+        b = tangent(int(sub.order[j]), sub.ctrl[j], False)
+        if math.degrees(math.acos(np.clip(a @ b, -1, 1))) > angle_deg:
+            count += 1
+    return count
+
+
+# --------------------------------------------------------------------------- source curves
+
+
+def test_arc_to_cubics_is_within_1e5_of_the_circle():
+    cub = arc_to_cubics([0, 0], [10, 0], [0, 10], 0.3, 2 * math.pi)
+    assert len(cub) == 8
+    t = np.linspace(0, 1, 101)
+    r = np.concatenate([np.hypot(*bezier(c, 3, t).T) for c in cub])
+    assert np.abs(r - 10).max() < 1e-4  # 1e-5 of the radius
+
+
+def test_reader_keeps_curves_that_match_the_flattened_outline(tmp_path):
+    el = _element(tmp_path, letter_svg("g"))
+    art = el.paths[0]
+    assert art.source is not None and art.source.tag == "path"
+    orders = np.concatenate([c.order for c in art.source.curves])
+    assert (orders == 2).sum() > 10  # the glyph's quadratic segments are kept as such
+    assert len(art.source.curves) == len(art.subpaths)
+    for c, flat in zip(art.source.curves, art.subpaths):
+        d = shapely.hausdorff_distance(shapely.LinearRing(flatten_subpath(c, 1e-3)),
+                                       shapely.LinearRing(flat), densify=0.01)
+        assert d < 0.2  # the reader's flattening tolerance (1e-3 of the diagonal)
+
+
+def test_circle_and_rect_markup_and_curves(tmp_path):
+    disc = _element(tmp_path, DISC, "disc.svg").paths[0].source
+    assert disc.tag == "circle" and dict(disc.attrs)["r"] == "45"
+    pts = flatten_subpath(disc.curves[0], 1e-4)
+    assert np.abs(np.hypot(pts[:, 0] - 50, pts[:, 1] - 50) - 45).max() < 1e-3
+    sq = _element(tmp_path, SQUARE, "sq.svg").paths[0].source
+    assert sq.tag == "rect" and list(sq.curves[0].order) == [1, 1, 1, 1]
+
+
+def test_path_data_round_trips_through_svgelements():
+    import svgelements as se
+
+    rng = np.random.default_rng(3)
+    ctrl = rng.uniform(-50, 150, (5, 4, 2))
+    order = np.array([3, 2, 1, 3, 1], np.int8)
+    for k in range(1, 5):
+        ctrl[k, 0] = ctrl[k - 1, order[k - 1]]
+    ctrl[-1, 1:] = ctrl[0, 0]
+    for k in range(5):
+        ctrl[k, order[k] + 1:] = ctrl[k, order[k]]
+    sub = CurveSubpath(order, ctrl, True)
+    open_sub = CurveSubpath(order[:3], ctrl[:3] + 300.0, False)
+    kinds = {1: (se.Line, se.Close), 2: (se.QuadraticBezier,), 3: (se.CubicBezier,)}
+    for relative in (True, False):
+        d = path_data([sub, open_sub], decimals=3, relative=relative)
+        segs = [g for g in se.Path(d) if not isinstance(g, se.Move)]
+        want = [(int(o), c) for cs in (sub, open_sub) for o, c in zip(cs.order, cs.ctrl)]
+        assert len(segs) == len(want)
+        for g, (o, c) in zip(segs, want):
+            assert isinstance(g, kinds[o])
+            got = [g.start] + [getattr(g, n) for n in ("control", "control1", "control2") if hasattr(g, n)] + [g.end]
+            got = np.array([[p.x, p.y] for p in got])
+            assert np.abs(got - c[: o + 1]).max() <= 1e-3 * 0.5 + 1e-9
+    assert path_data([sub], 3).endswith("z") and path_data([sub], 3).count("l") == 1  # closing line -> z
+
+
+def test_decimals_follow_the_tolerance():
+    for tol in (1.0, 0.1, 0.013, 1e-4):
+        d = decimals_for(tol)
+        assert 0.5 * 10.0 ** -d * math.sqrt(2) <= tol / 5
+        assert d == 0 or 0.5 * 10.0 ** -(d - 1) * math.sqrt(2) > tol / 5
+
+
+# --------------------------------------------------------------------------- the map
+
+
+def test_tps_weights_reproduce_affine_maps_and_interpolate_vertices():
+    rng = np.random.default_rng(1)
+    rest = rng.uniform(0, 50, (40, 2))
+    pts = rng.uniform(5, 45, (30, 2))
+    dirs = rng.standard_normal((30, 2))
+    W, D = tps_weights(rest, pts, dirs)
+    assert np.allclose(W.sum(1), 1) and np.allclose(D.sum(1), 0, atol=1e-9)
+    A = np.array([[1.3, -0.4], [0.7, 0.9]])
+    assert np.allclose(W @ (rest @ A.T + [3, 4]), pts @ A.T + [3, 4], atol=1e-8)
+    assert np.allclose(D @ (rest @ A.T), dirs @ A.T, atol=1e-8)
+    W0, _ = tps_weights(rest, rest[:5])
+    assert np.allclose(W0, np.eye(40)[:5], atol=1e-8)
+    # derivative weights agree with finite differences of the position weights
+    h = 1e-6
+    Wp, _ = tps_weights(rest, pts + h * dirs)
+    Wm, _ = tps_weights(rest, pts - h * dirs)
+    x = rest + rng.standard_normal(rest.shape)
+    assert np.allclose((Wp - Wm) @ x / (2 * h), D @ x, atol=1e-5)
+
+
+# --------------------------------------------------------------------------- fitting
+
+
+def test_affine_copy_keeps_every_segment_exactly(tmp_path):
+    el = _element(tmp_path, letter_svg("S"))
+    t = _template(el, 1.0)
+    A = np.array([[0.9, -0.5, 30.0], [0.5, 0.9, 40.0], [0, 0, 1]])
+    verts = t.verts @ A[:2, :2].T + A[:2, 2]
+    paths, tol = render_copy(t, verts, GAP)
+    src = el.paths[0].source.curves
+    out = paths[0].source.curves
+    assert [list(c.order) for c in out] == [list(c.order) for c in src]  # one piece per segment
+    rest = np.array([[t.scale, 0, -t.scale * t.outline.center[0]],
+                     [0, t.scale, -t.scale * t.outline.center[1]], [0, 0, 1]])
+    for c, s in zip(out, src):
+        want = s.transformed(A @ rest)
+        # end points exact up to rounding; the curves within the tolerance
+        assert np.abs(c.end_points() - want.end_points()).max() <= 10.0 ** -decimals_for(tol)
+        d = shapely.hausdorff_distance(shapely.LinearRing(dense_polyline(c)),
+                                       shapely.LinearRing(dense_polyline(want)), densify=0.02)
+        assert d <= tol
+
+
+def test_square_keeps_exactly_four_corners_when_bent(tmp_path):
+    t = _template(_element(tmp_path, SQUARE), 1.0)
+    for jitter in (0.0, 0.3):
+        paths, tol = render_copy(t, _bend(t.verts, jitter=jitter), GAP)
+        sub = paths[0].source.curves[0]
+        assert _corners(sub) == 4
+        assert (sub.order > 1).sum() >= 4  # bent sides are curves, not facets
+
+
+def test_straight_lines_stay_lines_when_the_map_keeps_them_straight(tmp_path):
+    t = _template(_element(tmp_path, SQUARE), 1.0)
+    verts = t.verts * 1.1 + [5, 5]  # no bend
+    paths, _ = render_copy(t, verts, GAP)
+    assert list(paths[0].source.curves[0].order) == [1, 1, 1, 1]
+
+
+@pytest.mark.parametrize("smooth", [True, False])
+def test_disc_copy_has_no_kinks_with_the_smooth_map(tmp_path, smooth):
+    t = _template(_element(tmp_path, DISC), 1.0)
+    jumps = []
+    for seed in range(4):
+        verts = _squeeze(t.verts, seed=seed)
+        paths, tol = render_copy(t, verts, GAP, RenderParams(smooth_map=smooth))
+        jumps.append(kink_stats(paths[0].source.curves[0])[1])
+    if smooth:
+        assert max(jumps) <= 2.0
+    else:  # the paper's per-triangle map: kinks where the outline crosses triangle edges
+        assert max(jumps) > 2.0
+
+
+@pytest.mark.parametrize("text", ["disc", "square", "g", "&"])
+def test_written_curves_are_within_the_tolerance_of_the_exact_map(tmp_path, text):
+    src = {"disc": DISC, "square": SQUARE}.get(text) or letter_svg(text)
+    t = _template(_element(tmp_path, src), 1.0)
+    for seed in range(3):
+        verts = _squeeze(t.verts, seed=seed) if seed < 2 else _bend(t.verts, jitter=0.2, seed=seed)
+        paths, tol = render_copy(t, verts, GAP)
+        d = deviation(paths, exact_outlines(t, verts), tol)
+        assert d <= tol, (seed, d, tol)
+
+
+def test_letters_are_mostly_curves_and_compact(tmp_path):
+    import xml.etree.ElementTree as ET
+
+    from repulsionpak.render.svg import _art_path_xml
+
+    for ch in "aegRS&":
+        text = letter_svg(ch)
+        el = _element(tmp_path, text, f"l{ord(ch)}.svg")
+        t = _template(el, 1.0)
+        paths, tol = render_copy(t, _squeeze(t.verts, amount=1.0), GAP)  # a moderate deformation
+        curved, total = curve_share(paths)
+        assert curved >= 0.5 * total
+        written = sum(len(_art_path_xml(a, 1.0, "")) for a in paths)
+        root = ET.fromstring(text)
+        source = sum(len(ET.tostring(e, encoding="unicode").replace(
+            "ns0:", "").replace(' xmlns:ns0="http://www.w3.org/2000/svg"', ""))
+            for e in root.iter() if e.tag.endswith("path"))
+        assert written <= 1.5 * source, (ch, written, source)
+
+
+def test_strongly_bent_bar_follows_the_bend_without_folding(tmp_path):
+    bar = ('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 200 30">'
+           '<rect x="0" y="0" width="200" height="20" rx="10" fill="#000"/></svg>')
+    t = _template(_element(tmp_path, bar), 1.0)
+
+    def bend(p):  # roll the bar around a circle of radius 40 (a U, 180° of turn)
+        r = 40.0
+        ang = p[:, 0] / r
+        rad = r + p[:, 1]
+        return np.column_stack([rad * np.sin(ang), -rad * np.cos(ang)])
+
+    verts = bend(t.verts)
+    paths, tol = render_copy(t, verts, GAP)
+    written = paths[0].subpaths[0]
+    assert shapely.Polygon(written).is_valid  # no fold or self-intersection
+    # the art follows the analytic bend within a small fraction of the bar's width
+    rest = np.array([[t.scale, 0, -t.scale * t.outline.center[0]],
+                     [0, t.scale, -t.scale * t.outline.center[1]], [0, 0, 1]])
+    exact = bend(dense_polyline(el_curve(t).transformed(rest)))
+    d = shapely.hausdorff_distance(shapely.LinearRing(written), shapely.LinearRing(exact), densify=0.05)
+    assert d < 0.1 * 20
+
+
+def el_curve(t):
+    return t.element.paths[0].source.curves[0]
+
+
+def test_plan_is_cached_per_template(tmp_path):
+    t = _template(_element(tmp_path, DISC), 1.0)
+    assert map_plan(t) is map_plan(t)
+    assert map_plan(t, smooth=False) is not map_plan(t)
