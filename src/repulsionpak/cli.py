@@ -223,9 +223,16 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
         if cache_is_cold():
             typer.echo("compiling the simulation kernels, first run only…", err=True)
-    with _Progress(progress) as prog, _StopFlag() as stop:
-        packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
-                       on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every, resume=resumed)
+    from .render import warmup
+
+    compiling = warmup.start()  # first run: the render kernels compile on a spare core meanwhile
+    try:
+        with _Progress(progress) as prog, _StopFlag() as stop:
+            packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
+                           on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
+                           resume=resumed)
+    finally:
+        warmup.stop(compiling)
     t_eval = time.perf_counter()
     # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
     metrics = evaluate(cont, packing.placed, g, with_scp=False,

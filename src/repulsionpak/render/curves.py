@@ -60,7 +60,7 @@ def _flatten(order, ctrl, tol):
         if bound > 0:
             counts[k] = max(1, min(4096, int(math.ceil(math.sqrt(bound / (8.0 * tol))))))
     out = np.empty((1 + counts.sum(), 2))
-    out[0] = ctrl[0, 0]
+    out[0, 0], out[0, 1] = ctrl[0, 0, 0], ctrl[0, 0, 1]  # scalars: a row assignment compiles slowly
     j = 1
     for k in range(n):
         c = ctrl[k]

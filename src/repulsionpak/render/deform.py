@@ -62,14 +62,19 @@ def _solve(a, b):
     n = a.shape[0]
     m = a.copy()
     x = b.copy()
-    scale = np.abs(m).max()
+    scale = 0.0  # loops rather than array expressions: seconds less to compile on a first run
+    for i in range(n):
+        for j in range(n):
+            scale = max(scale, abs(m[i, j]))
     for k in range(n):
         p = k
         for i in range(k + 1, n):
             if abs(m[i, k]) > abs(m[p, k]):
                 p = i
         if abs(m[p, k]) <= 1e-13 * scale:
-            x[:, :] = np.nan
+            for i in range(x.shape[0]):
+                for j in range(x.shape[1]):
+                    x[i, j] = np.nan
             return x
         if p != k:
             for j in range(n):

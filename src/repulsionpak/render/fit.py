@@ -147,6 +147,16 @@ def _lsq(q, u, lo, hi, c):
 
 
 @njit(cache=True)
+def _copy4(dst, src):
+    """dst[:, :] = src for (4, 2) arrays, as a loop: numba compiles a slice assignment with
+    its broadcasting checks and their error messages (2.9 of the 6.9 s the first run spent
+    compiling this module)."""
+    for r in range(4):
+        dst[r, 0] = src[r, 0]
+        dst[r, 1] = src[r, 1]
+
+
+@njit(cache=True)
 def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey, use_te, out_o, out_c,
                n_out):
     """Fit samples [lo, hi) (ends included); appends pieces; returns the new count."""
@@ -228,7 +238,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
                         out_c[n_out, 3, 0], out_c[n_out, 3, 1] = p3x, p3y
                         n_out += 1
                         continue
-                    best[:, :] = c
+                    _copy4(best, c)
                     best_err = err
                     for i in range(a, b):
                         u[i - a] = (t[i] - t[a]) / span if span > 0 else (i - a) / max(1, m - 1)
@@ -242,7 +252,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
             err = 1e299
         done = err <= tol
         if err < best_err:
-            best[:, :] = c
+            _copy4(best, c)
             best_err = err
         if not done:  # least squares, same tangent directions, refined parameters
             for _ in range(2):
@@ -251,14 +261,14 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
                 if not _forward(c, u, g, a, b, cos_tol):
                     err = 1e299
                 if err < best_err:
-                    best[:, :] = c
+                    _copy4(best, c)
                     best_err = err
                 if err <= tol:
                     done = True
                     break
         if done or m < 3 or depth >= MAX_DEPTH:
             out_o[n_out] = 3
-            out_c[n_out, :, :] = best
+            _copy4(out_c[n_out], best)
             n_out += 1
             continue
         k = a + m // 2  # split at the middle sample (shared by both halves)

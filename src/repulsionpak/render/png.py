@@ -88,7 +88,7 @@ def _draw_art(ax, art: ArtPath, stroke_scale: float, pt_per_unit: float) -> None
     if st.fill is not None and st.opacity * st.fill_opacity > 0:
         fp = _fill_path(art)
         if fp is not None:
-            ax.add_patch(
+            ax.add_artist(  # not add_patch: the limits are set, no data-limit update
                 PathPatch(
                     fp,
                     facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity),
@@ -100,7 +100,7 @@ def _draw_art(ax, art: ArtPath, stroke_scale: float, pt_per_unit: float) -> None
     if st.stroke is not None and st.opacity * st.stroke_opacity > 0 and width > 0:
         sp = _stroke_path(art)
         if sp is not None:
-            ax.add_patch(
+            ax.add_artist(  # not add_patch: the limits are set, no data-limit update
                 PathPatch(
                     sp,
                     facecolor="none",
@@ -205,7 +205,7 @@ def png_bytes(
             for poly in shapely.get_parts(container.region):
                 if isinstance(poly, shapely.Polygon) and not poly.is_empty:
                     for ring in [poly.exterior, *poly.interiors]:
-                        ax.add_patch(
+                        ax.add_artist(  # not add_patch: the limits are set, no data-limit update
                             PathPatch(
                                 MPath(np.asarray(ring.coords)),
                                 facecolor="none",
