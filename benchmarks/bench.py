@@ -202,13 +202,17 @@ def bench_mesh() -> None:
 def bench_firstrun() -> None:
     """``repulsionpak demo`` twice with an empty numba cache (NUMBA_CACHE_DIR in a fresh
     temporary folder): the first run compiles the kernels, the second loads them. Wall
-    and CPU time of the whole process."""
+    and CPU time of the whole process (the warm-up process included); then the first run
+    again with the warm-up turned off (``REPULSIONPAK_NO_WARMUP=1``)."""
     import os
     import tempfile
 
+    runs = [("first run (cold cache)", {}), ("second run", {}),
+            ("first run without the warm-up process", {"REPULSIONPAK_NO_WARMUP": "1"})]
     with tempfile.TemporaryDirectory() as tmp:
-        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
-        for label in ("first run (cold cache)", "second run"):
+        for k, (label, extra) in enumerate(runs):
+            cache = os.path.join(tmp, "numba" if k < 2 else "numba-nowarm")
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache, **extra)
             t0 = time.perf_counter()
             r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
             subprocess.run([sys.executable, "-m", "repulsionpak.cli", "demo", "-o", os.path.join(tmp, "d.svg")],

@@ -85,3 +85,12 @@ def test_start_does_nothing_when_cached():
     assert warmup.start() is None
     warmup.stop(None)
     warmup.wait()  # nothing running: returns at once
+
+
+def test_start_can_be_turned_off(monkeypatch):
+    from repulsionpak import warmup
+
+    monkeypatch.setattr(warmup, "is_cold", lambda: True)
+    monkeypatch.setattr(warmup, "_spare_cores", lambda: 1)
+    monkeypatch.setenv("REPULSIONPAK_NO_WARMUP", "1")
+    assert warmup.start() is None

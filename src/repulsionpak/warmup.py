@@ -192,9 +192,10 @@ def _spare_cores() -> int:
 
 def start() -> subprocess.Popen | None:
     """Start :func:`warm_up` in a background process when kernels are not cached yet and
-    the machine has a spare core; returns the process (or None)."""
+    the machine has a spare core; returns the process (or None). The environment variable
+    ``REPULSIONPAK_NO_WARMUP=1`` turns it off."""
     global _current
-    if _spare_cores() < 1 or not is_cold():
+    if os.environ.get("REPULSIONPAK_NO_WARMUP") or _spare_cores() < 1 or not is_cold():
         return None
     try:
         _current = subprocess.Popen([sys.executable, "-m", "repulsionpak.warmup"],
