@@ -16,8 +16,9 @@ Frame stride: ``every=N`` keeps the state every N iterations of each phase (plus
 last state of each phase). Without it the stride adapts to the run, whose length is not
 known in advance (it stops on convergence): it starts at the snapshot cadence and
 doubles, dropping every other frame, whenever more than ``2 * frames`` are held, so a
-run of any length ends with ``frames`` to ``2 * frames`` frames; the frame rate then
-makes the film about ``seconds`` long.
+run of any length ends with ``frames`` to ``2 * frames`` frames (each phase's first and
+last snapshot always among them); the frame rate then makes the film about ``seconds``
+long.
 """
 
 from __future__ import annotations
@@ -331,6 +332,8 @@ class MovieRecorder:
                 self.frames[-1] = _Frame(last.phase, last.iteration, last.model, last.x, True)
             else:
                 self._add(snap, True)
+        elif self.every is None and (last is None or last.phase != snap.phase):
+            self._add(snap, True)  # adaptive: each phase starts with its first snapshot
         elif snap.iteration % self.stride == 0 and not same:
             self._add(snap, False)
             if self.every is None and len(self.frames) > 2 * self.min_frames:
