@@ -176,11 +176,12 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
              margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None,
-             movie: Path | None = None, movie_every: int | None = None) -> dict:
+             movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it;
     ``movie`` (.gif or .mp4) the simulation as an animation, a frame every ``movie_every``
-    iterations (default: adapted to the run's length)."""
+    iterations (default: adapted to the run's length), ``movie_size`` pixels along the
+    frames' longer side."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png
     from .io.svg_write import atomic_write_bytes
@@ -195,7 +196,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         from .render.movie import MovieRecorder, check_movie_output
 
         check_movie_output(movie)  # before the run: an MP4 without imageio-ffmpeg fails now
-        recorder = MovieRecorder(movie, every=movie_every)
+        recorder = MovieRecorder(movie, every=movie_every, size_px=movie_size)
     if checkpoint_every < 1:
         raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
     resumed = None
@@ -360,6 +361,8 @@ MovieOpt = Annotated[Optional[Path], typer.Option(
          "pip install 'repulsionpak[mp4]'); about 12 s, then the result held for 2 s.")]
 MovieEveryOpt = Annotated[Optional[int], typer.Option(
     "--movie-every", min=1, help="Iterations between movie frames (default: chosen from the run's length).")]
+MovieSizeOpt = Annotated[int, typer.Option(
+    "--movie-size", min=64, max=4000, help="Longer side of the movie's frames, pixels.")]
 
 
 @app.command()
@@ -384,6 +387,7 @@ def pack(
     resume: Annotated[Optional[Path], typer.Option(help="Continue an interrupted run from its checkpoint (same inputs and options).")] = None,
     movie: MovieOpt = None,
     movie_every: MovieEveryOpt = None,
+    movie_size: MovieSizeOpt = 600,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -395,7 +399,7 @@ def pack(
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
                        margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
-                       movie=movie, movie_every=movie_every)
+                       movie=movie, movie_every=movie_every, movie_size=movie_size)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             if "movie" in rep:
@@ -580,6 +584,7 @@ def demo(
     seed: Annotated[int, typer.Option(help="Random seed.")] = 1,
     movie: MovieOpt = None,
     movie_every: MovieEveryOpt = None,
+    movie_size: MovieSizeOpt = 600,
     quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -593,7 +598,7 @@ def demo(
         png = output.with_suffix(".png")
         rep = run_pack(cfile, examples.element_files(), output, secondary=examples.secondary_files(),
                        gap=examples.DEFAULT_GAP, seed=seed, png=png, progress=not quiet,
-                       movie=movie, movie_every=movie_every)
+                       movie=movie, movie_every=movie_every, movie_size=movie_size)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             typer.echo(f"picture: {png}", err=True)

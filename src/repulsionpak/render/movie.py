@@ -308,6 +308,8 @@ class MovieRecorder:
         self.format = movie_format(path)
         if every is not None and int(every) < 1:
             raise ParameterError(f"--movie-every must be >= 1, got {every}")
+        if not 64 <= int(size_px) <= 4000:
+            raise ParameterError(f"movie frame size must be between 64 and 4000 px, got {size_px}")
         if frames < 2 or not seconds > 0 or not hold >= 0:
             raise ParameterError("the movie needs frames >= 2, seconds > 0 and hold >= 0")
         self.every = None if every is None else int(every)
@@ -416,7 +418,7 @@ def _gif_bytes(frames, delay_cs: int, last_cs: int, palette_from=None) -> tuple[
     durations = [10 * delay_cs] * (len(ims) - 1) + [10 * last_cs]
     buf = io.BytesIO()
     ims[0].save(buf, format="GIF", save_all=True, append_images=ims[1:], duration=durations,
-                loop=0, optimize=False, disposal=1)
+                loop=0, optimize=True, disposal=1)
     data = buf.getvalue()
     with Image.open(io.BytesIO(data)) as check:
         count = check.n_frames
