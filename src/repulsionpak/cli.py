@@ -101,10 +101,34 @@ class _Progress:
             self._live.update(self._task, phase=snap.phase, it=snap.iteration,
                               area=snap.area_fraction, n=snap.n_elements)
 
-    def frames(self, done: int, total: int) -> None:
-        """Progress of the movie's frames (the same bar, now with a total)."""
+    def __exit__(self, *exc):
         if self._live is not None:
-            self._live.update(self._task, phase="movie", it=done, total=total, completed=done)
+            self._live.__exit__(*exc)
+
+
+class _FrameProgress:
+    """The movie's frames being drawn and encoded (a bar on a terminal, after the
+    simulation's bar has gone)."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled and sys.stderr.isatty()
+        self._live = self._task = None
+
+    def __enter__(self):
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self._live = Progress(TextColumn("[bold]movie"), BarColumn(), MofNCompleteColumn(),
+                                  TextColumn("frames"), TimeElapsedColumn(), transient=True,
+                                  console=Console(stderr=True))
+            self._live.__enter__()
+            self._task = self._live.add_task("movie", total=None)
+        return self
+
+    def __call__(self, done: int, total: int) -> None:
+        if self._live is not None:
+            self._live.update(self._task, total=total, completed=done)
 
     def __exit__(self, *exc):
         if self._live is not None:
@@ -274,8 +298,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     seconds["render"] = seconds.get("render", 0.0) + (time.perf_counter() - t_eval)
     movie_info = None
     if recorder is not None:
-        with _Progress(progress) as prog:
-            movie_info = recorder.write(packing, progress=prog.frames)
+        with _FrameProgress(progress) as prog:
+            movie_info = recorder.write(packing, progress=prog)
         seconds["movie"] = movie_info.render_seconds + recorder.capture_seconds
     seconds["total"] = time.perf_counter() - t_start
     rep = {
