@@ -99,6 +99,11 @@ def test_mp4_without_imageio_ffmpeg_names_the_extra(tmp_path, monkeypatch):
     with pytest.raises(OutputError, match=r"pip install 'repulsionpak\[mp4\]'"):
         check_movie_output(tmp_path / "m.mp4")
     assert check_movie_output(tmp_path / "m.gif") == "gif"
+    # the command refuses before the run, and writes nothing
+    r = CliRunner().invoke(app, [*BASE, "-o", str(tmp_path / "m.svg"), "--movie", str(tmp_path / "m.mp4")])
+    assert r.exit_code == OutputError.exit_code
+    assert "repulsionpak[mp4]" in r.output
+    assert not (tmp_path / "m.svg").exists()
 
 
 def _snap(it, phase="primary", done=False, n=10):

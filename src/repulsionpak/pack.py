@@ -128,8 +128,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
     ``params.seed`` fixes every random choice. ``on_snapshot`` receives progress
-    snapshots (every ``snapshot_every`` iterations); ``should_stop()`` (or Ctrl-C) ends the current phase early and the result
-    is marked partial.
+    snapshots (every ``snapshot_every`` iterations, and at the end of each phase);
+    ``should_stop()`` (or Ctrl-C) ends the current phase early and the result is marked
+    partial.
 
     ``on_checkpoint(states)`` receives ``{"primary": ..., "secondary": ...}`` simulator
     states every ``checkpoint_every`` iterations and when a phase ends (see
@@ -138,6 +139,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     uninterrupted one.
     """
     params = params.validate()
+    if snapshot_every < 1:
+        raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
     templates, placement, gap = prepare(container, elements, params, rng)
