@@ -121,6 +121,7 @@ class FrameRenderer:
         self.background = background
         self._colours: dict = {}
         self._templates: dict[int, _TemplateDraw] = {}
+        self._models: dict = {}
         self._base = None
 
     # pixel coordinates on the supersampled canvas
@@ -142,9 +143,10 @@ class FrameRenderer:
 
         c = self.container
         if c.paths:
+            d = ImageDraw.Draw(img)
             for art in c.paths:
-                self._draw_path(img, [np.asarray(p, float) for p in art.subpaths], list(art.closed),
-                                art.style, 1.0)
+                self._draw_path(img, d, [self._px(np.asarray(p, float)) for p in art.subpaths],
+                                list(art.closed), art.style, 1.0)
         else:
             import shapely  # noqa: PLC0415
 
@@ -154,20 +156,20 @@ class FrameRenderer:
                     q = self._px(np.asarray(ring.coords))
                     d.line(q.ravel().tolist(), fill=(0, 0, 0), width=SUPERSAMPLE)
 
-    def _draw_path(self, img, rings: list[np.ndarray], closed: list[bool], style, stroke_scale: float) -> None:
-        """One art path: fill (its fill rule approximated: holes are rings turning the
-        other way, or every other ring for evenodd) and stroke."""
+    def _draw_path(self, img, draw, rings: list[np.ndarray], closed: list[bool], style,
+                   stroke_scale: float) -> None:
+        """One art path, ``rings`` in canvas pixels: fill (its fill rule approximated:
+        holes are rings turning the other way, or every other ring for evenodd) and stroke."""
         from PIL import Image, ImageChops, ImageDraw  # noqa: PLC0415
 
         if style.opacity <= 0:
             return
-        rings = [self._px(r) for r in rings]
         fill = _rgb(style.fill, self._colours)
         alpha = style.opacity * style.fill_opacity
         closed_rings = [r for r, c in zip(rings, closed) if len(r) >= 3]
         if fill is not None and alpha > 0 and closed_rings:
             if len(closed_rings) == 1 and alpha >= 0.999:
-                ImageDraw.Draw(img).polygon(closed_rings[0].ravel().tolist(), fill=fill)
+                draw.polygon(closed_rings[0].ravel().tolist(), fill=fill)
             else:
                 allp = np.concatenate(closed_rings)
                 lo = np.maximum(np.floor(allp.min(axis=0)).astype(int) - 1, 0)
@@ -186,21 +188,19 @@ class FrameRenderer:
                         d = ImageDraw.Draw(mask)
                         for r, a in sorted(zip(closed_rings, areas), key=lambda ra: np.sign(ra[1]) != sign):
                             d.polygon((r - lo).ravel().tolist(), fill=1 if np.sign(a) == sign else 0)
-                    m = mask.convert("L")
-                    if alpha < 0.999:
-                        m = m.point(lambda v: int(v * alpha))
+                    m = Image.new("L", size, 0)
+                    m.paste(round(255 * min(alpha, 1.0)), (0, 0, *size), mask)
                     img.paste(fill, (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1])), m)
         stroke = _rgb(style.stroke, self._colours)
         width = style.stroke_width * stroke_scale * self.px_per_unit
         if stroke is not None and style.stroke_opacity * style.opacity > 0 and width > 0:
-            d = ImageDraw.Draw(img)
             w = max(1, round(width))
             for r, c in zip(rings, closed):
                 if len(r) < 2:
                     continue
                 if c:
                     r = np.vstack([r, r[:1]])
-                d.line(r.ravel().tolist(), fill=stroke, width=w, joint="curve")
+                draw.line(r.ravel().tolist(), fill=stroke, width=w, joint="curve")
 
     def _template(self, index: int, template, render_params) -> _TemplateDraw:
         td = self._templates.get(index)
@@ -220,8 +220,9 @@ class FrameRenderer:
                     continue
                 pts = plan.points[a:b]
                 length = float(np.hypot(*np.diff(pts, axis=0).T).sum())
-                # about one point per 2 px of the final element (growth included)
-                k = int(np.clip(1.5 * length * self.px_per_unit / 2.0, 6, b - a))
+                # a point per 3 canvas pixels (1.5 px of the frame) of the element at
+                # its nominal final size, at least 6 per ring
+                k = int(np.clip(length * self.px_per_unit / 3.0, 6, b - a))
                 idx = np.unique(np.linspace(a, b - 1, k).round().astype(np.int64))
                 rows.append(idx)
                 sp.append((n, n + len(idx), bool(sub.closed)))
@@ -234,34 +235,60 @@ class FrameRenderer:
         self._templates[index] = td
         return td
 
+    def _groups(self, model) -> list:
+        """Elements of ``model`` by template: [(template index, elements, vertex index
+        (copies, N_t))], cached per model."""
+        key = id(model)
+        hit = self._models.get(key)
+        if hit is not None and hit[0] is model:
+            return hit[1]
+        vs, ti = model.elem_vstart, np.asarray(model.template_index)
+        groups = []
+        for t in np.unique(ti):
+            els = np.flatnonzero(ti == t)
+            n = int(vs[els[0] + 1] - vs[els[0]])
+            groups.append((int(t), els, vs[els][:, None] + np.arange(n)))
+        self._models[key] = (model, groups)
+        return groups
+
     def draw_state(self, model, x: np.ndarray, templates: Sequence, unit: float, render_params):
         """A frame (PIL RGB image) of the simulation state ``x`` (N, 2 sim units) of
-        ``model``, each element's art mapped through its mesh."""
+        ``model``, each element's art mapped through its mesh (one matrix product per
+        template for all its copies)."""
+        from PIL import ImageDraw  # noqa: PLC0415
+
         from .placed import similarity_fit  # noqa: PLC0415
 
-        img = self._canvas()
-        vstart = model.elem_vstart
-        for e in range(model.n_elements):
-            ti = int(model.template_index[e])
+        mapped = [None] * model.n_elements  # per element: (template, draw data, pixels, verts)
+        for ti, els, idx in self._groups(model):
             t = templates[ti]
             td = self._template(ti, t, render_params)
-            verts = np.asarray(x[vstart[e]:vstart[e + 1]], dtype=float) * unit
-            q = td.M @ verts
+            verts = np.asarray(x, dtype=float)[idx] * unit  # (copies, N_t, 2)
+            q = td.M @ verts  # (copies, P, 2)
+            q = (q - self.origin) * self.px_per_unit
+            for k, e in enumerate(els):
+                mapped[e] = (t, td, q[k], verts[k])
+        img = self._canvas()
+        d = ImageDraw.Draw(img)
+        for t, td, q, verts in mapped:
             scale = None
             for style, sp in td.paths:
                 if style.stroke is not None and scale is None:
                     scale = t.scale * similarity_fit(t.verts, verts)[0]
-                self._draw_path(img, [q[a:b] for a, b, _ in sp], [c for _, _, c in sp], style,
+                self._draw_path(img, d, [q[a:b] for a, b, _ in sp], [c for _, _, c in sp], style,
                                 scale or 1.0)
         return self._finish(img)
 
     def draw_placed(self, placed: Sequence):
         """A frame of finished art (:class:`~repulsionpak.types.PlacedArt` list)."""
+        from PIL import ImageDraw  # noqa: PLC0415
+
         img = self._canvas()
+        d = ImageDraw.Draw(img)
         for pa in placed:
             for art in pa.paths:
-                self._draw_path(img, [np.asarray(p, float) for p in art.subpaths], list(art.closed),
-                                art.style, pa.stroke_scale)
+                self._draw_path(img, d, [self._px(np.asarray(p, float)) for p in art.subpaths],
+                                list(art.closed), art.style, pa.stroke_scale)
         return self._finish(img)
 
     def _finish(self, img):
