@@ -453,7 +453,7 @@ def _gif_bytes(frames, delay_cs: int, last_cs: int, palette_from=None) -> tuple[
 
 
 def _write_mp4(path: Path, frames, size: tuple[int, int], fps: float, hold_frames: int) -> int:
-    """Encode frames as H.264 MP4 (yuv420p, plays everywhere) through a temp file in the
+    """Encode frames as H.264 MP4 (yuv420p, plays everywhere; preset veryfast: faster and smaller here than the default) through a temp file in the
     output's directory, then move it into place; returns the frame count."""
     import imageio_ffmpeg  # noqa: PLC0415
 
@@ -466,7 +466,7 @@ def _write_mp4(path: Path, frames, size: tuple[int, int], fps: float, hold_frame
     try:
         w = imageio_ffmpeg.write_frames(tmp, size, fps=fps, codec="libx264", pix_fmt_out="yuv420p",
                                         macro_block_size=2, quality=6,
-                                        output_params=["-movflags", "+faststart"],
+                                        output_params=["-preset", "veryfast", "-movflags", "+faststart"],
                                         ffmpeg_log_level="error")
         w.send(None)
         last = None
