@@ -303,7 +303,7 @@ class _Frame:
     iteration: int
     model: object
     x: np.ndarray  # float32 copy of the vertices
-    pinned: bool  # the last state of a phase: never dropped
+    pinned: bool  # first (adaptive mode) or last state of a phase: never dropped
 
 
 @dataclass(frozen=True)
