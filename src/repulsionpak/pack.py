@@ -125,12 +125,13 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
          secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
          should_stop: Callable[[], bool] | None = None,
          on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 500,
-         resume: dict | None = None) -> Packing:
+         resume: dict | None = None, snapshot_every: int = 25) -> Packing:
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
     ``params.seed`` fixes every random choice. ``on_snapshot`` receives progress
-    snapshots; ``should_stop()`` (or Ctrl-C) ends the current phase early and the result
-    is marked partial.
+    snapshots (every ``snapshot_every`` iterations, and at the end of each phase);
+    ``should_stop()`` (or Ctrl-C) ends the current phase early and the result is marked
+    partial.
 
     ``on_checkpoint(states)`` receives ``{"primary": ..., "secondary": ...}`` simulator
     states every ``checkpoint_every`` iterations and when a phase ends (see
@@ -139,6 +140,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     uninterrupted one.
     """
     params = params.validate()
+    if snapshot_every < 1:
+        raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
     templates, placement, gap = prepare(container, elements, params, rng)
@@ -156,7 +159,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     sim = Simulator(model, state, params.sim, phase="primary")
     res = sim.run_resumable((resume or {}).get("primary"),
                             None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
-                            checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop)
+                            checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop,
+                            every=snapshot_every)
     t2 = time.perf_counter()
     packing = Packing(container, gap, [], templates, model, state, frame, params,
                       iterations={"primary": res.iterations, "secondary": 0},
@@ -176,7 +180,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         add_secondary(packing, secondary, rng, on_snapshot=on_snapshot, should_stop=should_stop,
                       on_checkpoint=(None if on_checkpoint is None else
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
-                      checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
+                      checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"),
+                      snapshot_every=snapshot_every)
     t3 = time.perf_counter()
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)

@@ -71,7 +71,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
                   on_snapshot: Callable[[Snapshot], None] | None = None,
                   should_stop: Callable[[], bool] | None = None,
                   on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 0,
-                  saved: dict | None = None) -> int:
+                  saved: dict | None = None, snapshot_every: int = 25) -> int:
     """Run the secondary phase on ``packing`` in place; returns the number of elements added.
 
     ``on_checkpoint(state)`` / ``saved``: as in :func:`repulsionpak.pack.pack`, for this phase."""
@@ -116,7 +116,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
-                            should_stop=should_stop)
+                            should_stop=should_stop, every=snapshot_every)
     packing.templates = all_templates
     packing.model, packing.state = model, state
     packing.iterations["secondary"] = res.iterations

@@ -43,6 +43,7 @@ class Snapshot:
     n_inside: int
     state: State
     done: bool = False
+    model: Model | None = None  # whose element layout ``state.x`` follows (frame writers)
 
 
 @dataclass(frozen=True)
@@ -266,7 +267,7 @@ class Simulator:
                     self._good = st.copy()
                 if on_snapshot is not None and st.iteration % every == 0:
                     on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
-                                         self.n_inside, st))
+                                         self.n_inside, st, model=self.model))
                 if self.settle_left is None:
                     converged = (st.iteration >= p.min_iterations and len(hist) > w
                                  and min(rms, 2.0 * trend) < p.stop_epsilon)
@@ -289,7 +290,7 @@ class Simulator:
             set_threads(threads)
         if on_snapshot is not None:
             on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
-                                 self.n_inside, st, done=True))
+                                 self.n_inside, st, done=True, model=self.model))
         return RunResult(st.iteration, a, self.stopped_by, self.dt)
 
     def run_resumable(self, saved: dict | None, on_checkpoint: Callable[[dict], None] | None,
