@@ -500,6 +500,9 @@ def batch(
     margin: MarginOpt = None,
     no_pocket_fill: NoPocketFillOpt = False,
     config: ConfigOpt = None,
+    rotation: RotationOpt = None,
+    rigid: RigidOpt = False,
+    stiffness: StiffnessOpt = None,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -508,12 +511,14 @@ def batch(
     global _DEBUG
     _DEBUG = debug
     from .batch import run_batch
+    from .controls import cli_controls
 
     with _errors():
         base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill)
         with _BatchProgress(not quiet) as prog, _sigterm_as_interrupt():
             summary = run_batch(container, elements, output, seeds, set_ or [], base, secondary or [],
-                                workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog)
+                                workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog,
+                                controls=cli_controls(rotation, rigid, stiffness))
         n = len(summary.jobs)
         if not quiet:
             best = summary.best
