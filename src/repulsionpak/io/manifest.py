@@ -113,11 +113,12 @@ def load_manifest(path, base: ElementControls | None = None, tolerance: float | 
         where = f"[[element]] {n}"
         if not isinstance(entry, dict):
             raise InputError(path, f"{where} must be a table")
-        _check_keys(path, where, entry, ("file", "pins", *KEYS))
         f = entry.get("file")
+        if isinstance(f, str) and f:
+            where = f"{where} ({f})"
+        _check_keys(path, where, entry, ("file", "pins", *KEYS))
         if not isinstance(f, str) or not f:
             raise InputError(path, f"{where}: missing file = \"name.svg\" (a file or folder relative to the manifest)")
-        where = f"{where} ({f})"
         target = (path.parent / f)
         if not target.exists():
             raise InputError(path, f"{where}: {target} does not exist")
