@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from typer.testing import CliRunner
 
 from repulsionpak.cli import app
@@ -137,13 +138,14 @@ def test_rigid_pinned_logo_weight_zero_through_the_cli(lib, tmp_path):
     m = tmp_path / "scene.toml"
     m.write_text(f'[[element]]\nfile = "{lib / "star5.svg"}"\nrigid = true\nweight = 0\n'
                  'pins = [{x = 500, y = 480, angle = 0, scale = 2.5}]\n\n'
-                 f'[[element]]\nfile = "{lib / "glyph-R.svg"}"\nrigid = true\n\n'
+                 f'[[element]]\nfile = "{lib / "glyph-R.svg"}"\nrigid = true\n'
+                 'pins = [{x = 500, y = 800, angle = 30, scale = 1.5}]\n\n'
                  f'[[element]]\nfile = "{lib / "disc.svg"}"\nstiffness = 0.5\n')
     out = tmp_path / "out.svg"
     res = CliRunner().invoke(app, ["pack", str(lib / "circle.svg"), str(m), "-o", str(out), "-q",
                                    "--seed", "3", "--gap", "15", "--count", "10", "--max-iterations", "1500"])
     assert res.exit_code == 0, res.output
-    assert out.read_text().count('data-pinned="true"') == 1
+    assert out.read_text().count('data-pinned="true"') == 2
     _, placed, _ = read_packing_svg(out)
     src = source_geometries(load_elements([lib / "star5.svg", lib / "glyph-R.svg", lib / "disc.svg"]))
     stars = [p for p in placed if p.source == "star5.svg"]
@@ -156,7 +158,15 @@ def test_rigid_pinned_logo_weight_zero_through_the_cli(lib, tmp_path):
     assert (x1 - x0) / (sx1 - sx0) == pytest.approx(2.5, rel=1e-3)
     ang, d = _fit(src["star5.svg"], stars[0])
     assert d < 0.005 and min(abs(ang - k * 72) for k in range(-3, 4)) < 0.5
-    rs = [p for p in placed if p.source == "glyph-R.svg"]
+    # a turned pin: the source turned by 30° about its bounding-box centre, at (500, 800)
+    (pr,) = [p for p in placed if p.source == "glyph-R.svg" and p.pinned]
+    sx0, sy0, sx1, sy1 = src["glyph-R.svg"].bounds
+    want = shapely.affinity.translate(shapely.affinity.scale(shapely.affinity.rotate(
+        src["glyph-R.svg"], 30, origin=(0.5 * (sx0 + sx1), 0.5 * (sy0 + sy1))), 1.5, 1.5,
+        origin=(0.5 * (sx0 + sx1), 0.5 * (sy0 + sy1))), 500 - 0.5 * (sx0 + sx1), 800 - 0.5 * (sy0 + sy1))
+    got = art_area(pr.paths, 1.0)
+    assert shapely.symmetric_difference(want, got).area / want.area < 0.005
+    rs = [p for p in placed if p.source == "glyph-R.svg" and not p.pinned]
     assert len(rs) >= 3
     dist = [_fit(src["glyph-R.svg"], p)[1] for p in rs if p.kind == "primary"]
     assert max(dist) < 0.02  # rigid: below the promise
@@ -166,3 +176,19 @@ def test_rigid_pinned_logo_weight_zero_through_the_cli(lib, tmp_path):
     star = art_area(stars[0].paths, 1.0)
     others = [art_area(p.paths, p.stroke_scale) for p in placed if not p.pinned]
     assert min(star.distance(o) for o in others) >= 0.9 * 15.0
+
+
+def test_stiffness_scales_the_spring_force():
+    from repulsionpak.sim.controls import edge_force_stiff
+    from repulsionpak.sim.forces import edge_force
+
+    x = np.array([[0.0, 0.0], [3.0, 0.5], [10.0, 0.0], [12.5, 1.0]])
+    springs = np.array([[0, 1], [2, 3]], np.int32)
+    rest0 = np.array([2.0, 1.5])
+    sp_ptr = np.array([0, 1, 2])
+    growth, moving = np.ones(2), np.ones(2, bool)
+    f1, f2 = np.zeros((4, 2)), np.zeros((4, 2))
+    edge_force(x, springs, rest0, sp_ptr, growth, moving, 3.0, f1)
+    edge_force_stiff(x, springs, rest0, sp_ptr, growth, moving, 3.0, np.array([1.0, 4.0]), f2)
+    assert np.abs(f1).min() > 0
+    assert np.allclose(f2[:2], f1[:2]) and np.allclose(f2[2:], 4.0 * f1[2:])
