@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
+from .controls import (any_controls, limit_art_rotation, prepare_controlled, setup_model,
+                       straighten_limits)
 from .errors import ParameterError
 from .params import Params
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
@@ -185,6 +186,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
+    limit_art_rotation(packing.templates, packing.model, packing.state)  # controls only
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
     if packing.model.pinned is not None:
         placed = [dataclasses.replace(p, pinned=True) if packing.model.pinned[e] else p
