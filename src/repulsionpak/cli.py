@@ -226,9 +226,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
         if cache_is_cold():
             typer.echo("compiling the simulation kernels, first run only…", err=True)
-    from .render import warmup
+    from . import warmup
 
-    compiling = warmup.start()  # first run: the render kernels compile on a spare core meanwhile
+    compiling = warmup.start()  # first run: a second process compiles kernels from the far end
     try:
         with _Progress(progress) as prog, _StopFlag() as stop:
             packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,

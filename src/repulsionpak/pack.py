@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
+from . import warmup
 from .controls import (any_controls, limit_art_rotation, prepare_controlled, setup_model,
                        straighten_limits)
 from .errors import ParameterError
@@ -187,6 +188,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
     limit_art_rotation(packing.templates, packing.model, packing.state)  # controls only
+    warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
     if packing.model.pinned is not None:
         placed = [dataclasses.replace(p, pinned=True) if packing.model.pinned[e] else p
