@@ -266,44 +266,6 @@ def setup_model(model, ctrls, angles, pinned=None, base=None) -> None:
     model.controls = allc
 
 
-def _clamp(theta: float, lo: float, hi: float) -> float:
-    """``theta`` moved to the nearer end of [lo, hi] (angles modulo 2π) if outside."""
-    a = lo + (theta - lo) % (2 * math.pi)
-    if a <= hi:
-        return theta
-    return theta - (a - hi) if a - hi < lo + 2 * math.pi - a else theta + (lo + 2 * math.pi - a)
-
-
-def limit_art_rotation(templates, model, state) -> int:
-    """After the simulation: the rotation limits held on each mesh's similarity; a bent
-    mesh's *art* can be turned a little more (the art is not the mesh). Measure each
-    limited element's rotation on its art points (least-squares fit of the art mapped
-    through the mesh to the art on the rest mesh) and turn the mesh back by any excess
-    about the art's centroid. Returns the number of elements turned (the verification
-    that follows repairs any contact this makes)."""
-    if model.rot_on is None:
-        return 0
-    turned = 0
-    for e in np.flatnonzero(model.rot_on & ~model.pinned):  # primaries too (frozen in phase 2)
-        t = templates[model.template_index[e]]
-        s, u = int(model.elem_vstart[e]), int(model.elem_vstart[e + 1])
-        cur, rest = state.x[s:u], model.x_rest[s:u]
-        idx = t.tris[t.art_tri]
-        a_cur = np.einsum("ij,ijk->ik", t.art_bary, cur[idx])
-        a_rest = np.einsum("ij,ijk->ik", t.art_bary, rest[idx])
-        c = a_cur.mean(axis=0)
-        za = (a_rest - a_rest.mean(axis=0)) @ np.array([1.0, 1j])
-        zb = (a_cur - c) @ np.array([1.0, 1j])
-        theta = float(np.angle(np.vdot(za, zb)))
-        d = _clamp(theta, float(model.rot_lo[e]), float(model.rot_hi[e])) - theta
-        if d != 0.0:
-            cs, sn = math.cos(d), math.sin(d)
-            z = cur - c
-            state.x[s:u] = c + z @ np.array([[cs, sn], [-sn, cs]])
-            turned += 1
-    return turned
-
-
 def straighten_limits(model, limits: np.ndarray) -> np.ndarray:
     """The verification's straightening limits under the controls: scaled by 1/stiffness;
     rigid and pinned copies are never bent."""
@@ -316,4 +278,4 @@ def straighten_limits(model, limits: np.ndarray) -> np.ndarray:
 
 __all__ = ["ElementControls", "Pin", "cli_controls", "parse_rotation", "controls_of", "any_controls",
            "weighted_assignment", "initial_angles", "ROTATIONS", "prepare_controlled", "setup_model",
-           "straighten_limits", "pin_transform", "limit_art_rotation"]
+           "straighten_limits", "pin_transform"]

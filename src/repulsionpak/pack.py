@@ -11,8 +11,7 @@ import numpy as np
 import shapely
 
 from . import warmup
-from .controls import (any_controls, limit_art_rotation, prepare_controlled, setup_model,
-                       straighten_limits)
+from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
 from .params import Params
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
@@ -187,7 +186,6 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
     t3 = time.perf_counter()
-    limit_art_rotation(packing.templates, packing.model, packing.state)  # controls only
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
     if packing.model.pinned is not None:
