@@ -97,6 +97,17 @@ def test_manifest_typo_exits_2_and_bad_rotation_option_exits_3(lib, tmp_path):
         ElementControls(max_rotation=200)
 
 
+def test_pins_outside_or_overlapping_are_refused(lib):
+    cont = load_container(lib / "circle.svg")
+    star = load_elements([lib / "star5.svg"])[0]
+    disc = load_elements([lib / "disc.svg"])[0]
+    for pins, words in (((Pin(30, 500, 0, 1.0),), "edge margin"),
+                        ((Pin(500, 500, 0, 1.0), Pin(540, 500, 0, 1.0)), "overlaps")):
+        els = [dataclasses.replace(star, controls=ElementControls(pins=pins, weight=0)), disc]
+        with pytest.raises(ParameterError, match=words):
+            pack(cont, els, _params(4, iters=10))
+
+
 def test_weighted_assignment_honours_weights():
     rng = np.random.default_rng(0)
     a = weighted_assignment([2.0, 0.0, 1.0], 300, rng)

@@ -196,10 +196,18 @@ def prepare_controlled(container, elements, params, rng, gap):
         pin_ang.append(a)
         pin_skins.append(shapely.Polygon(placed_vertices(t, pos, a, 1.0)[:t.n_skin]))
     region = container.region
+    margin = 0.5 * gap if params.margin is None else float(params.margin)
+    inner = shapely.buffer(region, -(1.0 - 1e-6) * margin) if margin > 0 else region
     for k, ((i, p), sk) in enumerate(zip(pins, pin_skins)):
         where = f"{elements[i].source}: pin ({p.x:g}, {p.y:g})"
-        if not shapely.covers(shapely.buffer(region, 0.5 * gap), sk):
-            raise ParameterError(f"{where} lies (partly) outside the container")
+        o = outlines[i]
+        art = shapely.affinity.rotate(shapely.affinity.scale(
+            shapely.affinity.translate(o.geometry, -o.center[0], -o.center[1]), p.scale, p.scale,
+            origin=(0, 0)), pin_ang[k], origin=(0, 0), use_radians=True)
+        art = shapely.affinity.translate(art, *pin_pos[k])
+        if not shapely.covers(inner, art):
+            raise ParameterError(f"{where} lies (partly) outside the container or closer than the "
+                                 f"edge margin ({margin:g}) to its edge; move it inwards or make it smaller")
         for (j, q), other in zip(pins[k + 1:], pin_skins[k + 1:]):
             if sk.intersects(other):
                 raise ParameterError(f"{where} overlaps the pin ({q.x:g}, {q.y:g}) of {elements[j].source}")
