@@ -54,6 +54,7 @@ class ElementControls:
     pins: tuple[Pin, ...] = ()
 
     def __post_init__(self):
+        object.__setattr__(self, "pins", tuple(self.pins))
         if self.rotation not in ROTATIONS:
             raise ParameterError(f"rotation must be one of {', '.join(ROTATIONS)}, got {self.rotation!r}")
         for name in ("angle", "max_rotation", "stiffness", "weight"):
