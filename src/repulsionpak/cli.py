@@ -200,7 +200,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
              margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None,
-             movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600) -> dict:
+             movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
+             controls=None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it;
     ``movie`` (.gif or .mp4) the simulation as an animation, a frame every ``movie_every``
@@ -244,8 +245,10 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     if tol is None:
         cont = load_container(container, tolerance=0.01 * g)
     params = dataclasses.replace(params, gap=g)
-    elems = load_elements(elements)
-    secs = load_elements(secondary) if secondary else []
+    from .io.manifest import load_element_args  # element manifests (.toml) and controls
+
+    elems = load_element_args(elements, controls)
+    secs = load_element_args(secondary, controls) if secondary else []
     on_checkpoint = None
     if checkpoint is not None or resume is not None:
         from .checkpoint import fingerprint, load_checkpoint, save_checkpoint
@@ -369,6 +372,9 @@ CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary element
 MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")]
 QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
 MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
+RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE] or limited:DEG (see docs/controls.md).")]
+RigidOpt = Annotated[bool, typer.Option("--rigid", help="Elements never deform (rigid bodies).")]
+StiffnessOpt = Annotated[Optional[float], typer.Option(help="Multiplier of the spring constants of the elements.")]
 NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")]
 
 
@@ -412,18 +418,26 @@ def pack(
     movie: MovieOpt = None,
     movie_every: MovieEveryOpt = None,
     movie_size: MovieSizeOpt = 600,
+    rotation: RotationOpt = None,
+    rigid: RigidOpt = False,
+    stiffness: StiffnessOpt = None,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Pack CONTAINER with deformed copies of ELEMENTS and write OUTPUT (SVG)."""
+    """Pack CONTAINER with deformed copies of ELEMENTS and write OUTPUT (SVG).
+
+    An element argument ending in .toml is an element manifest (controls per element)."""
     global _DEBUG
     _DEBUG = debug
     with _errors():
+        from .controls import cli_controls
+
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
                        margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
-                       movie=movie, movie_every=movie_every, movie_size=movie_size)
+                       movie=movie, movie_every=movie_every, movie_size=movie_size,
+                       controls=cli_controls(rotation, rigid, stiffness))
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             if "movie" in rep:
@@ -568,6 +582,9 @@ def batch(
     margin: MarginOpt = None,
     no_pocket_fill: NoPocketFillOpt = False,
     config: ConfigOpt = None,
+    rotation: RotationOpt = None,
+    rigid: RigidOpt = False,
+    stiffness: StiffnessOpt = None,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -576,12 +593,14 @@ def batch(
     global _DEBUG
     _DEBUG = debug
     from .batch import run_batch
+    from .controls import cli_controls
 
     with _errors():
         base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill)
         with _BatchProgress(not quiet) as prog, _sigterm_as_interrupt():
             summary = run_batch(container, elements, output, seeds, set_ or [], base, secondary or [],
-                                workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog)
+                                workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog,
+                                controls=cli_controls(rotation, rigid, stiffness))
         n = len(summary.jobs)
         if not quiet:
             best = summary.best

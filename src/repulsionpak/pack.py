@@ -11,6 +11,7 @@ import numpy as np
 import shapely
 
 from . import warmup
+from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
 from .params import Params
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
@@ -144,17 +145,24 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
-    templates, placement, gap = prepare(container, elements, params, rng)
+    ctrl = None
+    if any_controls(elements):  # designer controls (controls.py); none: the paper's way
+        gap = params.gap if params.gap is not None else default_gap(container)
+        templates, placement, pinned, ctrl = prepare_controlled(container, elements, params, rng, gap)
+    else:
+        templates, placement, gap = prepare(container, elements, params, rng)
     frame = SimFrame.for_region(container.region)
     region_sim = shapely.affinity.scale(container.region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
     size = typical_size(templates, placement.template_index) / frame.unit
     cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
     model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
-                               gap=gap / frame.unit)
+                               gap=gap / frame.unit, frozen=None if ctrl is None else pinned)
     # skins rest inside the container by boundary_inset; where the margin asks for more
     # than the skin's width, the rest of it moves the boundary in
     model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
     model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
+    if ctrl is not None:
+        setup_model(model, ctrl, placement.angle, pinned)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     res = sim.run_resumable((resume or {}).get("primary"),
@@ -185,6 +193,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     t3 = time.perf_counter()
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
+    if packing.model.pinned is not None:
+        placed = [dataclasses.replace(p, pinned=True) if packing.model.pinned[e] else p
+                  for e, p in enumerate(placed)]
     t4 = time.perf_counter()
     v = params.verify
     straightened: list[int] = []
@@ -193,6 +204,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         limits = np.array([(sp.bend_limit_convex if is_convex(packing.templates[ti]) else sp.bend_limit)
                            for ti in packing.model.template_index]) * v.straighten
         limits[limits <= 0] = np.inf
+        limits = straighten_limits(packing.model, limits)
         placed, _, straightened = straighten(placed, rest_art(packing.templates, packing.model), limits)
     packing.placed, packing.verification = verify_and_repair(
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
