@@ -155,6 +155,14 @@ class SecondaryParams:
     max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")
     initial_fraction: float = _doc(
         0.5, "-", "Initial secondary size relative to its pocket (its skin's radius = fraction × distance).")
+    fill_holes: bool = _doc(
+        True, "-", "Put an undeformed secondary copy in every hole of the packed art (a ring's "
+        "middle, a letter's counter) that can hold one a gap away from its edge; part of the pocket "
+        "fill (off with it).")
+    hole_min_radius: float = _doc(
+        1.0, "× gap", "Smallest inscribed circle of a hole's free part (the hole shrunk by the gap) "
+        "that gets a copy.")
+    hole_depth: int = _doc(2, "-", "Holes of hole copies are filled too, this many levels deep.")
 
 
 @dataclass(frozen=True)
@@ -278,6 +286,8 @@ class Params:
             (64 <= sec.grid <= 10_000, "secondary.grid must be in [64, 10000]"),
             (sec.max_count is None or sec.max_count >= 0, "secondary.max_count must be >= 0"),
             (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
+            (sec.hole_min_radius > 0, "secondary.hole_min_radius must be > 0"),
+            (0 <= sec.hole_depth <= 10, "secondary.hole_depth must be in [0, 10]"),
             (1e-7 <= self.render.curve_tolerance <= 0.05, "render.curve_tolerance must be in [1e-7, 0.05]"),
             (0 < self.render.max_gap_share <= 0.5, "render.max_gap_share must be in (0, 0.5]"),
             (1 <= self.render.samples <= 64, "render.samples must be in [1, 64]"),

@@ -1,0 +1,104 @@
+"""Hole fill: the holes of packed rings and letters' counters get undeformed copies, a gap
+away from their host, and the negative space gets more even."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from repulsionpak import scenes
+from repulsionpak.controls import ElementControls
+from repulsionpak.errors import ConfigError, ParameterError
+from repulsionpak.evaluate import art_geometry, scp
+from repulsionpak.geometry.outline import art_area
+from repulsionpak.holes import HoleLibrary, fill_holes
+from repulsionpak.io import load_container, load_element
+from repulsionpak.pack import pack
+from repulsionpak.params import Params, params_from_dict
+
+GAP = 12.0
+
+
+@pytest.fixture(scope="module")
+def ring_scene(tmp_path_factory):
+    d = tmp_path_factory.mktemp("rings")
+    (d / "ring.svg").write_text(scenes.element_svg("ring"))
+    (d / "o.svg").write_text(scenes.glyph_svg("O"))
+    (d / "circle.svg").write_text(scenes.container_svg("circle", size=600))
+    cont = load_container(d / "circle.svg")
+    elems = [load_element(d / "ring.svg"), load_element(d / "o.svg")]
+    params = params_from_dict({"gap": GAP, "seed": 2, "placement": {"count": 8},
+                               "secondary": {"fill_holes": False}})
+    packing = pack(cont, elems, params)
+    return cont, elems, packing
+
+
+def _ratio(cont, placed):
+    r = scp(cont.region, [art_geometry(p) for p in placed], gap=GAP)
+    i = int(np.argmin(np.abs(np.asarray(r["r"]) - GAP / 2)))
+    return r["q"][i] / r["q"][0]
+
+
+def test_holes_get_copies_a_gap_from_their_host(ring_scene):
+    cont, elems, packing = ring_scene
+    placed = packing.placed
+    big = 0  # holes whose free part (shrunk by the gap) holds a circle of radius GAP
+    for p in placed:
+        g = art_area(p.paths, p.stroke_scale)
+        for poly in getattr(g, "geoms", [g]):
+            for ring in poly.interiors:
+                free = shapely.Polygon(ring).buffer(-1.005 * GAP)
+                if not free.is_empty and shapely.maximum_inscribed_circle(free).length >= GAP:
+                    big += 1
+    assert big >= 4  # the rings and the Os of the packing
+    extra = fill_holes(placed, HoleLibrary.of(elems), GAP, np.random.default_rng(0), min_radius=GAP)
+    assert len(extra) >= big  # every big hole got one (some copies got their own)
+    geoms = [art_area(p.paths, p.stroke_scale) for p in placed]
+    for e in extra:
+        g = art_area(e.paths, e.stroke_scale)
+        assert e.kind == "secondary" and e.deformation == 0.0
+        assert cont.region.contains(g)
+        others = geoms + [art_area(x.paths, x.stroke_scale) for x in extra if x is not e]
+        d = min(float(shapely.distance(g, o)) for o in others)
+        assert d >= GAP, d  # never closer than the gap ...
+        assert d <= 1.1 * GAP, d  # ... and grown until it touches the hole's free part
+    # the holes were the big pockets: the negative space gets much more even
+    before, after = _ratio(cont, placed), _ratio(cont, placed + extra)
+    assert after < 0.75 * before, (before, after)
+
+
+def test_hole_copies_are_undeformed_and_keep_their_rotation_control(ring_scene):
+    cont, elems, packing = ring_scene
+    fixed = [dataclasses.replace(elems[0], controls=ElementControls(rotation="fixed", angle=30.0)),
+             dataclasses.replace(elems[1], controls=ElementControls(weight=0.0))]  # weight 0: never used
+    extra = fill_holes(packing.placed, HoleLibrary.of(fixed), GAP, np.random.default_rng(1), min_radius=GAP)
+    assert extra and all(e.source == elems[0].source for e in extra)
+    for e in extra:
+        m = e.frame
+        angle = math.degrees(math.atan2(m[1, 0], m[0, 0]))
+        assert abs(angle - 30.0) < 1e-6
+        # undeformed: the written curves are the source's under the similarity (rounded
+        # to the written decimals)
+        for a_src, a_out in zip(elems[0].paths, e.paths):
+            for c_src, c_out in zip(a_src.source.curves, a_out.source.curves):
+                exact = c_src.ctrl @ m[:2, :2].T + m[:2, 2]
+                assert np.abs(c_out.ctrl - exact).max() < 1e-3 * e.stroke_scale * 100
+                assert np.abs(c_out.ctrl - exact).max() <= e.tolerance
+
+
+def test_small_holes_are_left_alone(ring_scene):
+    cont, elems, packing = ring_scene
+    assert fill_holes(packing.placed, HoleLibrary.of(elems), GAP, np.random.default_rng(0),
+                      min_radius=1000.0) == []
+    assert HoleLibrary.of([dataclasses.replace(elems[0], controls=ElementControls(weight=0.0))]) is None
+
+
+def test_pack_fills_holes_by_default_and_not_without_pocket_fill(ring_scene):
+    assert Params().secondary.fill_holes
+    from repulsionpak.cli import resolve_params
+
+    assert not resolve_params(pocket_fill=False).secondary.fill_holes
+    with pytest.raises((ConfigError, ParameterError)):
+        params_from_dict({"secondary": {"hole_min_radius": 0}})
