@@ -170,9 +170,12 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              report: Path | None = None, png: Path | None = None, count: int | None = None,
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
-             margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None) -> dict:
+             margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None,
+             live: dict | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
-    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it."""
+    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it.
+    ``live`` (``{"port": N, "open_browser": bool}``) serves the run in the browser and
+    writes the outputs only at Ctrl-C (see :mod:`repulsionpak.live`)."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png
     from .io.svg_write import atomic_write_bytes
@@ -226,19 +229,39 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     from .render import warmup
 
     compiling = warmup.start()  # first run: the render kernels compile on a spare core meanwhile
+    viewer = None
     try:
         with _Progress(progress) as prog, _StopFlag() as stop:
-            packing = pack(cont, elems, params, secondary=secs, on_snapshot=prog, should_stop=stop,
+            if live is not None:  # the browser view steers through the two callbacks
+                from .live import LiveRun
+
+                viewer = LiveRun(cont, params, external_stop=stop, **live)
+                viewer.start()
+            packing = pack(cont, elems, params, secondary=secs,
+                           on_snapshot=prog if viewer is None else viewer.on_snapshot(prog),
+                           should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
                            resume=resumed)
+    except BaseException:
+        if viewer is not None:
+            viewer.close()
+        raise
     finally:
         warmup.stop(compiling)
+    if viewer is not None:
+        viewer.drop_removed(packing)
     t_eval = time.perf_counter()
     # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
     metrics = evaluate(cont, packing.placed, g, with_scp=False,
                        sources=[*elems, *secs] if report is not None else None)
     checks = invariants(packing, metrics)
     text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
+    if viewer is not None:  # serve the result until Ctrl-C, then write it
+        viewer.finish(packing, metrics, text)
+        if not packing.partial:
+            with _StopFlag() as again:
+                viewer.wait(again)
+        viewer.close()
     if output.suffix.lower() == ".pdf" or pdf is not None:
         from .render.pdf import pdf_bytes
     if output.suffix.lower() == ".pdf":
@@ -333,6 +356,9 @@ def pack(
     checkpoint: Annotated[Optional[Path], typer.Option(help="Save the simulation state to this file periodically.")] = None,
     checkpoint_every: Annotated[int, typer.Option(help="Iterations between checkpoints.")] = 500,
     resume: Annotated[Optional[Path], typer.Option(help="Continue an interrupted run from its checkpoint (same inputs and options).")] = None,
+    live: Annotated[bool, typer.Option("--live", help="Watch and steer the run in the browser; Ctrl-C writes the outputs.")] = False,
+    port: Annotated[int, typer.Option(help="Port of the --live server (127.0.0.1 only).")] = 8765,
+    no_browser: Annotated[bool, typer.Option("--no-browser", help="With --live: only print the URL.")] = False,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -343,7 +369,8 @@ def pack(
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
-                       margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf)
+                       margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
+                       live={"port": port, "open_browser": not no_browser} if live else None)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:

@@ -153,6 +153,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
+    sim.templates = templates
     res = sim.run_resumable((resume or {}).get("primary"),
                             None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
                             checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop)

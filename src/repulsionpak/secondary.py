@@ -115,6 +115,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     model.bend_limit[m0.n_elements:] = bend_limits(all_templates, placement.template_index, p.sim)
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
+    sim.templates = all_templates
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
                             should_stop=should_stop)
     packing.templates = all_templates

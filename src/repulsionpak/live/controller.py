@@ -1,0 +1,287 @@
+"""The simulation side of the live view: a consumer of runner snapshots that also steers.
+
+:class:`LiveController` plugs into :func:`repulsionpak.pack.pack` through its two
+callbacks and nothing else: ``on_snapshot`` tells it which simulator is running (a
+snapshot carries it), ``should_stop`` — called by the runner after every iteration — is
+where it publishes frames, applies the page's commands (drag, pin, remove) and blocks
+while the run is paused. Everything that touches the simulation state therefore happens
+in the simulation's own thread, between two iterations.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import Future
+
+import numpy as np
+import shapely
+
+from ..sim.model import SimFrame
+from .protocol import encode_frame
+
+REMOVED_SCALE = 0.01  # a removed element shrinks to this share of its size, pinned
+
+
+class LiveController:
+    """State shared between the running simulation and the server.
+
+    ``publish(kind, payload)`` (set by the server) is called from the simulation thread
+    with ``("frame", bytes)`` or ``("json", dict)``; it must be thread-safe and cheap.
+    ``external_stop()`` (Ctrl-C) ends the run, also while paused.
+    """
+
+    def __init__(self, container, gap: float, skin_width: float, render_params=None,
+                 max_fps: float = 30.0, external_stop: Callable[[], bool] | None = None):
+        self.container = container
+        self.gap = float(gap)
+        self.skin_width = float(skin_width)
+        self.render_params = render_params
+        self.unit = SimFrame.for_region(container.region).unit
+        self.min_interval = 1.0 / max_fps
+        self.external_stop = external_stop or (lambda: False)
+        self.publish: Callable[[str, object], None] = lambda kind, payload: None
+        self.commands: queue.Queue = queue.Queue()
+        self.sim = None
+        self.phase = "preparing"
+        self.paused = False
+        self.steps_left = 0
+        self.layout_id = 0
+        self.layout: dict | None = None
+        self.removed: set[int] = set()
+        self.pinned: set[int] = set()
+        self.last_frame: bytes | None = None
+        self.last_points: np.ndarray | None = None
+        self._skin_idx = np.zeros(0, np.int64)
+        self._last_sent = 0.0
+        self.frames_sent = 0
+        self.final_svg: str | None = None
+        self.final_status: dict | None = None
+        self._lock = threading.Lock()
+
+    # -- called by the runner (simulation thread) -------------------------------------
+    def on_snapshot(self, snap) -> None:
+        if snap.sim is not None and snap.sim is not self.sim:
+            self._bind(snap.sim, snap.phase)
+        if snap.done:
+            self._publish_frame(force=True)
+
+    def should_stop(self) -> bool:
+        self._apply_commands()
+        self._publish_frame()
+        while self.paused and self.steps_left == 0 and not self.external_stop():
+            try:
+                cmd = self.commands.get(timeout=0.1)
+            except queue.Empty:
+                continue
+            self._apply(cmd)
+            self._apply_commands()
+            self._publish_frame(force=True)
+        if self.steps_left > 0:
+            self.steps_left -= 1
+        return bool(self.external_stop())
+
+    # -- called by the server (any thread) ---------------------------------------------
+    def submit(self, cmd: dict) -> None:
+        """Queue a parsed command; pause/resume/step take effect at once."""
+        c = cmd["cmd"]
+        if c in ("pause", "resume"):
+            self.paused = c == "pause"
+            self.steps_left = 0
+            self._status()
+            self.commands.put({"cmd": "noop"})  # wake the pause loop
+        elif c == "step":
+            self.paused = True
+            self.commands.put(cmd)
+        else:
+            self.commands.put(cmd)
+
+    def render_svg(self, timeout: float = 120.0) -> str:
+        """The current packing in the output format (the final one once the run ended)."""
+        if self.final_svg is not None:
+            return self.final_svg
+        fut: Future = Future()
+        self.commands.put({"cmd": "svg", "future": fut})
+        return fut.result(timeout=timeout)
+
+    def status(self) -> dict:
+        st = {"type": "status", "phase": self.phase, "paused": self.paused,
+              "iteration": int(self.sim.state.iteration) if self.sim is not None else 0,
+              "done": self.final_svg is not None}
+        if self.final_status is not None:
+            st.update(self.final_status)
+        return st
+
+    def scene(self) -> dict:
+        """Container rings and view box (container units) for the page."""
+        rings = []
+        for poly in getattr(self.container.region, "geoms", [self.container.region]):
+            rings.append(np.round(np.asarray(poly.exterior.coords)[:-1], 3).tolist())
+            rings += [np.round(np.asarray(r.coords)[:-1], 3).tolist() for r in poly.interiors]
+        minx, miny, maxx, maxy = self.container.bounds
+        pad = 0.02 * max(maxx - minx, maxy - miny)
+        return {"type": "scene", "rings": rings, "gap": self.gap,
+                "viewBox": [minx - pad, miny - pad, maxx - minx + 2 * pad, maxy - miny + 2 * pad]}
+
+    def estimates(self) -> dict:
+        """Area fraction of the art and median gap estimated from the latest skins (the
+        art lies ``skin_width`` inside its skin); exact values once the run ended."""
+        if self.final_status is not None or self.last_points is None or self.layout is None:
+            return {}
+        pts, counts = self.last_points, self.layout["counts"]
+        ends = np.cumsum(counts)
+        polys = []
+        for i, (a, b) in enumerate(zip(ends - counts, ends)):
+            if i not in self.removed and b - a >= 3:
+                polys.append(shapely.make_valid(shapely.Polygon(pts[a:b].astype(float))))
+        if not polys:
+            return {}
+        art = shapely.buffer(polys, -self.skin_width)
+        area = float(shapely.area(shapely.intersection(shapely.union_all(art), self.container.region)))
+        from ..evaluate import gap_statistics
+
+        med = gap_statistics(polys)["median"]
+        return {"area_fraction": area / self.container.area,
+                "median_gap": None if med is None else med + 2 * self.skin_width, "estimated": True}
+
+    def finish(self, svg_text: str, stopped_by: dict, area_fraction: float, median_gap) -> None:
+        """The run is over: serve ``svg_text`` from now on and tell the pages."""
+        self.final_status = {"stopped_by": stopped_by, "area_fraction": float(area_fraction),
+                             "median_gap": None if median_gap is None else float(median_gap),
+                             "estimated": False, "converged": all(
+                                 v in ("converged", "no_pockets") for v in stopped_by.values())}
+        self.final_svg = svg_text
+        self.paused = False
+        self.phase = "done"
+        while True:  # answer download requests that arrived after the last iteration
+            try:
+                cmd = self.commands.get_nowait()
+            except queue.Empty:
+                break
+            if cmd["cmd"] == "svg":
+                cmd["future"].set_result(svg_text)
+        self._status()
+
+    def drop_removed(self, placed: list) -> list:
+        """``placed`` without the removed elements (shrunk to specks, see :meth:`_apply`)."""
+        if not self.removed or not placed:
+            return placed
+        ext = []
+        for p in placed:
+            b = [s for path in p.paths for s in path.subpaths if len(s)]
+            pts = np.concatenate(b) if b else np.zeros((1, 2))
+            ext.append(float(np.ptp(pts, axis=0).max()))
+        med = float(np.median(ext))
+        return [p for p, e in zip(placed, ext) if e > 5 * REMOVED_SCALE * med]
+
+    # -- internals (simulation thread) -------------------------------------------------
+    def _bind(self, sim, phase: str) -> None:
+        m = sim.model
+        self.sim, self.phase = sim, phase
+        starts = m.elem_vstart[:-1].astype(np.int64)
+        counts = m.elem_nskin.astype(np.int64)
+        self._skin_idx = np.concatenate([np.arange(s, s + c) for s, c in zip(starts, counts)]) \
+            if len(counts) else np.zeros(0, np.int64)
+        for i in self.pinned:
+            if i < m.n_elements:
+                sim.set_moving(i, False)
+        for i in self.removed:
+            if i < m.n_elements:
+                sim.set_moving(i, False)
+        self.layout_id += 1
+        self.layout = {"type": "layout", "id": self.layout_id, "counts": counts.tolist(),
+                       "kinds": list(m.kind), "template": m.template_index.astype(int).tolist(),
+                       "frozen": [bool(f) for f in m.frozen]}
+        self.publish("json", self.layout_message())
+        self._status()
+        self._publish_frame(force=True)
+
+    def layout_message(self) -> dict:
+        lay = dict(self.layout or {"type": "layout", "id": 0, "counts": [], "kinds": [],
+                                   "template": [], "frozen": []})
+        lay["pinned"] = sorted(self.pinned)
+        lay["removed"] = sorted(self.removed)
+        return lay
+
+    def _status(self) -> None:
+        self.publish("json", self.status())
+
+    def _publish_frame(self, force: bool = False) -> None:
+        if self.sim is None:
+            return
+        now = time.perf_counter()
+        if not force and now - self._last_sent < self.min_interval:
+            return
+        self._last_sent = now
+        st = self.sim.state
+        pts = st.x[self._skin_idx] * self.unit
+        a = float(self.sim.areas.sum() / self.sim.model.container_area)  # all meshes
+        data = encode_frame(self.layout_id, st.iteration, a, pts)
+        self.last_frame, self.last_points = data, pts
+        self.frames_sent += 1
+        self.publish("frame", data)
+
+    def _apply_commands(self) -> None:
+        while True:
+            try:
+                cmd = self.commands.get_nowait()
+            except queue.Empty:
+                return
+            self._apply(cmd)
+            self._publish_frame(force=True)
+
+    def _apply(self, cmd: dict) -> None:
+        c = cmd["cmd"]
+        sim = self.sim
+        if c == "svg":
+            try:
+                cmd["future"].set_result(self._current_svg())
+            except Exception as exc:  # noqa: BLE001  (handed to the requesting thread)
+                cmd["future"].set_exception(exc)
+            return
+        if c == "step":
+            self.steps_left += cmd["n"]
+            self._status()
+            return
+        if sim is None or c == "noop" or cmd.get("index", 0) >= sim.model.n_elements:
+            return
+        i = cmd["index"]
+        m, st = sim.model, sim.state
+        a, b = int(m.elem_vstart[i]), int(m.elem_vstart[i + 1])
+        if c == "move" and not m.frozen[i]:
+            st.x[a:b, 0] += cmd["dx"] / self.unit
+            st.x[a:b, 1] += cmd["dy"] / self.unit
+            st.v[a:b] = 0.0
+        elif c == "pin" and not m.frozen[i] and i not in self.removed:
+            (self.pinned.add if cmd["pinned"] else self.pinned.discard)(i)
+            sim.set_moving(i, not cmd["pinned"])
+            st.v[a:b] = 0.0
+            self.publish("json", self.layout_message())
+        elif c == "remove" and not m.frozen[i] and i not in self.removed:
+            self.removed.add(i)
+            self.pinned.discard(i)
+            sim.set_moving(i, False)
+            c0 = st.x[a:b].mean(axis=0)
+            st.x[a:b] = c0 + REMOVED_SCALE * (st.x[a:b] - c0)
+            st.v[a:b] = 0.0
+            self.publish("json", self.layout_message())
+
+    def _current_svg(self) -> str:
+        from ..render import placed_art
+        from ..render.svg import packing_svg_string
+
+        sim = self.sim
+        if sim is None or sim.templates is None:
+            raise RuntimeError("the simulation has not started yet")
+        frame = SimFrame(self.unit)
+        keep = [e for e in range(sim.model.n_elements) if e not in self.removed]
+        placed = placed_art(sim.templates, sim.model, sim.state, frame, elements=keep,
+                            params=self.render_params)
+        return packing_svg_string(self.container, placed, self.gap,
+                                  attrs={"iteration": str(sim.state.iteration)}, partial=True,
+                                  metadata={"generator": "repulsionpak live view", "phase": self.phase})
+
+
+__all__ = ["LiveController"]
