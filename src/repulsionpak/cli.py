@@ -174,7 +174,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              live: dict | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it.
-    ``live`` (``{"port": N, "open_browser": bool}``) serves the run in the browser and
+    ``live`` (``{"port": N, "open_browser": bool, "paused": bool}``) serves the run in the browser and
     writes the outputs only at Ctrl-C (see :mod:`repulsionpak.live`)."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png
@@ -359,6 +359,7 @@ def pack(
     live: Annotated[bool, typer.Option("--live", help="Watch and steer the run in the browser; Ctrl-C writes the outputs.")] = False,
     port: Annotated[int, typer.Option(help="Port of the --live server (127.0.0.1 only).")] = 8765,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="With --live: only print the URL.")] = False,
+    paused: Annotated[bool, typer.Option("--paused", help="With --live: pause at the first frame.")] = False,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -370,7 +371,7 @@ def pack(
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
                        margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
-                       live={"port": port, "open_browser": not no_browser} if live else None)
+                       live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
         if rep["partial"]:

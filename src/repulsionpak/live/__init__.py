@@ -30,12 +30,14 @@ class LiveRun:
     callbacks to :func:`repulsionpak.pack.pack`, and keep serving the result until Ctrl-C."""
 
     def __init__(self, container, params, port: int = 8765, open_browser: bool = True,
-                 external_stop: Callable[[], bool] | None = None, token: str | None = None):
+                 external_stop: Callable[[], bool] | None = None, token: str | None = None,
+                 paused: bool = False):
         if not 0 <= int(port) <= 65535:
             raise ParameterError(f"--port must be in 0..65535, got {port}")
         gap = float(params.gap)
         self.controller = LiveController(container, gap, params.preprocess.skin_offset * gap,
                                           params.render, external_stop=external_stop)
+        self.controller.paused = bool(paused)  # from the first frame on
         self.server = LiveServer(self.controller, port, token=token)
         self.open_browser = open_browser
 

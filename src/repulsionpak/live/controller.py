@@ -56,6 +56,7 @@ class LiveController:
         self.last_points: np.ndarray | None = None
         self._skin_idx = np.zeros(0, np.int64)
         self._last_sent = 0.0
+        self._last_iteration = -1
         self.frames_sent = 0
         self.final_svg: str | None = None
         self.final_status: dict | None = None
@@ -70,8 +71,10 @@ class LiveController:
 
     def should_stop(self) -> bool:
         self._apply_commands()
-        self._publish_frame()
-        while self.paused and self.steps_left == 0 and not self.external_stop():
+        # the iteration a pause stops at is always shown
+        self._publish_frame(force=self.paused and self._last_iteration != self._iteration())
+        # (a pause takes effect once the first snapshot told which simulator runs)
+        while self.paused and self.sim is not None and self.steps_left == 0 and not self.external_stop():
             try:
                 cmd = self.commands.get(timeout=0.1)
             except queue.Empty:
@@ -216,12 +219,16 @@ class LiveController:
             return
         self._last_sent = now
         st = self.sim.state
+        self._last_iteration = st.iteration
         pts = st.x[self._skin_idx] * self.unit
         a = float(self.sim.areas.sum() / self.sim.model.container_area)  # all meshes
         data = encode_frame(self.layout_id, st.iteration, a, pts)
         self.last_frame, self.last_points = data, pts
         self.frames_sent += 1
         self.publish("frame", data)
+
+    def _iteration(self) -> int:
+        return -1 if self.sim is None else int(self.sim.state.iteration)
 
     def _apply_commands(self) -> None:
         while True:

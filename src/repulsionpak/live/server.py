@@ -97,6 +97,7 @@ class LiveServer:
         app.router.add_get("/", self._index)
         app.router.add_get("/packing.svg", self._packing)
         app.router.add_get("/ws", self._ws)
+        app.router.add_get("/favicon.ico", lambda request: web.Response(status=204))
         for name in STATIC:
             app.router.add_get(f"/{name}", self._static)
         self._runner = web.AppRunner(app, handle_signals=False, access_log=None)
