@@ -124,7 +124,8 @@ def test_frame_round_trip_and_command_validation():
         decode_frame(data[:-8])
     assert parse_command({"cmd": "move", "index": 2, "dx": 1, "dy": -0.5}) == \
         {"cmd": "move", "index": 2, "dx": 1.0, "dy": -0.5}
-    for bad in ({"cmd": "explode"}, {"cmd": "move", "index": -1, "dx": 0, "dy": 0},
+    assert parse_command({"cmd": "add", "index": 0, "x": 3, "y": 4}) == {"cmd": "add", "index": 0, "x": 3.0, "y": 4.0}
+    for bad in ({"cmd": "explode"}, {"cmd": "add", "index": 0, "x": 1}, {"cmd": "move", "index": -1, "dx": 0, "dy": 0},
                 {"cmd": "move", "index": 0, "dx": float("nan"), "dy": 0}, {"cmd": "step", "n": 0}, [1]):
         with pytest.raises(ValueError):
             parse_command(bad)
@@ -203,7 +204,7 @@ def _d(page, i: int) -> str:
     return page.get_attribute(f'#stage .element[data-index="{i}"] path', "d")
 
 
-def test_browser_pause_step_drag_pin_remove_download(live, tmp_path):
+def test_browser_pause_step_drag_pin_remove_add_download(live, tmp_path):
     exe = _chromium()
     if exe is None:
         pytest.skip("no Chromium found: install it with `apt-get install chromium` "
@@ -223,7 +224,7 @@ def test_browser_pause_step_drag_pin_remove_download(live, tmp_path):
     import json
 
     rep = json.loads((live.out / "report.json").read_text())
-    assert rep["n_primary"] == COUNT - 1  # one removed in the page
+    assert rep["n_primary"] == COUNT  # one removed, one added in the page
     assert rep["invariants"]["ok"]
     # the pinned element's art lies where it was pinned (inside its pinned skin)
     from repulsionpak.io.svg_write import read_packing_svg
@@ -279,6 +280,31 @@ def _drive(browser, live: Live, tmp_path: Path) -> None:
     page.click("#remove")
     page.wait_for_selector('#stage .element.removed[data-index="1"]', state="attached")
 
+    # add a copy of element 2 in the emptiest spot of the circle (farthest from every skin's box)
+    spot = page.evaluate("""() => {
+        const boxes = [...document.querySelectorAll('#stage .element:not(.removed) path')].map((p) => p.getBBox());
+        let best = null, far = -1;
+        for (let x = 40; x <= 460; x += 5) for (let y = 40; y <= 460; y += 5) {
+          if (Math.hypot(x - 250, y - 250) > 200) continue;
+          let d = 1e9;
+          for (const b of boxes) d = Math.min(d, Math.hypot(Math.max(b.x - x, 0, x - b.x - b.width),
+                                                            Math.max(b.y - y, 0, y - b.y - b.height)));
+          if (d > far) { far = d; best = [x, y]; }
+        }
+        const m = document.querySelector('#stage').getScreenCTM();
+        return [best[0], best[1], m.a * best[0] + m.e, m.d * best[1] + m.f];
+    }""")
+    page.locator('#stage .element[data-index="2"] path').click()
+    page.click("#add-copy")
+    page.mouse.click(spot[2], spot[3])
+    page.wait_for_function(f"document.querySelectorAll('#stage .element').length === {COUNT + 1}")
+    lay = page.evaluate("window.repulsionpak.layout")
+    assert lay["template"][COUNT] == lay["template"][2] and lay["kinds"][COUNT] == "primary"
+    new_box = _bbox(page, COUNT)  # the copy starts at its placement size, centred on the click
+    assert new_box[0] + new_box[2] / 2 == pytest.approx(spot[0], abs=0.2 * new_box[2])
+    assert new_box[1] + new_box[3] / 2 == pytest.approx(spot[1], abs=0.2 * new_box[3])
+    assert page.inner_text("#iteration") == "26"
+
     # a second tab sees the same run
     other = browser.new_page()
     other.goto(live.url)
@@ -305,7 +331,7 @@ def _drive(browser, live: Live, tmp_path: Path) -> None:
     dl.value.save_as(tmp_path / "download.svg")
     root = ET.parse(tmp_path / "download.svg").getroot()
     prim = [g for g in root.iter(f"{SVG_NS}g") if "primary" in (g.get("class") or "").split()]
-    assert len(prim) == COUNT - 1
+    assert len(prim) == COUNT  # one removed, one added
     with page.expect_download() as dl:
         page.click("#download-png")
     png = Path(dl.value.path()).read_bytes()

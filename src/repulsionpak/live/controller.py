@@ -254,6 +254,9 @@ class LiveController:
             return
         if sim is None or c == "noop" or cmd.get("index", 0) >= sim.model.n_elements:
             return
+        if c == "add":
+            self._add_copy(cmd["index"], cmd["x"], cmd["y"])
+            return
         i = cmd["index"]
         m, st = sim.model, sim.state
         a, b = int(m.elem_vstart[i]), int(m.elem_vstart[i + 1])
@@ -274,6 +277,59 @@ class LiveController:
             st.x[a:b] = c0 + REMOVED_SCALE * (st.x[a:b] - c0)
             st.v[a:b] = 0.0
             self.publish("json", self.layout_message())
+
+    def _add_copy(self, src: int, x: float, y: float) -> None:
+        """Append a copy of element ``src`` at (x, y) (container units), at the size every
+        element started from, unrotated, growing from now on.
+
+        The model and state are rebuilt with the running ones as base (as the secondary
+        phase appends its elements) and swapped into the *same* objects, so the runner's
+        loop and :func:`repulsionpak.pack.pack` see the new element; the simulator's
+        buffers are re-made for the new size with its stepping state (time step, settle
+        countdown, pins) kept."""
+        import dataclasses
+
+        from ..placement import Placement
+        from ..sim.model import Model, build_model
+
+        sim = self.sim
+        m, st = sim.model, sim.state
+        if m.frozen[src] or src in self.removed or sim.templates is None:
+            self._error(f"element {src} cannot be copied in this phase")
+            return
+        if not self.container.region.contains(shapely.Point(x, y)):
+            self._error("a copy must be placed inside the container")
+            return
+        n0, m0 = m.n_vertices, m.n_elements
+        region_sim = shapely.affinity.scale(self.container.region, 1 / self.unit, 1 / self.unit, origin=(0, 0))
+        shrink = 1.0 / float(m.max_growth[src])  # the size it was placed at
+        pl = Placement(np.array([m.template_index[src]]), np.array([[x, y]], float), np.zeros(1), np.array([shrink]))
+        new_m, new_st = build_model(sim.templates, pl, SimFrame(self.unit), region_sim,
+                                    cell_size=m.cell_size, gap=m.gap, kinds=[m.kind[src]],
+                                    base=(m, st))
+        # what build_model takes from the current state but must stay as it was
+        new_m.x_rest[:n0] = m.x_rest
+        new_m.stiffness[:m0] = m.stiffness
+        new_m.stiffness[m0] = m.stiffness[src]
+        new_m.bend_limit[m0] = m.bend_limit[src]
+        new_m.inset_extra = m.inset_extra
+        new_st.v[:n0] = st.v
+        for f in dataclasses.fields(Model):
+            setattr(m, f.name, getattr(new_m, f.name))
+        st.x, st.v, st.n_grow = new_st.x, new_st.v, new_st.n_grow
+        keep = {k: getattr(sim, k) for k in ("dt", "settle_left", "stopped_by", "allow_growth", "_recoveries")}
+        moving = sim.moving.copy()
+        sim.__init__(m, st, sim.params, sim.phase)
+        for k, v in keep.items():
+            setattr(sim, k, v)
+        for e in np.flatnonzero(~moving[:m0]):
+            sim.set_moving(int(e), False)
+        sim.refresh_growth()
+        sim._good = st.copy()  # noqa: SLF001  (recovery restores to a state of this size)
+        self._bind(sim, sim.phase)
+
+    def _error(self, message: str) -> None:
+        self.publish("json", {"type": "error", "message": message})
 
     def _current_svg(self) -> str:
         from ..render import placed_art

@@ -19,7 +19,8 @@ whenever the set of elements changes), ``status`` (iteration, paused, phase, est
 area fraction and median gap, ``done`` and ``stopped_by`` at the end). Commands from the
 page are JSON objects with a ``cmd``: ``pause``, ``resume``, ``step`` (``n``), ``move``
 (``index``, ``dx``, ``dy`` in container units), ``pin`` (``index``, ``pinned``),
-``remove`` (``index``).
+``remove`` (``index``), ``add`` (``index`` of the element to copy, ``x``, ``y`` in
+container units).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ import numpy as np
 
 MAGIC = b"RPKF"
 HEADER = struct.Struct("<4sIIfI")
-COMMANDS = ("pause", "resume", "step", "move", "pin", "remove")
+COMMANDS = ("pause", "resume", "step", "move", "pin", "remove", "add")
 
 
 def encode_frame(layout_id: int, iteration: int, area_fraction: float, points: np.ndarray) -> bytes:
@@ -59,16 +60,16 @@ def parse_command(msg: object) -> dict:
         raise ValueError(f"unknown command {msg!r}")
     cmd = msg["cmd"]
     out = {"cmd": cmd}
-    if cmd in ("move", "pin", "remove"):
+    if cmd in ("move", "pin", "remove", "add"):
         i = msg.get("index")
         if not isinstance(i, int) or isinstance(i, bool) or i < 0:
             raise ValueError(f"{cmd}: 'index' must be an element index, got {i!r}")
         out["index"] = i
-    if cmd == "move":
-        for k in ("dx", "dy"):
+    if cmd in ("move", "add"):
+        for k in ("dx", "dy") if cmd == "move" else ("x", "y"):
             v = msg.get(k)
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not np.isfinite(v):
-                raise ValueError(f"move: '{k}' must be a finite number, got {v!r}")
+                raise ValueError(f"{cmd}: '{k}' must be a finite number, got {v!r}")
             out[k] = float(v)
     if cmd == "pin":
         out["pinned"] = bool(msg.get("pinned", True))

@@ -10,7 +10,7 @@
   q("#download-svg").setAttribute("href", svgUrl);
 
   let ws = null, layout = null, starts = [], groups = [], status = {}, selected = -1;
-  let lastFrame = null, drag = null, frames = 0;
+  let lastFrame = null, drag = null, frames = 0, adding = false;
   window.repulsionpak = { get frames() { return frames; }, get layout() { return layout; },
                           get status() { return status; } };
 
@@ -71,7 +71,8 @@
       msg.textContent = (m.converged ? "Converged" : "Finished") + " (" + how +
         "). Press Ctrl-C in the terminal to write the output.";
       msg.classList.add("done");
-      ["#pause", "#step", "#pin", "#remove"].forEach((s) => { q(s).disabled = true; });
+      setAdding(false);
+      ["#pause", "#step", "#pin", "#remove", "#add-copy"].forEach((s) => { q(s).disabled = true; });
     } else {
       msg.textContent = m.paused ? "Paused" : "Running";
     }
@@ -110,7 +111,7 @@
       if (m.type === "scene") onScene(m);
       else if (m.type === "layout") onLayout(m);
       else if (m.type === "status") onStatus(m);
-      else if (m.type === "error") console.warn("repulsionpak:", m.message);
+      else if (m.type === "error") { console.warn("repulsionpak:", m.message); q("#selection").textContent = m.message; }
     };
     ws.onclose = () => {
       if (!status.done) q("#message").textContent = "disconnected (the run goes on; reload to reconnect)";
@@ -122,7 +123,7 @@
     if (selected >= 0 && groups[selected]) groups[selected].classList.remove("selected");
     selected = i;
     const ok = i >= 0 && groups[i] && !(layout.frozen[i]) && !status.done;
-    q("#pin").disabled = !ok; q("#remove").disabled = !ok;
+    q("#pin").disabled = !ok; q("#remove").disabled = !ok; q("#add-copy").disabled = !ok;
     if (i >= 0 && groups[i]) {
       groups[i].classList.add("selected");
       const pinned = (layout.pinned || []).includes(i);
@@ -140,7 +141,22 @@
     return p.matrixTransform(stage.getScreenCTM().inverse());
   }
 
+  function setAdding(on) {
+    adding = on;
+    q("#add-copy").classList.toggle("on", on);
+    stage.classList.toggle("adding", on);
+    if (on) q("#selection").textContent = "click where the copy of element " + selected + " should grow (Esc cancels)";
+    else select(selected);
+  }
+
   stage.addEventListener("pointerdown", (ev) => {
+    if (adding) {
+      const p = svgPoint(ev);
+      send({ cmd: "add", index: selected, x: p.x, y: p.y });
+      setAdding(false);
+      ev.preventDefault();
+      return;
+    }
     const g = ev.target.closest ? ev.target.closest(".element") : null;
     if (!g) { select(-1); return; }
     const i = Number(g.dataset.index);
@@ -182,6 +198,7 @@
     send({ cmd: "pin", index: selected, pinned: !(layout.pinned || []).includes(selected) });
   });
   q("#remove").addEventListener("click", () => { if (selected >= 0) send({ cmd: "remove", index: selected }); });
+  q("#add-copy").addEventListener("click", () => { if (selected >= 0) setAdding(!adding); });
   q("#download-png").addEventListener("click", async () => {
     const text = await (await fetch(svgUrl)).text();
     const url = URL.createObjectURL(new Blob([text], { type: "image/svg+xml" }));
@@ -207,6 +224,8 @@
     if (ev.key === " ") { ev.preventDefault(); q("#pause").click(); }
     else if (ev.key === "s") q("#step").click();
     else if (ev.key === "p" && !q("#pin").disabled) q("#pin").click();
+    else if (ev.key === "a" && !q("#add-copy").disabled) q("#add-copy").click();
+    else if (ev.key === "Escape" && adding) setAdding(false);
     else if ((ev.key === "Delete" || ev.key === "Backspace") && !q("#remove").disabled) q("#remove").click();
   });
   connect();
