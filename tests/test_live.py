@@ -131,6 +131,56 @@ def test_frame_round_trip_and_command_validation():
             parse_command(bad)
 
 
+def test_controller_moves_pins_removes_and_adds_between_iterations():
+    """The controller alone, inside an in-process pack() (no server, no browser)."""
+    import dataclasses
+
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.live import LiveController
+    from repulsionpak.pack import pack
+    from repulsionpak.params import Params
+
+    cont = load_container(EX / "containers" / "circle.svg")
+    elems = load_elements([EX / "elements" / "apple.svg", EX / "elements" / "fish.svg"])
+    p = Params(gap=12.0, seed=3)
+    p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=5),
+                            sim=dataclasses.replace(p.sim, max_iterations=200, min_iterations=0),
+                            secondary=dataclasses.replace(p.secondary, auto=False))
+    ctl = LiveController(cont, 12.0, 7.2, p.render)
+    sent = []
+    ctl.publish = lambda kind, payload: sent.append((kind, payload))
+    seen = {}
+
+    def on_snapshot(snap):
+        ctl.on_snapshot(snap)
+        if snap.iteration == 25 and not snap.done:
+            m = snap.sim.model
+            seen["x0"] = snap.state.x[m.elem_vstart[0]:m.elem_vstart[1]].copy()
+            ctl.submit({"cmd": "move", "index": 0, "dx": 10.0, "dy": -5.0})
+            ctl.submit({"cmd": "pin", "index": 0, "pinned": True})
+            ctl.submit({"cmd": "remove", "index": 1})
+            ctl.submit({"cmd": "add", "index": 2, "x": 250.0, "y": 250.0})
+            ctl.submit({"cmd": "add", "index": 2, "x": 5.0, "y": 5.0})  # outside: refused
+
+    packing = pack(cont, elems, p, on_snapshot=on_snapshot, should_stop=ctl.should_stop)
+    m, x = packing.model, packing.state.x
+    assert m.n_elements == 6 and m.template_index[5] == m.template_index[2]
+    # moved by (10, -5) container units, then never touched again
+    want = seen["x0"] + np.array([10.0, -5.0]) / ctl.unit
+    np.testing.assert_allclose(x[m.elem_vstart[0]:m.elem_vstart[1]], want, rtol=0, atol=1e-12)
+    # removed: shrunk to 1% about its centre and left out of the art
+    r1 = x[m.elem_vstart[1]:m.elem_vstart[2]]
+    assert np.ptp(r1, axis=0).max() * ctl.unit < 2.0
+    assert len(ctl.drop_removed(packing.placed)) == len(packing.placed) - 1
+    # the copy grew from the click point and stayed inside the circle
+    c = x[m.elem_vstart[5]:m.elem_vstart[6]] * ctl.unit
+    assert np.hypot(*(c.mean(axis=0) - 250)) < 60 and np.hypot(c[:, 0] - 250, c[:, 1] - 250).max() < 230
+    errors = [pl["message"] for kind, pl in sent if kind == "json" and pl.get("type") == "error"]
+    assert errors == ["a copy must be placed inside the container"]
+    layouts = [pl for kind, pl in sent if kind == "json" and pl.get("type") == "layout"]
+    assert layouts[-1]["pinned"] == [0] and layouts[-1]["removed"] == [1] and len(layouts[-1]["counts"]) == 6
+
+
 # -- server ---------------------------------------------------------------------------
 
 
