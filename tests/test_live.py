@@ -146,7 +146,7 @@ def test_controller_moves_pins_removes_and_adds_between_iterations():
     p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=5),
                             sim=dataclasses.replace(p.sim, max_iterations=200, min_iterations=0),
                             secondary=dataclasses.replace(p.secondary, auto=False))
-    ctl = LiveController(cont, 12.0, 7.2, p.render)
+    ctl = LiveController(cont, 12.0, p.render)
     sent = []
     ctl.publish = lambda kind, payload: sent.append((kind, payload))
     seen = {}
@@ -175,6 +175,19 @@ def test_controller_moves_pins_removes_and_adds_between_iterations():
     # the copy grew from the click point and stayed inside the circle
     c = x[m.elem_vstart[5]:m.elem_vstart[6]] * ctl.unit
     assert np.hypot(*(c.mean(axis=0) - 250)) < 60 and np.hypot(c[:, 0] - 250, c[:, 1] - 250).max() < 230
+    # the page's estimates from the last frame against the exact measures of the art the
+    # renderer makes of the same state (before the final verification adjusts it)
+    from repulsionpak.evaluate import evaluate
+    from repulsionpak.render import placed_art
+    from repulsionpak.sim.model import SimFrame
+
+    est = ctl.estimates()
+    keep = [e for e in range(m.n_elements) if e != 1]
+    art = placed_art(packing.templates, m, packing.state, SimFrame(ctl.unit), elements=keep)
+    exact = evaluate(cont, art, 12.0, with_scp=False)
+    print("estimate", est, "exact", exact["area_fraction"], exact["gap"]["median"])
+    assert est["area_fraction"] == pytest.approx(exact["area_fraction"], rel=0.03)
+    assert est["median_gap"] == pytest.approx(exact["gap"]["median"], rel=0.15)
     errors = [pl["message"] for kind, pl in sent if kind == "json" and pl.get("type") == "error"]
     assert errors == ["a copy must be placed inside the container"]
     layouts = [pl for kind, pl in sent if kind == "json" and pl.get("type") == "layout"]
