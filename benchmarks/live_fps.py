@@ -3,8 +3,10 @@ heart scene and count the binary frames a WebSocket client receives while each p
 
     python benchmarks/live_fps.py [--data ../shared/data] [--seed 1]
 
-Prints one line per phase (frames/s, longest gap, bytes/frame, iterations/s); the run's
-output goes to a temporary directory and the server is stopped with SIGINT at the end.
+Prints one line per phase (frames/s, longest gap, bytes/frame, iterations/s) and the
+run's own phase times (report ``seconds``, to compare with the same command without
+``--live``); the output goes to a temporary directory and the server is stopped with
+SIGINT at the end.
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ def main() -> None:
         proc = subprocess.Popen([sys.executable, "-m", "repulsionpak.cli", "pack",
                                  str(data / "containers" / "heart.svg"), str(data / "animals"),
                                  "--gap", "5.2", "--seed", str(a.seed), "-o", f"{tmp}/out.svg",
+                                 "--report", f"{tmp}/report.json",
                                  "--live", "--no-browser", "--port", "0", "-q"],
                                 stdout=subprocess.PIPE, text=True)
         url = proc.stdout.readline().strip()
@@ -63,7 +66,8 @@ def main() -> None:
             per = asyncio.run(watch(url))
         finally:
             proc.send_signal(signal.SIGINT)
-            proc.wait(timeout=120)
+            proc.wait(timeout=300)
+        seconds = json.loads(Path(f"{tmp}/report.json").read_text())["seconds"]
     for ph, fr in per.items():
         if len(fr) < 2:
             continue
@@ -72,6 +76,8 @@ def main() -> None:
         print(f"{ph}: {len(fr)} frames in {dt:.1f} s = {(len(fr) - 1) / dt:.1f} fps "
               f"(longest gap {max(gaps) * 1000:.0f} ms); iterations {fr[0][1]}..{fr[-1][1]} "
               f"({(fr[-1][1] - fr[0][1]) / dt:.0f} it/s); {fr[-1][2]} bytes/frame")
+    print("phase seconds: " + ", ".join(f"{k} {seconds[k]:.1f}" for k in ("preprocess", "primary", "secondary")
+                                        if k in seconds))
 
 
 if __name__ == "__main__":
