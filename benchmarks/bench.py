@@ -7,6 +7,7 @@
     python benchmarks/bench.py secondary            # the same with secondary cats (seeding time)
     python benchmarks/bench.py mesh                 # skin mesh quality (angles, counts)
     python benchmarks/bench.py firstrun             # `repulsionpak demo` with an empty kernel cache, twice
+    python benchmarks/bench.py controls             # heart scene: free vs --rotation fixed vs --rigid (docs/controls.md)
     python benchmarks/bench.py all
 
 Fixed seeds; results are printed as Markdown table rows for docs/benchmarks.md.
@@ -202,13 +203,17 @@ def bench_mesh() -> None:
 def bench_firstrun() -> None:
     """``repulsionpak demo`` twice with an empty numba cache (NUMBA_CACHE_DIR in a fresh
     temporary folder): the first run compiles the kernels, the second loads them. Wall
-    and CPU time of the whole process."""
+    and CPU time of the whole process (the warm-up process included); then the first run
+    again with the warm-up turned off (``REPULSIONPAK_NO_WARMUP=1``)."""
     import os
     import tempfile
 
+    runs = [("first run (cold cache)", {}), ("second run", {}),
+            ("first run without the warm-up process", {"REPULSIONPAK_NO_WARMUP": "1"})]
     with tempfile.TemporaryDirectory() as tmp:
-        env = dict(os.environ, NUMBA_CACHE_DIR=os.path.join(tmp, "numba"))
-        for label in ("first run (cold cache)", "second run"):
+        for k, (label, extra) in enumerate(runs):
+            cache = os.path.join(tmp, "numba" if k < 2 else "numba-nowarm")
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache, **extra)
             t0 = time.perf_counter()
             r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
             subprocess.run([sys.executable, "-m", "repulsionpak.cli", "demo", "-o", os.path.join(tmp, "d.svg")],
@@ -218,10 +223,54 @@ def bench_firstrun() -> None:
             print(f"demo, {label}: wall {time.perf_counter() - t0:.1f} s, CPU {cpu:.1f} s", flush=True)
 
 
+def bench_controls(seeds=(1, 2, 3)) -> None:
+    """The heart scene (animals, no pocket fill) packed in-process with every element free,
+    fixed upright (``--rotation fixed``) and rigid (``--rigid``): simulation seconds,
+    iterations, ms/iteration and the whole pack()'s CPU time (robust on a shared
+    machine), median over ``seeds``; the slowdown is relative to free (issue 12 asks for
+    at most 20%)."""
+    import dataclasses
+
+    from repulsionpak.controls import cli_controls
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.pack import pack
+    from repulsionpak.params import Params
+
+    if not SHARED.exists():
+        print("controls: ../shared/data not found, skipped")
+        return
+    cont = load_container(SHARED / "containers" / "heart.svg", tolerance=0.052)
+    plain = load_elements([SHARED / "animals"])
+    base = Params(gap=5.2)
+    base = dataclasses.replace(base, secondary=dataclasses.replace(base.secondary, auto=False))
+    warm = dataclasses.replace(base, seed=0, sim=dataclasses.replace(base.sim, max_iterations=30))
+    cases = {"free": None, "fixed": cli_controls("fixed"), "rigid": cli_controls(None, True),
+             "fixed + rigid": cli_controls("fixed", True)}
+    runs = {name: ([], [], []) for name in cases}
+    for name, c in cases.items():  # kernels compiled outside the timing
+        pack(cont, plain[:2] if c is None else [dataclasses.replace(e, controls=c) for e in plain[:2]], warm)
+    for sd in seeds:  # interleaved: a busy machine slows every case alike
+        for name, c in cases.items():
+            els = plain if c is None else [dataclasses.replace(e, controls=c) for e in plain]
+            t0 = time.process_time()
+            r = pack(cont, els, dataclasses.replace(base, seed=sd))
+            runs[name][0].append(r.iterations["primary"])
+            runs[name][1].append(r.seconds["primary"])
+            runs[name][2].append(time.process_time() - t0)
+    print("| case | iterations | simulation s (wall) | ms/iteration (wall) | pack() CPU s | slowdown vs free (CPU) |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    ref = None
+    for name, (its, sim, tot) in runs.items():
+        it, sm, tt = (float(np.median(v)) for v in (its, sim, tot))
+        ms = float(np.median(np.array(sim) / np.array(its))) * 1e3
+        ref = tt if ref is None else ref
+        print(f"| {name} | {it:.0f} | {sm:.2f} | {ms:.3f} | {tt:.2f} | {100 * (tt / ref - 1):+.0f}% |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "preprocess", "heart", "pockets", "secondary", "mesh",
-                                     "firstrun", "all"])
+                                     "firstrun", "controls", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
@@ -238,6 +287,8 @@ def main() -> None:
         bench_mesh()
     if a.what in ("firstrun", "all"):
         bench_firstrun()
+    if a.what in ("controls", "all"):
+        bench_controls()
     if a.what in ("iteration", "all"):
         bench_iteration(plot=a.plot)
 

@@ -118,12 +118,14 @@ def measure(name: str, workdir: Path) -> dict:
             ex = exact_outlines(t, verts, per_segment=256)[0][0][:-1]
             kinks["after"].append((kink_stats(w)[1], kink_stats(w, 4000)[0], kink_stats(ex)[1]))
             kinks["before"].append((kink_stats(polys[0][0][0])[1], kink_stats(polys[0][0][0], 4000)[0], 0))
-    out = {"scene": name, "copies": m.n_elements, "pack_s": seconds, "render_first_s": t_first,
+    out = {"scene": name, "copies": m.n_elements, "primaries": sum(k == "primary" for k in m.kind), "pack_s": seconds, "render_first_s": t_first,
            "render_s": t_again, "dev_over_tol": max(devs), "smooth_vs_pl_over_gap": max(dev_pl)}
     for k in ("before", "after"):
         r = np.array(rows[k])
         out[f"{k}_bytes_ratio"] = float(r[:, 0].mean())
         out[f"{k}_bytes_ratio_max"] = float(r[:, 0].max())
+        prim = np.array([kd == "primary" for kd in m.kind])
+        out[f"{k}_bytes_ratio_primary"] = float(r[prim, 0].mean())
         out[f"{k}_curve_share"] = float(r[:, 1].sum() / r[:, 2].sum())
         out[f"{k}_kink"] = np.max(kinks[k], axis=0) if kinks[k] else None
     return out
@@ -134,19 +136,20 @@ def main() -> None:
     ap.add_argument("--scenes", nargs="*", default=["discs", "squares", "letters", "badges", "examples"])
     ap.add_argument("--workdir", default="/tmp/repulsionpak-output-curves")
     args = ap.parse_args()
-    print("| scene | copies | curve share before → after | bytes/copy ÷ source before → after (max) "
+    print("| scene | copies | curve share before → after | bytes/copy ÷ source before → after (max) | primaries only, after "
           "| disc: turning jump, 400 samples, before → after (exact map) | disc: largest turn, 4000 samples, "
           "before → after | deviation ÷ tolerance | smooth − barycentric map ÷ gap | render s (first / again) |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for s in args.scenes:
         r = measure(s, Path(args.workdir))
+        r["copies"] = f"{r['copies']} ({r['primaries']} primary)"
         if r["after_kink"] is None:
             kink = "— | —"
         else:
             b, a = r["before_kink"], r["after_kink"]
             kink = f"{b[0]:.1f}° → {a[0]:.2f}° ({a[2]:.2f}°) | {b[1]:.1f}° → {a[1]:.2f}°"
         print(f"| {s} | {r['copies']} | {r['before_curve_share']:.0%} → {r['after_curve_share']:.0%} "
-              f"| {r['before_bytes_ratio']:.2f} → {r['after_bytes_ratio']:.2f} ({r['after_bytes_ratio_max']:.2f}) "
+              f"| {r['before_bytes_ratio']:.2f} → {r['after_bytes_ratio']:.2f} ({r['after_bytes_ratio_max']:.2f}) | {r['after_bytes_ratio_primary']:.2f} "
               f"| {kink} | {r['dev_over_tol']:.2f} | {r['smooth_vs_pl_over_gap']:.3f} "
               f"| {r['render_first_s']:.2f} / {r['render_s']:.2f} |", flush=True)
 

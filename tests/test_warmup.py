@@ -1,4 +1,4 @@
-"""The first run's background warm-up compiles exactly the render kernels a packing uses."""
+"""The first run's background warm-up compiles exactly the kernels a packing uses."""
 
 import os
 import subprocess
@@ -9,56 +9,88 @@ import pytest
 
 from repulsionpak import examples
 
-RENDER = textwrap.dedent("""
+# a small packing (simulation, verification, rendering) in a fresh process: prints the
+# repulsionpak kernels it had to compile
+PACK = textwrap.dedent("""
     import sys
-    import numpy as np
     from numba.core import event
     compiled = []
     class L(event.Listener):
         def on_start(self, ev):
-            compiled.append(ev.data["dispatcher"].py_func.__module__)
+            f = ev.data["dispatcher"].py_func
+            compiled.append(f.__module__ + "." + f.__name__)
         def on_end(self, ev):
             pass
     event.register("numba:compile", L())
-    from repulsionpak.preprocess import outline_of
-    from repulsionpak.io import load_elements
-    from repulsionpak.preprocess import build_template
-    from repulsionpak.render.placed import render_copy
-    from repulsionpak.render import warmup
+    from repulsionpak import examples, warmup
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.pack import pack
+    from repulsionpak.params import params_from_dict
     cold = warmup.is_cold()
-    t = build_template(outline_of(load_elements([sys.argv[1]])[0]), 1.0, 2.0)
-    shear = np.array([[1.0, 0.3], [0.0, 1.1]])
-    paths, tol = render_copy(t, t.verts @ shear.T, gap=2.0)
-    assert paths and tol > 0
+    cont = load_container(examples.container_file(examples.DEFAULT_CONTAINER))
+    elems = load_elements(examples.element_files()[:3])
+    params = params_from_dict({"gap": examples.DEFAULT_GAP, "seed": 3,
+                               "placement": {"count": 6}, "sim": {"max_iterations": 150}})
+    p = pack(cont, elems, params)
+    assert p.placed
     print("COLD", cold)
-    print("RENDER", sorted({m for m in compiled if m.startswith("repulsionpak.render")}))
+    print("COMPILED", sorted({c for c in compiled if c.startswith("repulsionpak.")}))
 """)
 
 
-def _run(code_or_module, cache, *args, module=False):
+def _run(args, cache):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-    cmd = [sys.executable, "-m", code_or_module] if module else [sys.executable, "-c", code_or_module]
-    return subprocess.run([*cmd, *args], env=env, capture_output=True, text=True, check=True).stdout
+    return subprocess.run([sys.executable, *args], env=env, capture_output=True, text=True,
+                          check=True).stdout
+
+
+def _compiled(out: str) -> list[str]:
+    line = next(ln for ln in out.splitlines() if ln.startswith("COMPILED"))
+    return eval(line.split(" ", 1)[1])  # noqa: S307  (our own printed list)
 
 
 @pytest.mark.slow
-def test_render_after_warm_up_compiles_no_render_kernel(tmp_path):
-    element = str(examples.element_files()[0])
-    cold_cache = tmp_path / "cold"
-    out = _run(RENDER, cold_cache, element)  # without a warm-up, rendering compiles them
-    assert "COLD True" in out
-    assert "repulsionpak.render.fit" in out and "repulsionpak.render.deform" in out
-    warm_cache = tmp_path / "warm"
-    _run("repulsionpak.render.warmup", warm_cache, module=True)
-    out = _run(RENDER, warm_cache, element)
+def test_packing_after_warm_up_compiles_no_kernel(tmp_path):
+    cache = tmp_path / "cache"
+    _run(["-m", "repulsionpak.warmup"], cache)
+    out = _run(["-c", PACK], cache)
     assert "COLD False" in out
-    assert "RENDER []" in out, out
+    assert _compiled(out) == [], out
+
+
+def test_specialisations_cover_the_simulation_kernels():
+    from repulsionpak import warmup
+    from repulsionpak.sim import kernels
+
+    calls = warmup.simulation_specialisations()
+    names = [d.py_func.__name__ for d, _ in calls]
+    assert len(names) == len(set(names))  # one specialisation each
+    # every force of Eq. 1 and the integrator, in the order one iteration calls them
+    order = ["contact_query", "repulsion_force", "edge_force", "boundary_force", "overlap_force",
+             "euler_step", "grow", "skin_areas", "contact_update", "project_inside"]
+    assert [n for n in names if n in order] == order
+    serial = {k.serial for k in kernels._KERNELS}
+    assert sum(d in serial for d, _ in calls) >= 8
+    # recording ran the plain Python functions: the real kernels are back in place
+    from repulsionpak.sim import forces, runner
+    assert runner.contact_query is forces.contact_query
+    assert type(runner.grow).__name__ == "CPUDispatcher"
 
 
 def test_start_does_nothing_when_cached():
-    from repulsionpak.render import warmup
+    from repulsionpak import warmup
 
     warmup.warm_up()  # compiles or loads in this process: the cache now holds the kernels
     assert not warmup.is_cold()
     assert warmup.start() is None
     warmup.stop(None)
+    warmup.wait()  # nothing running: returns at once
+
+
+def test_start_can_be_turned_off(monkeypatch):
+    from repulsionpak import warmup
+
+    monkeypatch.setattr(warmup, "is_cold", lambda: True)
+    monkeypatch.setattr(warmup, "_spare_cores", lambda: 1)
+    monkeypatch.setenv("REPULSIONPAK_NO_WARMUP", "1")
+    assert warmup.start() is None

@@ -106,6 +106,35 @@ class _Progress:
             self._live.__exit__(*exc)
 
 
+class _FrameProgress:
+    """The movie's frames being drawn and encoded (a bar on a terminal, after the
+    simulation's bar has gone)."""
+
+    def __init__(self, enabled: bool):
+        self.enabled = enabled and sys.stderr.isatty()
+        self._live = self._task = None
+
+    def __enter__(self):
+        if self.enabled:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+            self._live = Progress(TextColumn("[bold]movie"), BarColumn(), MofNCompleteColumn(),
+                                  TextColumn("frames"), TimeElapsedColumn(), transient=True,
+                                  console=Console(stderr=True))
+            self._live.__enter__()
+            self._task = self._live.add_task("movie", total=None)
+        return self
+
+    def __call__(self, done: int, total: int) -> None:
+        if self._live is not None:
+            self._live.update(self._task, total=total, completed=done)
+
+    def __exit__(self, *exc):
+        if self._live is not None:
+            self._live.__exit__(*exc)
+
+
 class _StopFlag:
     """SIGINT/SIGTERM handler: the first signal asks the simulation to stop after the
     current iteration (a partial packing is then written); a second Ctrl-C aborts."""
@@ -171,11 +200,15 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
              margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None,
-             live: dict | None = None) -> dict:
+             movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
+             controls=None, live: dict | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
-    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it.
-    ``live`` (``{"port": N, "open_browser": bool, "paused": bool}``) serves the run in the browser and
-    writes the outputs only at Ctrl-C (see :mod:`repulsionpak.live`)."""
+    in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it;
+    ``movie`` (.gif or .mp4) the simulation as an animation, a frame every ``movie_every``
+    iterations (default: adapted to the run's length), ``movie_size`` pixels along the
+    frames' longer side. ``live`` (``{"port": N, "open_browser": bool, "paused": bool}``)
+    serves the run in the browser and writes the outputs only at Ctrl-C (see
+    :mod:`repulsionpak.live`)."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png
     from .io.svg_write import atomic_write_bytes
@@ -184,7 +217,13 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
     t_start = time.perf_counter()
     inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
-    _check_outputs([output, report, png, checkpoint, pdf], inputs + ([resume] if resume else []))
+    _check_outputs([output, report, png, checkpoint, pdf, movie], inputs + ([resume] if resume else []))
+    recorder = None
+    if movie is not None:
+        from .render.movie import MovieRecorder, check_movie_output
+
+        check_movie_output(movie)  # before the run: an MP4 without imageio-ffmpeg fails now
+        recorder = MovieRecorder(movie, every=movie_every, size_px=movie_size)
     if checkpoint_every < 1:
         raise ParameterError(f"--checkpoint-every must be >= 1, got {checkpoint_every}")
     resumed = None
@@ -208,8 +247,10 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     if tol is None:
         cont = load_container(container, tolerance=0.01 * g)
     params = dataclasses.replace(params, gap=g)
-    elems = load_elements(elements)
-    secs = load_elements(secondary) if secondary else []
+    from .io.manifest import load_element_args  # element manifests (.toml) and controls
+
+    elems = load_element_args(elements, controls)
+    secs = load_element_args(secondary, controls) if secondary else []
     on_checkpoint = None
     if checkpoint is not None or resume is not None:
         from .checkpoint import fingerprint, load_checkpoint, save_checkpoint
@@ -226,22 +267,28 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
         if cache_is_cold():
             typer.echo("compiling the simulation kernels, first run only…", err=True)
-    from .render import warmup
+    from . import warmup
 
-    compiling = warmup.start()  # first run: the render kernels compile on a spare core meanwhile
+    compiling = warmup.start()  # first run: a second process compiles kernels from the far end
     viewer = None
     try:
         with _Progress(progress) as prog, _StopFlag() as stop:
+            on_snapshot, snap_kw = prog, {}
+            if recorder is not None:
+                def on_snapshot(snap):
+                    prog(snap)
+                    recorder(snap)
+                snap_kw = {"snapshot_every": recorder.snapshot_every}
             if live is not None:  # the browser view steers through the two callbacks
                 from .live import LiveRun
 
                 viewer = LiveRun(cont, params, external_stop=stop, **live)
                 viewer.start()
-            packing = pack(cont, elems, params, secondary=secs,
-                           on_snapshot=prog if viewer is None else viewer.on_snapshot(prog),
+                on_snapshot = viewer.on_snapshot(on_snapshot)
+            packing = pack(cont, elems, params, secondary=secs, on_snapshot=on_snapshot,
                            should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
-                           resume=resumed)
+                           resume=resumed, **snap_kw)
     except BaseException:
         if viewer is not None:
             viewer.close()
@@ -274,6 +321,11 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         render_png(png, cont, packing.placed)
     seconds = dict(packing.seconds)
     seconds["render"] = seconds.get("render", 0.0) + (time.perf_counter() - t_eval)
+    movie_info = None
+    if recorder is not None:
+        with _FrameProgress(progress) as prog:
+            movie_info = recorder.write(packing, progress=prog)
+        seconds["movie"] = movie_info.render_seconds + recorder.capture_seconds
     seconds["total"] = time.perf_counter() - t_start
     rep = {
         "n_primary": packing.n_primary, "n_secondary": packing.n_secondary,
@@ -288,6 +340,10 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
                    "secondary": [str(s) for s in secondary or []]},
         "params": params.to_dict(),
     }
+    if movie_info is not None:
+        rep["movie"] = {"file": movie_info.path, "frames": movie_info.frames, "fps": movie_info.fps,
+                        "seconds": movie_info.seconds, "bytes": movie_info.bytes,
+                        "every": movie_info.stride}
     if report is not None:
         _write_json_atomic(report, rep)
     return rep
@@ -322,6 +378,11 @@ def _summary(rep: dict, output: Path) -> str:
             + ("  [PARTIAL: interrupted]" if rep["partial"] else ""))
 
 
+def _movie_line(m: dict) -> str:
+    return (f"movie: {m['file']}: {m['frames']} frames, {m['seconds']:.1f} s at {m['fps']:.3g} fps, "
+            f"a frame every {m['every']} iterations, {m['bytes'] / 1e6:.2f} MB")
+
+
 DebugOpt = Annotated[bool, typer.Option("--debug", help="Show Python tracebacks on errors.")]
 # options shared by `pack` and `batch`
 ContainerArg = Annotated[Path, typer.Argument(help="Container: SVG or .path file; every closed path is a region.")]
@@ -333,7 +394,27 @@ CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary element
 MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")]
 QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
 MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
+RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE] or limited:DEG (see docs/controls.md).")]
+RigidOpt = Annotated[bool, typer.Option("--rigid", help="Elements never deform (rigid bodies).")]
+StiffnessOpt = Annotated[Optional[float], typer.Option(help="Multiplier of the spring constants of the elements.")]
 NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")]
+
+
+def _movie_path(value: Optional[Path]) -> Optional[Path]:
+    if value is not None and value.suffix.lower() not in (".gif", ".mp4"):
+        raise typer.BadParameter(f"{value}: unknown movie format {value.suffix or '(no extension)'!r}; "
+                                 "use a file ending in .gif or .mp4")
+    return value
+
+
+MovieOpt = Annotated[Optional[Path], typer.Option(
+    "--movie", callback=_movie_path,
+    help="Also write the simulation as an animation: OUT.gif (Pillow) or OUT.mp4 (needs "
+         "pip install 'repulsionpak[mp4]'); about 12 s, then the result held for 2 s.")]
+MovieEveryOpt = Annotated[Optional[int], typer.Option(
+    "--movie-every", min=1, help="Iterations between movie frames (default: chosen from the run's length).")]
+MovieSizeOpt = Annotated[int, typer.Option(
+    "--movie-size", min=64, max=4000, help="Longer side of the movie's frames, pixels.")]
 
 
 @app.command()
@@ -356,6 +437,12 @@ def pack(
     checkpoint: Annotated[Optional[Path], typer.Option(help="Save the simulation state to this file periodically.")] = None,
     checkpoint_every: Annotated[int, typer.Option(help="Iterations between checkpoints.")] = 500,
     resume: Annotated[Optional[Path], typer.Option(help="Continue an interrupted run from its checkpoint (same inputs and options).")] = None,
+    movie: MovieOpt = None,
+    movie_every: MovieEveryOpt = None,
+    movie_size: MovieSizeOpt = 600,
+    rotation: RotationOpt = None,
+    rigid: RigidOpt = False,
+    stiffness: StiffnessOpt = None,
     live: Annotated[bool, typer.Option("--live", help="Watch and steer the run in the browser; Ctrl-C writes the outputs.")] = False,
     port: Annotated[int, typer.Option(help="Port of the --live server (127.0.0.1 only).")] = 8765,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="With --live: only print the URL.")] = False,
@@ -363,17 +450,25 @@ def pack(
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Pack CONTAINER with deformed copies of ELEMENTS and write OUTPUT (SVG)."""
+    """Pack CONTAINER with deformed copies of ELEMENTS and write OUTPUT (SVG).
+
+    An element argument ending in .toml is an element manifest (controls per element)."""
     global _DEBUG
     _DEBUG = debug
     with _errors():
+        from .controls import cli_controls
+
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
                        margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
+                       movie=movie, movie_every=movie_every, movie_size=movie_size,
+                       controls=cli_controls(rotation, rigid, stiffness),
                        live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
+            if "movie" in rep:
+                typer.echo(_movie_line(rep["movie"]), err=True)
         if rep["partial"]:
             raise typer.Exit(130)
         if not rep["invariants"]["ok"]:
@@ -514,6 +609,9 @@ def batch(
     margin: MarginOpt = None,
     no_pocket_fill: NoPocketFillOpt = False,
     config: ConfigOpt = None,
+    rotation: RotationOpt = None,
+    rigid: RigidOpt = False,
+    stiffness: StiffnessOpt = None,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -522,12 +620,14 @@ def batch(
     global _DEBUG
     _DEBUG = debug
     from .batch import run_batch
+    from .controls import cli_controls
 
     with _errors():
         base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill)
         with _BatchProgress(not quiet) as prog, _sigterm_as_interrupt():
             summary = run_batch(container, elements, output, seeds, set_ or [], base, secondary or [],
-                                workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog)
+                                workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog,
+                                controls=cli_controls(rotation, rigid, stiffness))
         n = len(summary.jobs)
         if not quiet:
             best = summary.best
@@ -552,6 +652,9 @@ def demo(
     output: Annotated[Path, typer.Option("-o", "--output", help="Output SVG (a PNG is written beside it).")] = Path("repulsionpak-demo.svg"),
     container: Annotated[str, typer.Option(help="Name of a shipped example container.")] = "",
     seed: Annotated[int, typer.Option(help="Random seed.")] = 1,
+    movie: MovieOpt = None,
+    movie_every: MovieEveryOpt = None,
+    movie_size: MovieSizeOpt = 600,
     quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -564,10 +667,13 @@ def demo(
         cfile = examples.container_file(container or examples.DEFAULT_CONTAINER)
         png = output.with_suffix(".png")
         rep = run_pack(cfile, examples.element_files(), output, secondary=examples.secondary_files(),
-                       gap=examples.DEFAULT_GAP, seed=seed, png=png, progress=not quiet)
+                       gap=examples.DEFAULT_GAP, seed=seed, png=png, progress=not quiet,
+                       movie=movie, movie_every=movie_every, movie_size=movie_size)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             typer.echo(f"picture: {png}", err=True)
+            if "movie" in rep:
+                typer.echo(_movie_line(rep["movie"]), err=True)
 
 
 @app.command()

@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
+from . import warmup
+from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
 from .params import Params
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
@@ -124,12 +126,13 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
          secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
          should_stop: Callable[[], bool] | None = None,
          on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 500,
-         resume: dict | None = None) -> Packing:
+         resume: dict | None = None, snapshot_every: int = 25) -> Packing:
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
     ``params.seed`` fixes every random choice. ``on_snapshot`` receives progress
-    snapshots; ``should_stop()`` (or Ctrl-C) ends the current phase early and the result
-    is marked partial.
+    snapshots (every ``snapshot_every`` iterations, and at the end of each phase);
+    ``should_stop()`` (or Ctrl-C) ends the current phase early and the result is marked
+    partial.
 
     ``on_checkpoint(states)`` receives ``{"primary": ..., "secondary": ...}`` simulator
     states every ``checkpoint_every`` iterations and when a phase ends (see
@@ -138,25 +141,35 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     uninterrupted one.
     """
     params = params.validate()
+    if snapshot_every < 1:
+        raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
-    templates, placement, gap = prepare(container, elements, params, rng)
+    ctrl = None
+    if any_controls(elements):  # designer controls (controls.py); none: the paper's way
+        gap = params.gap if params.gap is not None else default_gap(container)
+        templates, placement, pinned, ctrl = prepare_controlled(container, elements, params, rng, gap)
+    else:
+        templates, placement, gap = prepare(container, elements, params, rng)
     frame = SimFrame.for_region(container.region)
     region_sim = shapely.affinity.scale(container.region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
     size = typical_size(templates, placement.template_index) / frame.unit
     cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
     model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
-                               gap=gap / frame.unit)
+                               gap=gap / frame.unit, frozen=None if ctrl is None else pinned)
     # skins rest inside the container by boundary_inset; where the margin asks for more
     # than the skin's width, the rest of it moves the boundary in
     model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
     model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
+    if ctrl is not None:
+        setup_model(model, ctrl, placement.angle, pinned)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     sim.templates = templates
     res = sim.run_resumable((resume or {}).get("primary"),
                             None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
-                            checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop)
+                            checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop,
+                            every=snapshot_every)
     t2 = time.perf_counter()
     packing = Packing(container, gap, [], templates, model, state, frame, params,
                       iterations={"primary": res.iterations, "secondary": 0},
@@ -176,9 +189,14 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         add_secondary(packing, secondary, rng, on_snapshot=on_snapshot, should_stop=should_stop,
                       on_checkpoint=(None if on_checkpoint is None else
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
-                      checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"))
+                      checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"),
+                      snapshot_every=snapshot_every)
     t3 = time.perf_counter()
+    warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
+    if packing.model.pinned is not None:
+        placed = [dataclasses.replace(p, pinned=True) if packing.model.pinned[e] else p
+                  for e, p in enumerate(placed)]
     t4 = time.perf_counter()
     v = params.verify
     straightened: list[int] = []
@@ -187,6 +205,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         limits = np.array([(sp.bend_limit_convex if is_convex(packing.templates[ti]) else sp.bend_limit)
                            for ti in packing.model.template_index]) * v.straighten
         limits[limits <= 0] = np.inf
+        limits = straighten_limits(packing.model, limits)
         placed, _, straightened = straighten(placed, rest_art(packing.templates, packing.model), limits)
     packing.placed, packing.verification = verify_and_repair(
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,

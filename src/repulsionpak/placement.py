@@ -103,9 +103,10 @@ def placed_vertices(t: Template, position: np.ndarray, angle: float, shrink: flo
 
 
 def place(templates: Sequence[Template], assignment: np.ndarray, region, params: PlacementParams,
-          rng: np.random.Generator) -> Placement:
+          rng: np.random.Generator, angle_fn=None) -> Placement:
     """Blue-noise positions, random orientations, and a common shrink so the skins cover
-    ``initial_fraction`` of the container without overlapping each other (sec. 4)."""
+    ``initial_fraction`` of the container without overlapping each other (sec. 4).
+    ``angle_fn(angles)`` (designer controls) may replace the random orientations."""
     count = len(assignment)
     skin_total = sum(templates[i].skin_area for i in assignment)
     shrink = float(np.sqrt(params.initial_fraction * region.area / skin_total))
@@ -115,6 +116,8 @@ def place(templates: Sequence[Template], assignment: np.ndarray, region, params:
         inner = region
     positions = blue_noise(inner, count, rng, params.candidates_per_point)
     angles = rng.uniform(0.0, 2 * np.pi, count) if params.rotate else np.zeros(count)
+    if angle_fn is not None:
+        angles = angle_fn(angles)
     for _ in range(40):
         skins = [shapely.Polygon(placed_vertices(templates[i], positions[k], angles[k], shrink)[:templates[i].n_skin])
                  for k, i in enumerate(assignment)]

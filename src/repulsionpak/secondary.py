@@ -9,6 +9,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import shapely
 
+from .controls import any_controls, controls_of, initial_angles, setup_model, weighted_assignment
 from .evaluate import rasterize
 from .geometry.edt import distance_transform
 from .params import SecondaryParams
@@ -71,7 +72,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
                   on_snapshot: Callable[[Snapshot], None] | None = None,
                   should_stop: Callable[[], bool] | None = None,
                   on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 0,
-                  saved: dict | None = None) -> int:
+                  saved: dict | None = None, snapshot_every: int = 25) -> int:
     """Run the secondary phase on ``packing`` in place; returns the number of elements added.
 
     ``on_checkpoint(state)`` / ``saved``: as in :func:`repulsionpak.pack.pack`, for this phase."""
@@ -92,11 +93,22 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
         r_art = float(np.sqrt(o.area / np.pi))
         scale = max(target_r - p.preprocess.skin_offset * gap, 0.5 * target_r) / max(r_art, 1e-12)
         templates.append(build_template(o, scale, gap, p.preprocess))
-    order = rng.permutation(len(templates))
-    assign = order[np.arange(len(seeds)) % len(templates)]
+    ctrls = controls_of(elements)
+    controlled = any_controls(elements) or packing.model.rot_on is not None
+    weights = [c.weight for c in ctrls]
+    if controlled and len(set(weights)) > 1:  # designer controls: frequencies
+        if not sum(weights) > 0:
+            packing.stopped_by["secondary"] = "no_elements"
+            return 0
+        assign = weighted_assignment(weights, len(seeds), rng)
+    else:
+        order = rng.permutation(len(templates))
+        assign = order[np.arange(len(seeds)) % len(templates)]
     radius = np.array([templates[i].radius for i in assign])
     shrink = sp.initial_fraction * dist / radius  # each starts at a share of its own pocket
     angles = rng.uniform(0, 2 * np.pi, len(seeds)) if p.placement.rotate else np.zeros(len(seeds))
+    if controlled:
+        angles = initial_angles(ctrls, assign, angles, rng)
     base_index = len(packing.templates)
     placement = Placement(assign + base_index, seeds, angles, shrink)
     all_templates = list(packing.templates) + templates
@@ -113,11 +125,13 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     from .pack import bend_limits  # noqa: PLC0415  (pack imports this module lazily too)
 
     model.bend_limit[m0.n_elements:] = bend_limits(all_templates, placement.template_index, p.sim)
+    if controlled:
+        setup_model(model, [ctrls[int(i)] for i in assign], angles, base=m0)
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
     sim.templates = all_templates
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
-                            should_stop=should_stop)
+                            should_stop=should_stop, every=snapshot_every)
     packing.templates = all_templates
     packing.model, packing.state = model, state
     packing.iterations["secondary"] = res.iterations

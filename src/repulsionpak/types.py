@@ -163,6 +163,8 @@ class Element:
     paths: tuple[ArtPath, ...]
     #: gradients and patterns the paths refer to: id -> self-contained SVG markup
     paint_servers: dict = field(default_factory=dict)
+    #: designer controls (:class:`repulsionpak.controls.ElementControls`); None: defaults
+    controls: object | None = None
 
     def all_points(self) -> np.ndarray:
         """All art vertices stacked, shape (P, 2)."""
@@ -219,3 +221,5 @@ class PlacedArt:
     #: the curve tolerance the art was fitted to (container units); the writer rounds the
     #: coordinates of curves to match it (to tol/5); None: 6 decimals
     tolerance: float | None = None
+    #: a pinned copy (element controls): written with ``data-pinned="true"``
+    pinned: bool = False

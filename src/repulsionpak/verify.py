@@ -154,7 +154,8 @@ def _centre(g) -> np.ndarray:
     return np.asarray(shapely.get_coordinates(shapely.centroid(g)))[0]
 
 
-def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False):
+def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
+           fixed=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
@@ -162,7 +163,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     too close, the smaller one shrinks). Also counts of each kind of violation and the
     smallest art–art and art–edge distances seen (the latter only over the elements that
     are not clearly inside ``inner``, the container shrunk by the margin, unless
-    ``exact_edges``)."""
+    ``exact_edges``). ``fixed[i]`` (pinned copies): element i never moves nor shrinks;
+    its neighbours take the whole of a pair's deficit."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
@@ -205,6 +207,17 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 total = min_gap - dd + 2 * tol
                 u = pi - pj
             nu = float(np.hypot(*u))
+            if fixed is not None and (fixed[i] or fixed[j]):
+                if fixed[i] and fixed[j]:
+                    continue  # two pins: the designer's choice, reported, not repaired
+                if fixed[i]:  # j takes it all
+                    i, j, gi, gj, pi, pj, u = j, i, gj, gi, pj, pi, -u
+                if nu > 0:
+                    push[i] += total * u / nu
+                need[i] = max(need[i], total)
+                rho = float(np.hypot(*(pi - centre(i))))
+                rel[i] = max(rel[i], total / rho if rho > 0 else 0.05)
+                continue
             if nu > 0:
                 push[i] += 0.5 * total * u / nu
                 push[j] -= 0.5 * total * u / nu
@@ -235,6 +248,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         if e < 0:
             counts["outside"] += 1
         counts["margin"] += 1
+        if fixed is not None and fixed[i]:
+            continue  # a pin placed there by the designer: reported, not repaired
         deficit = margin - e + tol
         c = centre(i)
         if e >= 0:
@@ -255,7 +270,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
 
 
 def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
-             max_scale, tol, rounds, inner=None):
+             max_scale, tol, rounds, inner=None, fixed=None):
     """Grow every element about its centroid into the room around it, never closer than
     ``target`` to another element nor ``margin`` to the edge, and no bigger than
     ``max_scale`` of its size: each round, an element with slack s (half the spare
@@ -283,6 +298,8 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
         grow = {}
         for p, i in enumerate(idx):
             sl = slack[p] - tol
+            if fixed is not None and fixed[i]:
+                continue
             if scale[i] < max_scale and sl > 1e-3 * target and radius[i] > 0:
                 grow[i] = min(1.0 + sl / radius[i], max_scale / scale[i])
         if not grow:
@@ -324,6 +341,8 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     slack = 0.02 * min_gap  # aim a little beyond the floor: fewer rounds
     shift = np.zeros((n, 2))
     stuck = np.zeros(n, bool)  # a move made it worse: shrink from now on
+    fixed = np.array([bool(getattr(p, "pinned", False)) for p in placed])  # pinned: never touched
+    fixed = fixed if fixed.any() else None
 
     def transform(g, i):
         return shapely.affinity.translate(
@@ -333,7 +352,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
         geoms[i] = transform(base[i], i)
 
     def check(exact_edges=False):
-        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges)
+        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed)
 
     for r in range(rounds if repair else 0):
         need, rel, push, counts, _, _ = check()
@@ -343,6 +362,8 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
         translate = r < rounds // 2  # local separation first: a move keeps shape and size
         moved = []
         for i in bad:
+            if fixed is not None and fixed[i]:
+                continue
             ln = float(np.hypot(*push[i]))
             if translate and ln > 0 and not stuck[i]:
                 step = push[i] * min(1.0 + slack / need[i], (need[i] + slack) / ln)
@@ -363,17 +384,18 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                     place(i)
     if repair and grow_to > 0:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
-                 w_margin, max_scale, tol, rounds=8, inner=inner)
+                 w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed)
     # final verification, exact, on what is returned
     geoms = [transform(exact[i], i) for i in range(n)]
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
-                                                 exact_edges=True)
-    if repair:  # anything still violating after the rounds is dropped
+                                                 exact_edges=True, fixed=fixed)
+    if repair:  # anything still violating after the rounds is dropped (never a pinned copy)
         for i in np.flatnonzero(need > 0):
-            alive[i] = False
+            if fixed is None or not fixed[i]:
+                alive[i] = False
         if (need > 0).any():
             need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin,
-                                                         tol, exact_edges=True)
+                                                         tol, exact_edges=True, fixed=fixed)
     dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not exact[i].is_empty]
     for i, src in dropped:
         if placed[i].kind == "primary":

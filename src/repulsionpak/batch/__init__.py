@@ -64,16 +64,18 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
               sets: Sequence[str] = (), base: Params = Params(), secondary: Sequence[Path] = (),
               workers: int | None = None, scheduler: str | None = None,
               on_start: Callable[[int, object], None] | None = None,
-              on_result: Callable[[int, Job, JobResult], None] | None = None) -> BatchSummary:
+              on_result: Callable[[int, Job, JobResult], None] | None = None,
+              controls=None) -> BatchSummary:
     """Everything ``repulsionpak batch`` does: parse ``--seeds`` and ``--set``, read the
     inputs once, run the jobs on Dask, write ``OUTDIR/*.svg`` as results arrive, then
     ``results.csv``, ``best.svg`` and ``contact-sheet.png``.
 
     ``on_start(n_jobs, client)`` is called once the cluster is up, ``on_result(i, job,
-    result)`` per finished job. A Ctrl-C (KeyboardInterrupt) cancels the rest and still
+    result)`` per finished job. ``controls``: the CLI's default element controls
+    (element manifests among ``elements`` are read as by ``pack``). A Ctrl-C (KeyboardInterrupt) cancels the rest and still
     writes the outputs of what finished (``summary.interrupted``).
     """
-    from ..io import load_container, load_elements
+    from ..io import load_container
     from ..pack import default_gap
 
     t0 = time.perf_counter()
@@ -85,8 +87,10 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
         base = dataclasses.replace(base, gap=default_gap(load_container(container)))
     jobs = make_jobs(base, seed_list, settings, thumbnail_size(len(seed_list) * _n_combos(settings)))
     cont = load_container(container, tolerance=_tolerance(jobs))
-    inputs = BatchInputs(cont, tuple(load_elements(list(elements))),
-                         tuple(load_elements(list(secondary))) if secondary else ())
+    from ..io.manifest import load_element_args
+
+    inputs = BatchInputs(cont, tuple(load_element_args(list(elements), controls)),
+                         tuple(load_element_args(list(secondary), controls)) if secondary else ())
     outdir = Path(outdir)
     files: dict[int, str] = {}
     best: list = [None, None]  # ((scp_half_gap, job index), svg text) of the best so far

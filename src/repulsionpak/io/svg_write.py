@@ -277,6 +277,7 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
                     paths=tuple(arts),
                     stroke_scale=1.0,
                     deformation=deformation,
+                    pinned=grp.get("data-pinned") == "true",
                 )
             )
         return container, placed, info

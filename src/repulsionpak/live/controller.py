@@ -334,6 +334,10 @@ class LiveController:
         new_m, new_st = build_model(sim.templates, pl, SimFrame(self.unit), region_sim,
                                     cell_size=m.cell_size, gap=m.gap, kinds=[m.kind[src]],
                                     base=(m, st))
+        if m.rot_on is not None:  # designer controls (issue 12): the copy gets its source's
+            from ..controls import setup_model
+
+            setup_model(new_m, [m.controls[src]], np.zeros(1), base=m)
         # what build_model takes from the current state but must stay as it was
         new_m.x_rest[:n0] = m.x_rest
         new_m.stiffness[:m0] = m.stiffness

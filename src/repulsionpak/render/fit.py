@@ -158,8 +158,13 @@ def _copy4(dst, src):
 
 @njit(cache=True)
 def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey, use_te, out_o, out_c,
-               n_out):
-    """Fit samples [lo, hi) (ends included); appends pieces; returns the new count."""
+               count):
+    """Fit samples [lo, hi) (ends included); appends pieces at ``count[0]`` and advances it.
+
+    The count lives in a one-element array, not an int argument: the caller's first call
+    would pass the literal 0 and numba would compile this function twice (``Literal[int]``
+    and ``int64``), a second of the first run's compilation."""
+    n_out = count[0]
     # explicit stack of pieces (lo, hi, depth, use_ts, use_te), processed left to right
     stack = np.empty((2 * MAX_DEPTH + 4, 5), np.int64)
     top = 0
@@ -276,7 +281,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
         top += 1
         stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3], stack[top, 4] = a, k + 1, depth + 1, us, 0
         top += 1
-    return n_out
+    count[0] = n_out
 
 
 @njit(cache=True)
@@ -321,11 +326,11 @@ def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
         cap += max(1, seg_start[k + 1] - seg_start[k])
     out_o = np.empty(cap, np.int8)
     out_c = np.empty((cap, 4, 2))
-    n_out = 0
+    count = np.zeros(1, np.int64)
     for k in range(n):
-        n_out = _fit_piece(order[k], q, g, t, seg_start[k], seg_start[k + 1], tol, cos_tol,
-                           ts[k, 0], ts[k, 1], use_ts[k], te[k, 0], te[k, 1], use_te[k],
-                           out_o, out_c, n_out)
+        _fit_piece(order[k], q, g, t, seg_start[k], seg_start[k + 1], tol, cos_tol,
+                   ts[k, 0], ts[k, 1], use_ts[k], te[k, 0], te[k, 1], use_te[k], out_o, out_c, count)
+    n_out = count[0]
     return out_o[:n_out], out_c[:n_out]
 
 

@@ -272,6 +272,8 @@ def packing_svg_string(
         g = [("class", f"element {kind}"), ("data-source", pa.source)]
         if pa.deformation is not None:
             g.append(("data-deformation", repr(float(pa.deformation))))
+        if getattr(pa, "pinned", False):
+            g.append(("data-pinned", "true"))
         lines.append(f"    <g{_attrs(g)}>")
         suffix = f"-e{index + 1}"
         paint = CopyPaint(getattr(pa, "paint_servers", None) or {}, suffix)

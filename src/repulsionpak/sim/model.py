@@ -108,6 +108,14 @@ class Model:
     grid_origin: tuple[float, float]
     grid_extent: tuple[float, float]
     inset_extra: float = 0.0  # sim units added to the boundary inset (the edge margin's share)
+    # designer controls (repulsionpak.controls.setup_model); None/False: none (the default)
+    rot_on: np.ndarray | None = None  # (M,) bool: rotation limited to [rot_lo, rot_hi]
+    rot_lo: np.ndarray | None = None  # (M,) radians relative to the rest shape
+    rot_hi: np.ndarray | None = None  # (M,)
+    rigid: np.ndarray | None = None  # (M,) bool: shape matched every step
+    pinned: np.ndarray | None = None  # (M,) bool: pinned copies (also frozen)
+    stiff_edges: bool = False  # spring constants scaled by ``stiffness``
+    controls: list | None = None  # (M,) ElementControls of each element
 
     @property
     def n_vertices(self) -> int:

@@ -24,6 +24,7 @@ from .grid import Grid
 from .integrate import count_inside, euler_step, grow, skin_areas, window_change
 from .kernels import set_threads
 from .model import Model, State, element_ranges
+from .controls import apply_controls, edge_force_stiff
 from .selfintersect import relax_self_intersections
 from .shape import limit_deformation
 
@@ -43,6 +44,7 @@ class Snapshot:
     n_inside: int
     state: State
     done: bool = False
+    model: Model | None = None  # whose element layout ``state.x`` follows (frame writers)
     sim: "Simulator | None" = None  # the simulator itself (the live view steers through it)
 
 
@@ -149,7 +151,11 @@ class Simulator:
         # F = F_r + F_e + F_b + F_o  (Eq. 1)
         repulsion_force(x, self.active_skin, self.inside, self.nb_count, self.nb_q,
                         p.k_repulsion, p.soft, F)
-        edge_force(x, m.springs, m.rest0, self.sp_ptr, self.growth, self.moving, p.k_edge, F)
+        if m.stiff_edges:  # designer controls: stiffness per element
+            edge_force_stiff(x, m.springs, m.rest0, self.sp_ptr, self.growth, self.moving, p.k_edge,
+                             m.stiffness, F)
+        else:
+            edge_force(x, m.springs, m.rest0, self.sp_ptr, self.growth, self.moving, p.k_edge, F)
         if p.k_shape > 0:
             shape_force(x, m.x_rest, m.elem_vstart, self.moving, m.stiffness, p.k_shape, F)
         boundary_force(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
@@ -169,6 +175,9 @@ class Simulator:
                            1.0 / m.field.h, 0.0)
         if m.bend_limit.any():
             limit_deformation(x, m.x_rest, m.elem_vstart, self.moving, m.bend_limit)
+        if m.rot_on is not None:  # designer controls: rotation limits, rigid bodies
+            apply_controls(x, st.v, m.x_rest, m.elem_vstart, self.moving, m.rot_on, m.rot_lo,
+                           m.rot_hi, m.rigid)
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:
@@ -278,7 +287,7 @@ class Simulator:
                     self._good = st.copy()
                 if on_snapshot is not None and st.iteration % every == 0:
                     on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
-                                         self.n_inside, st, sim=self))
+                                         self.n_inside, st, model=self.model, sim=self))
                 if self.settle_left is None:
                     converged = (st.iteration >= p.min_iterations and len(hist) > w
                                  and min(rms, 2.0 * trend) < p.stop_epsilon)
@@ -301,7 +310,7 @@ class Simulator:
             set_threads(threads)
         if on_snapshot is not None:
             on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
-                                 self.n_inside, st, done=True, sim=self))
+                                 self.n_inside, st, done=True, model=self.model, sim=self))
         return RunResult(st.iteration, a, self.stopped_by, self.dt)
 
     def run_resumable(self, saved: dict | None, on_checkpoint: Callable[[dict], None] | None,

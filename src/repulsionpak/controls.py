@@ -1,0 +1,290 @@
+"""Designer controls per element (issue 12): rotation limits, rigid and stiff elements,
+frequencies and pinned copies.
+
+An :class:`~repulsionpak.types.Element` may carry an :class:`ElementControls`
+(``element.controls``); the element manifest (:mod:`repulsionpak.io.manifest`) and the
+CLI shortcuts ``--rotation``, ``--rigid``, ``--stiffness`` build them. An element without
+controls (``None``) or with the default ones packs exactly as before.
+
+Angles are in degrees, clockwise on screen (SVG's y axis points down), measured on the
+art as drawn in its source file.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ParameterError
+
+ROTATIONS = ("free", "fixed", "limited")
+
+
+@dataclass(frozen=True)
+class Pin:
+    """A fixed copy: the centre of the art's bounding box at (``x``, ``y``) (container
+    units), turned by ``angle`` degrees clockwise, at ``scale`` × the source's units."""
+
+    x: float
+    y: float
+    angle: float = 0.0
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class ElementControls:
+    """How the copies of one element may move and deform.
+
+    rotation: "free" | "fixed" (every copy at ``angle``) | "limited" (within
+    ± ``max_rotation`` of ``angle``), degrees clockwise. rigid: the art never deforms
+    (translation, rotation and growth only). stiffness: multiplier of the spring and
+    shape-keeping constants (ignored when rigid). weight: relative frequency of free
+    copies (0: none). pins: fixed copies that never move.
+    """
+
+    rotation: str = "free"
+    angle: float = 0.0
+    max_rotation: float = 20.0
+    rigid: bool = False
+    stiffness: float = 1.0
+    weight: float = 1.0
+    pins: tuple[Pin, ...] = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "pins", tuple(self.pins))
+        if self.rotation not in ROTATIONS:
+            raise ParameterError(f"rotation must be one of {', '.join(ROTATIONS)}, got {self.rotation!r}")
+        for name in ("angle", "max_rotation", "stiffness", "weight"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ParameterError(f"{name} must be a finite number, got {v!r}")
+        if not 0 <= self.max_rotation <= 180:
+            raise ParameterError(f"max_rotation must be between 0 and 180 degrees, got {self.max_rotation:g}")
+        if not self.stiffness > 0:
+            raise ParameterError(f"stiffness must be > 0, got {self.stiffness:g}")
+        if not self.weight >= 0:
+            raise ParameterError(f"weight must be >= 0, got {self.weight:g}")
+        if not isinstance(self.rigid, bool):
+            raise ParameterError(f"rigid must be true or false, got {self.rigid!r}")
+        for p in self.pins:
+            if not isinstance(p, Pin):
+                raise ParameterError("pins must be Pin(x, y, angle, scale) values")
+            if not (math.isfinite(p.x) and math.isfinite(p.y) and math.isfinite(p.angle)) or not p.scale > 0:
+                raise ParameterError(f"pin {p}: x, y and angle must be finite and scale > 0")
+
+    @property
+    def is_default(self) -> bool:
+        return self == ElementControls()
+
+    @property
+    def limits(self) -> tuple[float, float] | None:
+        """(low, high) absolute orientation in radians, or None when free."""
+        if self.rotation == "fixed":
+            a = math.radians(self.angle)
+            return a, a
+        if self.rotation == "limited" and self.max_rotation < 180:
+            a, d = math.radians(self.angle), math.radians(self.max_rotation)
+            return a - d, a + d
+        return None
+
+
+def parse_rotation(text: str) -> tuple[str, float | None]:
+    """CLI ``--rotation``: ``free``, ``fixed``, ``fixed:DEG`` or ``limited:DEG`` ->
+    (rotation, angle for fixed / max_rotation for limited, or None)."""
+    name, _, arg = text.partition(":")
+    name = name.strip().lower()
+    if name not in ROTATIONS:
+        raise ParameterError(f"--rotation must be free, fixed[:ANGLE] or limited:DEG, got {text!r}")
+    if not arg:
+        return name, None
+    if name == "free":
+        raise ParameterError(f"--rotation free takes no angle, got {text!r}")
+    try:
+        value = float(arg)
+    except ValueError:
+        raise ParameterError(f"--rotation {name}: {arg!r} is not a number of degrees") from None
+    return name, value
+
+
+def cli_controls(rotation: str | None = None, rigid: bool = False,
+                 stiffness: float | None = None) -> ElementControls | None:
+    """Default controls from the CLI shortcuts, or None when none is given."""
+    if rotation is None and not rigid and stiffness is None:
+        return None
+    kw: dict = {"rigid": bool(rigid)}
+    if rotation is not None:
+        name, value = parse_rotation(rotation)
+        kw["rotation"] = name
+        if value is not None:
+            kw["angle" if name == "fixed" else "max_rotation"] = value
+    if stiffness is not None:
+        kw["stiffness"] = float(stiffness)
+    return ElementControls(**kw)
+
+
+def controls_of(elements: Sequence) -> list[ElementControls]:
+    """Each element's controls (the defaults where it has none)."""
+    return [getattr(e, "controls", None) or ElementControls() for e in elements]
+
+
+def any_controls(elements: Sequence) -> bool:
+    return any(not c.is_default for c in controls_of(elements))
+
+
+def weighted_assignment(weights: Sequence[float], count: int, rng: np.random.Generator) -> np.ndarray:
+    """(count,) library indices with element i drawn ~ count·w_i/Σw times (exactly its
+    floor, the remainders drawn at random by their fractional parts), shuffled."""
+    w = np.asarray(weights, dtype=float)
+    if not (w.sum() > 0):
+        raise ParameterError("every element has weight 0: there is nothing to pack freely")
+    expect = count * w / w.sum()
+    n = np.floor(expect).astype(np.int64)
+    rest = count - int(n.sum())
+    if rest > 0:
+        frac = expect - n
+        extra = rng.choice(len(w), size=rest, replace=False, p=frac / frac.sum())
+        n[extra] += 1
+    out = np.repeat(np.arange(len(w)), n)
+    return out[rng.permutation(len(out))]
+
+
+def initial_angles(ctrls: Sequence[ElementControls], assignment: np.ndarray, angles: np.ndarray,
+                   rng: np.random.Generator) -> np.ndarray:
+    """Start angles (radians): fixed elements at their angle, limited ones uniformly in
+    their range, free ones keep ``angles``."""
+    out = np.array(angles, dtype=float, copy=True)
+    for k, i in enumerate(assignment):
+        lim = ctrls[int(i)].limits
+        if lim is not None:
+            out[k] = lim[0] if lim[0] == lim[1] else rng.uniform(lim[0], lim[1])
+    return out
+
+
+# -- the packing side ----------------------------------------------------------------
+
+def pin_transform(outline, pin: Pin) -> tuple[np.ndarray, float]:
+    """(position, angle radians) of a copy of the template of ``outline`` at ``pin``: the
+    template is centred on the outline's centroid; the pin places the centre of its
+    bounding box."""
+    x0, y0, x1, y1 = outline.geometry.bounds
+    off = (np.array([0.5 * (x0 + x1), 0.5 * (y0 + y1)]) - outline.center) * pin.scale
+    a = math.radians(pin.angle)
+    c, s = math.cos(a), math.sin(a)
+    return np.array([pin.x, pin.y]) - np.array([c * off[0] - s * off[1], s * off[0] + c * off[1]]), a
+
+
+def prepare_controlled(container, elements, params, rng, gap):
+    """:func:`repulsionpak.pack.prepare` with designer controls: weighted assignment,
+    start angles within the rotation limits, and pinned copies (frozen, appended after
+    the free ones; the free ones are placed around them). Returns (templates, placement,
+    pinned mask (M,), controls (M,))."""
+    import shapely  # noqa: PLC0415
+
+    from .placement import Placement, assign_elements, estimate_count, final_scale, place, placed_vertices
+    from .preprocess import build_template, outline_of
+
+    ctrls = controls_of(elements)
+    outlines = [outline_of(e) for e in elements]
+    pins = [(i, p) for i, c in enumerate(ctrls) for p in c.pins]
+    pin_templates = [build_template(outlines[i], p.scale, gap, params.preprocess) for i, p in pins]
+    pin_pos, pin_ang, pin_skins = [], [], []
+    for (i, p), t in zip(pins, pin_templates):
+        pos, a = pin_transform(outlines[i], p)
+        pin_pos.append(pos)
+        pin_ang.append(a)
+        pin_skins.append(shapely.Polygon(placed_vertices(t, pos, a, 1.0)[:t.n_skin]))
+    region = container.region
+    margin = 0.5 * gap if params.margin is None else float(params.margin)
+    inner = shapely.buffer(region, -(1.0 - 1e-6) * margin) if margin > 0 else region
+    for k, ((i, p), sk) in enumerate(zip(pins, pin_skins)):
+        where = f"{elements[i].source}: pin ({p.x:g}, {p.y:g})"
+        o = outlines[i]
+        art = shapely.affinity.rotate(shapely.affinity.scale(
+            shapely.affinity.translate(o.geometry, -o.center[0], -o.center[1]), p.scale, p.scale,
+            origin=(0, 0)), pin_ang[k], origin=(0, 0), use_radians=True)
+        art = shapely.affinity.translate(art, *pin_pos[k])
+        if not shapely.covers(inner, art):
+            raise ParameterError(f"{where} lies (partly) outside the container or closer than the "
+                                 f"edge margin ({margin:g}) to its edge; move it inwards or make it smaller")
+        for (j, q), other in zip(pins[k + 1:], pin_skins[k + 1:]):
+            if sk.intersects(other):
+                raise ParameterError(f"{where} overlaps the pin ({q.x:g}, {q.y:g}) of {elements[j].source}")
+    free = region
+    if pin_skins:
+        free = shapely.difference(region, shapely.buffer(shapely.union_all(pin_skins), 0.5 * gap))
+        if free.is_empty or free.area <= 0:
+            raise ParameterError("the pinned copies cover the whole container: nothing left to pack")
+    weights = [c.weight for c in ctrls]
+    count = estimate_count(free.area, gap, params.placement)
+    if len(set(weights)) == 1 and weights[0] > 0:
+        assignment = assign_elements(len(elements), count, rng)
+    else:
+        assignment = weighted_assignment(weights, count, rng)
+    scale = final_scale(outlines, assignment, free.area, params.preprocess.skin_offset * gap,
+                        params.placement.target_fraction)
+    templates = [build_template(o, scale, gap, params.preprocess) for o in outlines]
+    placement = place(templates, assignment, free, params.placement, rng,
+                      angle_fn=lambda a: initial_angles(ctrls, assignment, a, rng))
+    n = len(assignment)
+    if pins:
+        placement = Placement(
+            np.concatenate([placement.template_index, len(templates) + np.arange(len(pins))]),
+            np.vstack([placement.position, np.array(pin_pos)]),
+            np.concatenate([placement.angle, np.array(pin_ang)]),
+            np.concatenate([np.full(n, placement.shrink_of(0)), np.ones(len(pins))]))
+    pinned = np.zeros(n + len(pins), bool)
+    pinned[n:] = True
+    per_elem = [ctrls[int(i)] for i in assignment] + [ctrls[i] for i, _ in pins]
+    return templates + pin_templates, placement, pinned, per_elem
+
+
+def setup_model(model, ctrls, angles, pinned=None, base=None) -> None:
+    """Fill the control arrays of ``model`` (sim/controls.py) for its elements from
+    ``base``'s count on: ``ctrls`` and ``angles`` (start angles, radians) of those
+    elements; ``base`` (the model it extends) gives the first ones."""
+    M = model.n_elements
+    m0 = 0 if base is None else base.n_elements
+    on, lo, hi = np.zeros(M, bool), np.zeros(M), np.zeros(M)
+    rigid, pin = np.zeros(M, bool), np.zeros(M, bool)
+    allc = [ElementControls()] * M
+    if base is not None and base.rot_on is not None:
+        on[:m0], lo[:m0], hi[:m0] = base.rot_on, base.rot_lo, base.rot_hi
+        rigid[:m0], pin[:m0] = base.rigid, base.pinned
+        model.stiffness[:m0] = base.stiffness
+        allc[:m0] = base.controls
+    for k, (c, a) in enumerate(zip(ctrls, angles)):
+        e = m0 + k
+        allc[e] = c
+        lim = c.limits
+        if lim is not None:
+            on[e], lo[e], hi[e] = True, lim[0] - a, lim[1] - a
+        rigid[e] = c.rigid
+        if not c.rigid:
+            model.stiffness[e] = c.stiffness
+            if c.stiffness != 1.0:  # a stiffer element may bend less, a softer one more
+                model.bend_limit[e] /= c.stiffness
+        else:
+            model.bend_limit[e] = 0.0  # the projection keeps it exact
+    if pinned is not None:
+        pin[m0:m0 + len(pinned)] |= np.asarray(pinned, bool)
+    model.rot_on, model.rot_lo, model.rot_hi, model.rigid, model.pinned = on, lo, hi, rigid, pin
+    model.stiff_edges = bool((model.stiffness != 1.0).any())
+    model.controls = allc
+
+
+def straighten_limits(model, limits: np.ndarray) -> np.ndarray:
+    """The verification's straightening limits under the controls: scaled by 1/stiffness;
+    rigid and pinned copies are never bent."""
+    if model.rot_on is None:
+        return limits
+    out = limits / model.stiffness
+    out[model.rigid | model.pinned] = np.inf
+    return out
+
+
+__all__ = ["ElementControls", "Pin", "cli_controls", "parse_rotation", "controls_of", "any_controls",
+           "weighted_assignment", "initial_angles", "ROTATIONS", "prepare_controlled", "setup_model",
+           "straighten_limits", "pin_transform"]

@@ -1,0 +1,239 @@
+"""The first run: compile numba kernels on the spare core, from the far end of the run.
+
+A fresh install compiles every numba kernel the first time it is called: about 11 CPU
+seconds for a packing, more than the packing itself takes. The run calls its kernels in a
+fixed order (preprocessing, then the simulation kernels in the order one iteration calls
+them, then the renderer's curve fitting). On a machine with a spare core :func:`start`
+launches ``python -m repulsionpak.warmup``, which compiles the same specialisations in
+**reverse** order into numba's disk cache: the packing compiles forward from the start,
+the warm-up backward from the end, and each finds in the cache what the other has done
+(numba looks there before compiling a new specialisation). They meet in the middle, so
+the compilation is split between the two cores without any coordination beyond the
+cache, and at most one kernel is compiled twice. Before rendering, the packing waits for a
+warm-up that is still compiling (:func:`wait`): it is then further along than a fresh
+compilation would be.
+
+Which specialisations? The simulation's are recorded by running a few iterations of a
+tiny packing with every simulation kernel replaced by its plain Python function (the
+argument types are those of the real run: same code, same arrays); the renderer's by
+calling its public wrappers on a tiny input. ``tests/test_warmup.py`` checks that a
+packing after a warm-up compiles no simulation or render kernel.
+
+Later runs find everything cached and start nothing.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+__all__ = ["warm_up", "is_cold", "start", "stop", "wait", "simulation_specialisations"]
+
+#: the warm-up process of this run, if one was started (see :func:`wait`)
+_current: subprocess.Popen | None = None
+
+
+def _render_dispatchers() -> list:
+    from .render import curves, deform, fit
+
+    return [deform._solve, fit._fit_chain, curves._flatten]
+
+
+def _sim_dispatchers() -> list:
+    from .sim import kernels, runner  # noqa: F401  (registers every simulation kernel)
+
+    return [k.serial for k in kernels._KERNELS]
+
+
+def _cached(dispatcher) -> bool:
+    return bool(dispatcher._cache._cache_file._load_index())
+
+
+def is_cold() -> bool:
+    """True when numba's disk cache holds no entry for any render kernel or for any
+    simulation kernel (the first run, or the sources changed since). False when that
+    cannot be told."""
+    try:
+        render = not any(_cached(d) for d in _render_dispatchers())
+        sim = not any(_cached(d) for d in _sim_dispatchers())
+    except Exception:  # noqa: BLE001  (private numba API: stay silent rather than fail)
+        return False
+    return render or sim
+
+
+# -- the simulation's specialisations ---------------------------------------------------
+
+class _Recorder:
+    """Stands in for a kernel: notes the argument types of its first top-level call and
+    runs its plain Python function instead (nested kernel calls just run)."""
+
+    depth = 0
+
+    def __init__(self, target, calls: list):
+        self.target = target
+        self.dispatcher = getattr(target, "serial", target)  # a sim.kernels.Kernel or a dispatcher
+        self.calls = calls
+
+    def __call__(self, *args):
+        if _Recorder.depth == 0:
+            sig = tuple(self.dispatcher.typeof_pyval(a) for a in args)
+            if (self.dispatcher, sig) not in self.calls:
+                self.calls.append((self.dispatcher, sig))
+        _Recorder.depth += 1
+        try:
+            return self.target.py_func(*args)
+        finally:
+            _Recorder.depth -= 1
+
+
+def _tiny_simulator():
+    """A Simulator of two small elements in an L-shaped container (a reflex corner, so
+    the corner kernels run too), built the way :func:`repulsionpak.pack.pack` builds one."""
+    import shapely
+
+    from . import examples
+    from .io import load_elements
+    from .pack import bend_limits, margin_of, prepare, typical_size
+    from .params import Params
+    from .sim.model import SimFrame, build_model
+    from .sim.runner import Simulator
+    from .types import Container
+
+    region = shapely.Polygon([(0, 0), (100, 0), (100, 50), (50, 50), (50, 100), (0, 100)])
+    params = Params(gap=2.0, seed=0)
+    params = dataclasses.replace(
+        params, placement=dataclasses.replace(params.placement, count=2),
+        sim=dataclasses.replace(params.sim, max_iterations=2, min_iterations=0, stop_window=2,
+                                settle_iterations=2, threads=1)).validate()
+    rng = np.random.default_rng(0)
+    elements = load_elements([examples.element_files()[0]])
+    templates, placement, gap = prepare(Container("warm-up", region), elements, params, rng)
+    frame = SimFrame.for_region(region)
+    region_sim = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    size = typical_size(templates, placement.template_index) / frame.unit
+    cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
+    model, state = build_model(templates, placement, frame, region_sim, cell_size=cell, gap=gap / frame.unit)
+    model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
+    model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
+    return Simulator(model, state, params.sim)
+
+
+def simulation_specialisations() -> list:
+    """``[(dispatcher, argument types), ...]`` of the preprocessing and simulation kernels
+    in the order a run first calls them, recorded on a tiny packing run in plain Python."""
+    import importlib
+    import pkgutil
+
+    from . import geometry, sim
+    from .sim import kernels
+
+    for pkg in (geometry, sim):
+        for info in pkgutil.iter_modules(pkg.__path__):
+            importlib.import_module(f"{pkg.__name__}.{info.name}")
+    modules = [m for name, m in list(sys.modules.items()) if m is not None
+               and name.startswith(("repulsionpak.sim.", "repulsionpak.geometry."))]
+    targets = {id(k) for k in kernels._KERNELS}
+    calls: list = []
+    patched = []
+    for mod in modules:
+        for name, obj in list(vars(mod).items()):
+            if id(obj) in targets or type(obj).__name__ == "CPUDispatcher":
+                patched.append((mod, name, obj))
+                setattr(mod, name, _Recorder(obj, calls))
+    try:
+        _tiny_simulator().run(on_snapshot=lambda s: None, every=1)
+    finally:
+        for mod, name, obj in patched:
+            setattr(mod, name, obj)
+    return calls
+
+
+# -- the warm-up ---------------------------------------------------------------------
+
+def _warm_render() -> None:
+    """Compile (or load) the render kernels through the renderer's own wrappers."""
+    from .render.curves import flatten_subpath
+    from .render.deform import tps_factors
+    from .render.fit import fit_subpath
+    from .types import CurveSubpath
+
+    th = np.linspace(0.0, 0.5 * np.pi, 9)
+    q = np.column_stack([np.cos(th), np.sin(th)])
+    g = np.column_stack([-np.sin(th), np.cos(th)])
+    rest = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    tps_factors(rest, q, g)
+    fit_subpath(np.array([3, 1]), np.array([0, 5, 9]), False, q, g, th, 1e-6)
+    sub = CurveSubpath(np.array([1, 3], np.int8),
+                       np.array([[[0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 0.0]],
+                                 [[1.0, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 1.0]]]), False)
+    flatten_subpath(sub, 1e-3)
+
+
+def warm_up(simulation: bool = True, render: bool = True) -> None:
+    """Compile (or load from the cache) the kernels a packing uses: the simulation's in
+    reverse order of first use, then the renderer's."""
+    if simulation:
+        for dispatcher, sig in reversed(simulation_specialisations()):
+            dispatcher.compile(sig)  # loads it instead when the packing got there first
+    if render:
+        _warm_render()
+
+
+def _spare_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0)) - 1
+    except AttributeError:  # not on Linux
+        return (os.cpu_count() or 1) - 1
+
+
+def start() -> subprocess.Popen | None:
+    """Start :func:`warm_up` in a background process when kernels are not cached yet and
+    the machine has a spare core; returns the process (or None). The environment variable
+    ``REPULSIONPAK_NO_WARMUP=1`` turns it off."""
+    global _current
+    if os.environ.get("REPULSIONPAK_NO_WARMUP") or _spare_cores() < 1 or not is_cold():
+        return None
+    try:
+        _current = subprocess.Popen([sys.executable, "-m", "repulsionpak.warmup"],
+                                    stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                    stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+    return _current
+
+
+def wait(timeout: float = 60.0) -> None:
+    """Let a running warm-up finish (the renderer calls this before its first kernel: the
+    warm-up compiles the render kernels last and is further along than a fresh start)."""
+    proc = _current
+    if proc is None or proc.poll() is not None:
+        return
+    try:
+        proc.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pass
+
+
+def stop(proc: subprocess.Popen | None) -> None:
+    """End a background warm-up (numba writes its cache files atomically, so stopping it
+    loses nothing)."""
+    global _current
+    if proc is None:
+        return
+    if proc is _current:
+        _current = None
+    if proc.poll() is None:
+        proc.terminate()
+    try:
+        proc.wait(timeout=5)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+if __name__ == "__main__":
+    warm_up()
