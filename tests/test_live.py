@@ -194,6 +194,39 @@ def test_controller_moves_pins_removes_and_adds_between_iterations():
     assert layouts[-1]["pinned"] == [0] and layouts[-1]["removed"] == [1] and len(layouts[-1]["counts"]) == 6
 
 
+def test_added_copy_keeps_its_sources_designer_controls():
+    """A copy of a stiff, upright element (issue 12's controls) is stiff and upright too."""
+    import dataclasses
+
+    from repulsionpak.controls import ElementControls
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.live import LiveController
+    from repulsionpak.pack import pack
+    from repulsionpak.params import Params
+
+    cont = load_container(EX / "containers" / "circle.svg")
+    ctrl = ElementControls(rotation="fixed", stiffness=3.0)
+    elems = [dataclasses.replace(e, controls=ctrl)
+             for e in load_elements([EX / "elements" / "apple.svg", EX / "elements" / "fish.svg"])]
+    p = Params(gap=12.0, seed=3)
+    p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=4),
+                            sim=dataclasses.replace(p.sim, max_iterations=150, min_iterations=0),
+                            secondary=dataclasses.replace(p.secondary, auto=False))
+    ctl = LiveController(cont, 12.0, p.render)
+
+    def on_snapshot(snap):
+        ctl.on_snapshot(snap)
+        if snap.iteration == 25 and not snap.done:
+            ctl.submit({"cmd": "add", "index": 1, "x": 250.0, "y": 250.0})
+
+    packing = pack(cont, elems, p, on_snapshot=on_snapshot, should_stop=ctl.should_stop)
+    m = packing.model
+    assert m.n_elements == 5 and m.controls[4] == m.controls[1] == ctrl
+    assert m.stiffness[4] == m.stiffness[1] == 3.0 and m.bend_limit[4] == m.bend_limit[1]
+    assert m.rot_on[4] and m.rot_lo[4] <= 0 <= m.rot_hi[4]
+    assert len(m.rot_on) == len(m.rigid) == len(m.pinned) == 5
+
+
 # -- server ---------------------------------------------------------------------------
 
 
