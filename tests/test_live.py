@@ -63,6 +63,7 @@ class Live:
 @pytest.fixture(scope="module")
 def live(tmp_path_factory):
     d = tmp_path_factory.mktemp("live")
+    t0 = time.monotonic()
     proc = subprocess.Popen(_cli("-o", str(d / "out.svg"), "--report", str(d / "report.json"),
                                  "--live", "--no-browser", "--port", "0", "--paused", "-q"),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env())
@@ -71,6 +72,7 @@ def live(tmp_path_factory):
         proc.kill()
         pytest.fail(f"no URL printed: {url!r} {proc.stderr.read()}")
     lv = Live(proc, url, d)
+    lv.t0 = t0
     yield lv
     if proc.poll() is None:
         proc.send_signal(signal.SIGINT)
@@ -313,6 +315,8 @@ def test_browser_pause_step_drag_pin_remove_add_download(live, tmp_path):
         finally:
             browser.close()
     # Ctrl-C writes -o and --report and exits cleanly
+    time.sleep(1.0)
+    t_int = time.monotonic()
     live.proc.send_signal(signal.SIGINT)
     assert live.proc.wait(timeout=60) == 0, live.proc.stderr.read()
     out = (live.out / "out.svg").read_bytes()
@@ -322,6 +326,8 @@ def test_browser_pause_step_drag_pin_remove_add_download(live, tmp_path):
     rep = json.loads((live.out / "report.json").read_text())
     assert rep["n_primary"] == COUNT  # one removed, one added in the page
     assert rep["invariants"]["ok"]
+    # the time the result was served (from "Converged" to Ctrl-C) is not in the run's times
+    assert rep["seconds"]["total"] < (t_int - live.t0) - (t_int - _drive.t_done) + 0.5
     # the pinned element's art lies where it was pinned (inside its pinned skin)
     from repulsionpak.io.svg_write import read_packing_svg
 
@@ -416,6 +422,7 @@ def _drive(browser, live: Live, tmp_path: Path) -> None:
     assert _d(page, 0) == pinned_d
     other.close()  # closing a tab does not disturb the run
     page.wait_for_function("document.querySelector('#message').textContent.includes('Ctrl-C')", timeout=60000)
+    _drive.t_done = time.monotonic()
     msg = page.inner_text("#message")
     assert msg.startswith("Converged"), msg
     af = float(page.inner_text("#area-fraction"))

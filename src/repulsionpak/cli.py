@@ -305,10 +305,13 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
     if viewer is not None:  # serve the result until Ctrl-C, then write it
         viewer.finish(packing, metrics, text)
+        served = time.perf_counter()
         if not packing.partial:
             with _StopFlag() as again:
                 viewer.wait(again)
         viewer.close()
+        served = time.perf_counter() - served  # not part of the run's times in the report
+        t_start, t_eval = t_start + served, t_eval + served
     if output.suffix.lower() == ".pdf" or pdf is not None:
         from .render.pdf import pdf_bytes
     if output.suffix.lower() == ".pdf":
