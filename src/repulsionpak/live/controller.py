@@ -201,7 +201,10 @@ class LiveController:
             pts = np.concatenate(b) if b else np.zeros((1, 2))
             ext.append(float(np.ptp(pts, axis=0).max()))
         med = float(np.median(ext))
-        return [p for p, e in zip(placed, ext) if e > 5 * REMOVED_SCALE * med]
+        # the specks: at most as many as were removed, the smallest, each far below the rest
+        specks = [i for i in np.argsort(ext, kind="stable")[:len(self.removed)]
+                  if ext[i] <= 5 * REMOVED_SCALE * med]
+        return [p for i, p in enumerate(placed) if i not in set(specks)]
 
     # -- internals (simulation thread) -------------------------------------------------
     def _bind(self, sim, phase: str) -> None:
