@@ -202,12 +202,14 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
              margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None,
              movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
-             controls=None) -> dict:
+             controls=None, live: dict | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it;
     ``movie`` (.gif or .mp4) the simulation as an animation, a frame every ``movie_every``
     iterations (default: adapted to the run's length), ``movie_size`` pixels along the
-    frames' longer side."""
+    frames' longer side. ``live`` (``{"port": N, "open_browser": bool, "paused": bool}``)
+    serves the run in the browser and writes the outputs only at Ctrl-C (see
+    :mod:`repulsionpak.live`)."""
     from .evaluate import evaluate
     from .io import load_container, load_elements, render_png
     from .io.svg_write import atomic_write_bytes
@@ -269,6 +271,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     from . import warmup
 
     compiling = warmup.start()  # first run: a second process compiles kernels from the far end
+    viewer = None
     try:
         with _Progress(progress) as prog, _StopFlag() as stop:
             on_snapshot, snap_kw = prog, {}
@@ -277,17 +280,39 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
                     prog(snap)
                     recorder(snap)
                 snap_kw = {"snapshot_every": recorder.snapshot_every}
-            packing = pack(cont, elems, params, secondary=secs, on_snapshot=on_snapshot, should_stop=stop,
+            if live is not None:  # the browser view steers through the two callbacks
+                from .live import LiveRun
+
+                viewer = LiveRun(cont, params, external_stop=stop, **live)
+                viewer.start()
+                on_snapshot = viewer.on_snapshot(on_snapshot)
+            packing = pack(cont, elems, params, secondary=secs, on_snapshot=on_snapshot,
+                           should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
                            resume=resumed, **snap_kw)
+    except BaseException:
+        if viewer is not None:
+            viewer.close()
+        raise
     finally:
         warmup.stop(compiling)
+    if viewer is not None:
+        viewer.drop_removed(packing)
     t_eval = time.perf_counter()
     # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
     metrics = evaluate(cont, packing.placed, g, with_scp=False,
                        sources=[*elems, *secs] if report is not None else None)
     checks = invariants(packing, metrics)
     text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
+    if viewer is not None:  # serve the result until Ctrl-C, then write it
+        viewer.finish(packing, metrics, text)
+        served = time.perf_counter()
+        if not packing.partial:
+            with _StopFlag() as again:
+                viewer.wait(again)
+        viewer.close()
+        served = time.perf_counter() - served  # not part of the run's times in the report
+        t_start, t_eval = t_start + served, t_eval + served
     if output.suffix.lower() == ".pdf" or pdf is not None:
         from .render.pdf import pdf_bytes
     if output.suffix.lower() == ".pdf":
@@ -422,6 +447,10 @@ def pack(
     rotation: RotationOpt = None,
     rigid: RigidOpt = False,
     stiffness: StiffnessOpt = None,
+    live: Annotated[bool, typer.Option("--live", help="Watch and steer the run in the browser; Ctrl-C writes the outputs.")] = False,
+    port: Annotated[int, typer.Option(help="Port of the --live server (127.0.0.1 only).")] = 8765,
+    no_browser: Annotated[bool, typer.Option("--no-browser", help="With --live: only print the URL.")] = False,
+    paused: Annotated[bool, typer.Option("--paused", help="With --live: pause at the first frame.")] = False,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -438,7 +467,8 @@ def pack(
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
                        margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
                        movie=movie, movie_every=movie_every, movie_size=movie_size,
-                       controls=cli_controls(rotation, rigid, stiffness))
+                       controls=cli_controls(rotation, rigid, stiffness),
+                       live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             if "movie" in rep:

@@ -165,6 +165,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         setup_model(model, ctrl, placement.angle, pinned)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
+    sim.templates = templates
     res = sim.run_resumable((resume or {}).get("primary"),
                             None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
                             checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop,

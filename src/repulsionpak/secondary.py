@@ -129,6 +129,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
         setup_model(model, [ctrls[int(i)] for i in assign], angles, base=m0)
     t1 = time.perf_counter()
     sim = Simulator(model, state, p.sim, phase="secondary")
+    sim.templates = all_templates
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
                             should_stop=should_stop, every=snapshot_every)
     packing.templates = all_templates

@@ -45,6 +45,7 @@ class Snapshot:
     state: State
     done: bool = False
     model: Model | None = None  # whose element layout ``state.x`` follows (frame writers)
+    sim: "Simulator | None" = None  # the simulator itself (the live view steers through it)
 
 
 @dataclass(frozen=True)
@@ -78,6 +79,8 @@ def skin_topology(m: Model) -> tuple[np.ndarray, ...]:
 
 class Simulator:
     """Advance a packing. ``phase`` is a label ("primary"/"secondary") for snapshots."""
+
+    templates: list | None = None  # the model's templates, set by pack() for snapshot renderers
 
     def __init__(self, model: Model, state: State, params: SimParams, phase: str = "primary"):
         self.model, self.state, self.params, self.phase = model, state, params, phase
@@ -197,6 +200,15 @@ class Simulator:
             corner_candidates(self.model.corners, t.order, t.start, *t.params,
                               self.corner_ptr, self.corner_tris)
 
+    def set_moving(self, elem: int, moving: bool) -> None:
+        """Pin (``moving=False``) or release element ``elem`` between iterations: a pinned
+        element neither moves nor grows but still repels (the live view's pin)."""
+        m = self.model
+        self.moving[elem] = bool(moving) and not m.frozen[elem]
+        vmask = self.moving[m.vert_elem]
+        self.active_all = np.flatnonzero(vmask).astype(np.int64)
+        self.active_skin = np.flatnonzero(vmask & m.is_skin).astype(np.int64)
+
     def begin_settle(self) -> None:
         """Stop growing; the last iterations only resolve overlaps and even out gaps."""
         self.allow_growth = False
@@ -275,7 +287,7 @@ class Simulator:
                     self._good = st.copy()
                 if on_snapshot is not None and st.iteration % every == 0:
                     on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
-                                         self.n_inside, st, model=self.model))
+                                         self.n_inside, st, model=self.model, sim=self))
                 if self.settle_left is None:
                     converged = (st.iteration >= p.min_iterations and len(hist) > w
                                  and min(rms, 2.0 * trend) < p.stop_epsilon)
@@ -298,7 +310,7 @@ class Simulator:
             set_threads(threads)
         if on_snapshot is not None:
             on_snapshot(Snapshot(self.phase, st.iteration, a, rms, self.model.n_elements,
-                                 self.n_inside, st, done=True, model=self.model))
+                                 self.n_inside, st, done=True, model=self.model, sim=self))
         return RunResult(st.iteration, a, self.stopped_by, self.dt)
 
     def run_resumable(self, saved: dict | None, on_checkpoint: Callable[[dict], None] | None,
