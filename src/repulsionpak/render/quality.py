@@ -10,6 +10,7 @@ from collections.abc import Sequence
 import numpy as np
 import shapely
 
+from ..params import RenderParams
 from ..types import ArtPath
 from .curves import bezier, flatten_subpath
 from .deform import art_curves, linear_weights, tps_weights
@@ -18,9 +19,12 @@ __all__ = ["curve_share", "dense_polyline", "deviation", "exact_outlines", "kink
 
 
 def exact_outlines(template, verts: np.ndarray, smooth: bool = True,
-                   per_segment: int = 96, smoothing: float = 0.0) -> list[list[np.ndarray]]:
+                   per_segment: int = 96, smoothing: float | None = None) -> list[list[np.ndarray]]:
     """The art of one copy mapped exactly: per art path, per subpath, ``per_segment``
-    samples of every source segment mapped through the deformation (container units)."""
+    samples of every source segment mapped through the deformation (container units);
+    ``smoothing``: the map's λ (default: the renderer's, ``RenderParams().smoothing``)."""
+    if smoothing is None:
+        smoothing = RenderParams().smoothing
     s, c = template.scale, template.outline.center
     rest = np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
     t = np.arange(per_segment) / per_segment
