@@ -296,6 +296,13 @@ def test_batch_on_separate_scheduler_and_worker(tmp_path, scheduler_and_worker):
 
 
 @pytest.mark.slow
+def _default_sigint() -> None:
+    """In the child: SIGINT back to its default disposition. A test run started in the
+    background (``pytest &``, nohup, some CI runners) ignores SIGINT, and an ignored signal
+    stays ignored across exec, so the Ctrl-C under test would never arrive."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_ctrl_c_cancels_cleanly(tmp_path):
     """A real SIGINT to the whole process group (as a terminal's Ctrl-C): exit 130, no
     traceback, the finished job written, the endless one recorded as cancelled, no
@@ -308,7 +315,7 @@ def test_ctrl_c_cancels_cleanly(tmp_path):
                              "-o", str(out), "--seeds", "1", "--config", str(cfg), "--workers", "2",
                              "--set", "sim.max_iterations=300,1000000"],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_default_sigint)
     try:
         lines = []
         deadline = time.monotonic() + 90

@@ -23,10 +23,20 @@ NS = "{http://www.w3.org/2000/svg}"
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 
-def _subpaths(d: str) -> list[np.ndarray]:
+def _subpaths(d: str, per_curve: int = 16) -> list[np.ndarray]:
+    """Each subpath as a polygon: lines by their end points, curves sampled ``per_curve``
+    times by svgelements (end points alone would cut every curve by its chord: the
+    written art is mostly Bézier curves)."""
     out = []
     for sub in svgelements.Path(d).as_subpaths():
-        pts = [(seg.end.x, seg.end.y) for seg in svgelements.Path(sub) if seg.end is not None]
+        pts = []
+        for seg in svgelements.Path(sub):
+            if seg.end is None:
+                continue
+            if isinstance(seg, (svgelements.CubicBezier, svgelements.QuadraticBezier, svgelements.Arc)):
+                pts.extend((p.x, p.y) for p in (seg.point(t) for t in np.arange(1, per_curve + 1) / per_curve))
+            else:
+                pts.append((seg.end.x, seg.end.y))
         if len(pts) >= 2:
             out.append(np.array(pts, dtype=float))
     return out
