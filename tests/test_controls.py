@@ -203,3 +203,21 @@ def test_stiffness_scales_the_spring_force():
     edge_force_stiff(x, springs, rest0, sp_ptr, growth, moving, 3.0, np.array([1.0, 4.0]), f2)
     assert np.abs(f1).min() > 0
     assert np.allclose(f2[:2], f1[:2]) and np.allclose(f2[2:], 4.0 * f1[2:])
+
+
+def test_pins_on_a_secondary_element_are_refused(tmp_path):
+    """A pin given on a --secondary element is an error naming it, not silently ignored."""
+    import dataclasses as _dc
+
+    from repulsionpak import examples as _ex
+    from repulsionpak.controls import ElementControls as _EC, Pin as _Pin
+    from repulsionpak.errors import ParameterError as _PE
+    from repulsionpak.io import load_container as _lc, load_elements as _le
+    from repulsionpak.pack import pack as _pack
+    from repulsionpak.params import Params as _P
+
+    cont = _lc(_ex.container_file(_ex.DEFAULT_CONTAINER))
+    elems = _le(_ex.element_files()[:2])
+    sec = _dc.replace(_le(_ex.secondary_files()[:1])[0], controls=_EC(pins=(_Pin(400, 400),)))
+    with pytest.raises(_PE, match=sec.source):
+        _pack(cont, elems, _P(gap=5.0, seed=1), secondary=[sec])

@@ -141,6 +141,10 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     uninterrupted one.
     """
     params = params.validate()
+    for e in secondary:
+        if getattr(e, "controls", None) is not None and e.controls.pins:
+            raise ParameterError(f"{e.source}: pins are for primary elements; give the pinned "
+                                 "element among the elements, not as a secondary one")
     if snapshot_every < 1:
         raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
