@@ -102,3 +102,30 @@ def test_pack_fills_holes_by_default_and_not_without_pocket_fill(ring_scene):
     assert not resolve_params(pocket_fill=False).secondary.fill_holes
     with pytest.raises((ConfigError, ParameterError)):
         params_from_dict({"secondary": {"hole_min_radius": 0}})
+
+
+def test_copies_in_a_pinched_hole_keep_the_gap_from_each_other(tmp_path):
+    """A hole pinched in the middle splits into two free parts once shrunk by the gap:
+    one copy each, a gap from the host and from each other (fill_holes also subtracts a
+    copy's dilated art from the hole's other parts, for pinches sharper than this one)."""
+    from repulsionpak.types import PlacedArt
+
+    a = shapely.Point(100, 100).buffer(40, 64).union(shapely.Point(178, 100).buffer(40, 64))
+    outer = a.buffer(30, 64)
+    d = " ".join("M" + " L".join(f"{x:.3f} {y:.3f}" for x, y in np.asarray(r.coords)) + " Z"
+                 for r in (outer.exterior, a.exterior))
+    (tmp_path / "host.svg").write_text(
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="400" height="300"><path fill-rule="evenodd" d="{d}"/></svg>')
+    (tmp_path / "bar.svg").write_text(scenes.element_svg("bar"))
+    host = load_element(tmp_path / "host.svg")
+    lib = HoleLibrary.of([load_element(tmp_path / "bar.svg")])
+    placed = [PlacedArt(host.source, "primary", host.paths)]
+    hg = art_area(host.paths)
+    for seed in range(6):
+        extra = fill_holes(placed, lib, GAP, np.random.default_rng(seed), min_radius=4.0, depth=1)
+        gs = [art_area(e.paths, e.stroke_scale) for e in extra]
+        assert len(gs) >= 2  # one per lobe
+        for i, g in enumerate(gs):
+            assert shapely.distance(g, hg) >= GAP
+            for h in gs[i + 1:]:
+                assert shapely.distance(g, h) >= GAP, seed

@@ -141,7 +141,12 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
             for g in others:  # none expected (meshes cover holes); never closer than the gap
                 if g.intersects(hole):
                     free = free.difference(g.buffer(keep))
+            here: list = []  # copies put in this hole: parts of a pinched hole may be close
             for part in getattr(free, "geoms", [free]):
+                for g in here:
+                    part = part.difference(g.buffer(keep))
+                if isinstance(part, shapely.MultiPolygon):
+                    part = max(part.geoms, key=lambda q: q.area)
                 if part.is_empty or not isinstance(part, shapely.Polygon):
                     continue
                 line = shapely.maximum_inscribed_circle(part, 0.01 * gap)
@@ -180,5 +185,6 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
                 g = _place(library.geoms[k], s, angle, at)
                 out.append(copy)
                 added.append(g)
+                here.append(g)
                 queue.append((g, level + 1))
     return out
