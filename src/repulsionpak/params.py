@@ -183,12 +183,12 @@ class RenderParams:
         "mapped outline's at any sample: keeps the curvature of the fit close to the exact "
         "one, so smooth art has no visible bends at the joints of the fitted pieces.")
     smoothing: float = _doc(
-        0.002, "-", "λ of a smoothing thin-plate spline (coordinates scaled to the element's "
-        "size); 0 passes exactly through every mesh vertex. The default irons out the small "
-        "ripples the simulation leaves in pressed skins, which the fitter would otherwise "
-        "write as waves (letters: 2.15 → 1.50× their source's markup); the art moves off the "
-        "exact map by 0.005 gap for the median copy, ≤ 0.2 gap at most, and the verification "
-        "checks the written art.")
+        0.0, "-", "λ of a smoothing thin-plate spline (coordinates scaled to the element's "
+        "size); 0 passes exactly through every mesh vertex. 0.002 irons out the small ripples "
+        "the simulation leaves in pressed skins, which the fitter otherwise writes as waves "
+        "(letters' primaries: 1.89 → 1.50× their source's markup), but moves the art off the "
+        "mesh (≤ 0.2 gap) and the verification then leaves the negative space a little less "
+        "even (Q_s(gap/2)/Q_s(0) +0.01–0.04 on letter scenes): see docs/quality.md.")
     samples: float = _doc(
         8.0, "per mesh spacing", "Samples of each source segment per mesh edge length when "
         "mapping it (curves get 8 to 128 samples, lines 3 to 128).")
