@@ -1,4 +1,4 @@
-"""The whole method as one call: preprocess → place → simulate → (secondary) → render."""
+"""The whole method as one call: preprocess → place → simulate → (secondary) → render → verify → hole fill."""
 
 from __future__ import annotations
 

@@ -23,6 +23,7 @@ from numba import prange
 
 from .kernels import parallel_kernel
 from .forces import _spring
+from .shape import similarity_sums
 
 TWO_PI = 2.0 * np.pi
 
@@ -50,30 +51,7 @@ def apply_controls(x, v, x_rest, elem_vstart, moving, rot_on, rot_lo, rot_hi, ri
         s = elem_vstart[e]
         t = elem_vstart[e + 1]
         n = t - s
-        cx = 0.0
-        cy = 0.0
-        rx = 0.0
-        ry = 0.0
-        for i in range(s, t):
-            cx += x[i, 0]
-            cy += x[i, 1]
-            rx += x_rest[i, 0]
-            ry += x_rest[i, 1]
-        cx /= n
-        cy /= n
-        rx /= n
-        ry /= n
-        re = 0.0
-        im = 0.0
-        ww = 0.0
-        for i in range(s, t):
-            wx = x_rest[i, 0] - rx
-            wy = x_rest[i, 1] - ry
-            zx = x[i, 0] - cx
-            zy = x[i, 1] - cy
-            re += wx * zx + wy * zy
-            im += wx * zy - wy * zx
-            ww += wx * wx + wy * wy
+        cx, cy, rx, ry, re, im, ww, _ = similarity_sums(x, x_rest, s, t)
         if ww <= 0.0:
             continue
         theta = np.arctan2(im, re)

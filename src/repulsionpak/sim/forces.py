@@ -14,6 +14,7 @@ from numba import njit, prange
 
 from .grid import cell_of
 from .kernels import parallel_kernel
+from .shape import similarity_sums
 
 
 @njit(cache=True, inline="always")
@@ -476,32 +477,8 @@ def shape_force(x, x_rest, elem_vstart, moving, stiffness, k_s, F):
             continue
         s = elem_vstart[e]
         t = elem_vstart[e + 1]
-        n = t - s
-        cx = 0.0
-        cy = 0.0
-        rx = 0.0
-        ry = 0.0
-        for i in range(s, t):
-            cx += x[i, 0]
-            cy += x[i, 1]
-            rx += x_rest[i, 0]
-            ry += x_rest[i, 1]
-        cx /= n
-        cy /= n
-        rx /= n
-        ry /= n
         # complex least squares: z ≈ c·w with z = x − centroid, w = rest − centroid
-        re = 0.0
-        im = 0.0
-        ww = 0.0
-        for i in range(s, t):
-            wx = x_rest[i, 0] - rx
-            wy = x_rest[i, 1] - ry
-            zx = x[i, 0] - cx
-            zy = x[i, 1] - cy
-            re += wx * zx + wy * zy
-            im += wx * zy - wy * zx
-            ww += wx * wx + wy * wy
+        cx, cy, rx, ry, re, im, ww, _ = similarity_sums(x, x_rest, s, t)
         if ww <= 0.0:
             continue
         re /= ww

@@ -14,9 +14,45 @@ mesh measure.
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
+from numba import njit, prange
 
 from .kernels import parallel_kernel
+
+
+@njit(cache=True, inline="always")
+def similarity_sums(x, x_rest, s, t):
+    """Sums of the least-squares similarity from ``x_rest[s:t]`` to ``x[s:t]`` (complex
+    least squares z ≈ c·w, z = x − centroid, w = rest − centroid): the centroids (cx, cy),
+    (rx, ry), Re and Im of Σ conj(w)·z, Σ|w|² and Σ|z|². c = (re + i·im) / ww; shared by
+    the shape force, the bend limit and the designer controls."""
+    n = t - s
+    cx = 0.0
+    cy = 0.0
+    rx = 0.0
+    ry = 0.0
+    for i in range(s, t):
+        cx += x[i, 0]
+        cy += x[i, 1]
+        rx += x_rest[i, 0]
+        ry += x_rest[i, 1]
+    cx /= n
+    cy /= n
+    rx /= n
+    ry /= n
+    re = 0.0
+    im = 0.0
+    ww = 0.0
+    zz = 0.0
+    for i in range(s, t):
+        wx = x_rest[i, 0] - rx
+        wy = x_rest[i, 1] - ry
+        zx = x[i, 0] - cx
+        zy = x[i, 1] - cy
+        re += wx * zx + wy * zy
+        im += wx * zy - wy * zx
+        ww += wx * wx + wy * wy
+        zz += zx * zx + zy * zy
+    return cx, cy, rx, ry, re, im, ww, zz
 
 
 @parallel_kernel
@@ -32,33 +68,7 @@ def limit_deformation(x, x_rest, elem_vstart, moving, limit):
             continue
         s = elem_vstart[e]
         t = elem_vstart[e + 1]
-        n = t - s
-        cx = 0.0
-        cy = 0.0
-        rx = 0.0
-        ry = 0.0
-        for i in range(s, t):
-            cx += x[i, 0]
-            cy += x[i, 1]
-            rx += x_rest[i, 0]
-            ry += x_rest[i, 1]
-        cx /= n
-        cy /= n
-        rx /= n
-        ry /= n
-        re = 0.0
-        im = 0.0
-        ww = 0.0
-        zz = 0.0
-        for i in range(s, t):
-            wx = x_rest[i, 0] - rx
-            wy = x_rest[i, 1] - ry
-            zx = x[i, 0] - cx
-            zy = x[i, 1] - cy
-            re += wx * zx + wy * zy
-            im += wx * zy - wy * zx
-            ww += wx * wx + wy * wy
-            zz += zx * zx + zy * zy
+        cx, cy, rx, ry, re, im, ww, zz = similarity_sums(x, x_rest, s, t)
         if ww <= 0.0 or zz <= 0.0:
             continue
         re /= ww
