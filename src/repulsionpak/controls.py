@@ -183,6 +183,7 @@ def prepare_controlled(container, elements, params, rng, gap):
     pinned mask (M,), controls (M,))."""
     import shapely  # noqa: PLC0415
 
+    from .pack import margin_of
     from .placement import Placement, assign_elements, estimate_count, final_scale, place, placed_vertices
     from .preprocess import build_template, outline_of
 
@@ -197,7 +198,7 @@ def prepare_controlled(container, elements, params, rng, gap):
         pin_ang.append(a)
         pin_skins.append(shapely.Polygon(placed_vertices(t, pos, a, 1.0)[:t.n_skin]))
     region = container.region
-    margin = 0.5 * gap if params.margin is None else float(params.margin)
+    margin = margin_of(params, gap)
     inner = shapely.buffer(region, -(1.0 - 1e-6) * margin) if margin > 0 else region
     for k, ((i, p), sk) in enumerate(zip(pins, pin_skins)):
         where = f"{elements[i].source}: pin ({p.x:g}, {p.y:g})"

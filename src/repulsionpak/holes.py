@@ -89,8 +89,9 @@ def _matrix(scale: float, angle: float, centre_src: np.ndarray, at: np.ndarray) 
 
 
 def _place(geom0, scale: float, angle: float, at: np.ndarray):
-    c, s = math.cos(angle) * scale, math.sin(angle) * scale
-    return shapely.affinity.affine_transform(geom0, [c, -s, s, c, float(at[0]), float(at[1])])
+    """``geom0`` (centred on its art's centre) under :func:`_matrix`."""
+    m = _matrix(scale, angle, np.zeros(2), at)
+    return shapely.affinity.affine_transform(geom0, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
 
 
 def _written(art: ArtPath, m: np.ndarray, tol: float) -> ArtPath:
@@ -136,10 +137,9 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
             if hole.area < math.pi * min_radius ** 2:
                 continue
             free = hole.buffer(-keep)
-            others = [geoms[j] for j in tree.query(hole) if geoms[j] is not host]
-            others += [g for g in added if g is not host and g.intersects(hole)]
+            others = [geoms[j] for j in tree.query(hole)] + added
             for g in others:  # none expected (meshes cover holes); never closer than the gap
-                if g.intersects(hole):
+                if g is not host and g.intersects(hole):
                     free = free.difference(g.buffer(keep))
             here: list = []  # copies put in this hole: parts of a pinched hole may be close
             for part in getattr(free, "geoms", [free]):

@@ -99,12 +99,27 @@ def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float
     return float(2 * np.sqrt(np.mean([templates[i].skin_area for i in assignment]) / np.pi))
 
 
-def prepare(container: Container, elements: Sequence[Element], params: Params,
-            rng: np.random.Generator) -> tuple[list[Template], Placement, float]:
-    """Preprocess the library and place the primary elements (sec. 4).
+def primary_model(region, templates: Sequence[Template], placement: Placement, gap: float,
+                  params: Params, frozen: np.ndarray | None = None) -> tuple[Model, State, SimFrame]:
+    """The simulation model of the primary phase (sim units): grid cell from the typical
+    element size, the edge margin beyond the skin as an extra boundary inset, each
+    element's bend limit."""
+    frame = SimFrame.for_region(region)
+    region_sim = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    size = typical_size(templates, placement.template_index) / frame.unit
+    cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
+    model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
+                               gap=gap / frame.unit, frozen=frozen)
+    # skins rest inside the container by boundary_inset; where the margin asks for more
+    # than the skin's width, the rest of it moves the boundary in
+    model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
+    model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
+    return model, state, frame
 
-    Returns the templates (one per library element), the placement and the gap.
-    """
+
+def checked_gap(container: Container, elements: Sequence[Element], params: Params) -> float:
+    """The gap of a run (``params.gap``, else :func:`default_gap`), refused with a clear
+    error when it cannot work; also refuses an empty element list."""
     if not elements:
         raise ParameterError("no elements given")
     gap = params.gap if params.gap is not None else default_gap(container)
@@ -112,6 +127,16 @@ def prepare(container: Container, elements: Sequence[Element], params: Params,
     if gap * 4 >= min(maxx - minx, maxy - miny):
         raise ParameterError(f"the gap ({gap:g}) is absurdly large for a container of "
                              f"{maxx - minx:g}×{maxy - miny:g} units; use a gap of about 1% of its size")
+    return gap
+
+
+def prepare(container: Container, elements: Sequence[Element], params: Params,
+            rng: np.random.Generator) -> tuple[list[Template], Placement, float]:
+    """Preprocess the library and place the primary elements (sec. 4).
+
+    Returns the templates (one per library element), the placement and the gap.
+    """
+    gap = checked_gap(container, elements, params)
     outlines: list[Outline] = [outline_of(e) for e in elements]
     count = estimate_count(container.area, gap, params.placement)
     assignment = assign_elements(len(elements), count, rng)
@@ -151,20 +176,12 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     t0 = time.perf_counter()
     ctrl = None
     if any_controls(elements):  # designer controls (controls.py); none: the paper's way
-        gap = params.gap if params.gap is not None else default_gap(container)
+        gap = checked_gap(container, elements, params)
         templates, placement, pinned, ctrl = prepare_controlled(container, elements, params, rng, gap)
     else:
         templates, placement, gap = prepare(container, elements, params, rng)
-    frame = SimFrame.for_region(container.region)
-    region_sim = shapely.affinity.scale(container.region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
-    size = typical_size(templates, placement.template_index) / frame.unit
-    cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
-    model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
-                               gap=gap / frame.unit, frozen=None if ctrl is None else pinned)
-    # skins rest inside the container by boundary_inset; where the margin asks for more
-    # than the skin's width, the rest of it moves the boundary in
-    model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
-    model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
+    model, state, frame = primary_model(container.region, templates, placement, gap, params,
+                                        frozen=None if ctrl is None else pinned)
     if ctrl is not None:
         setup_model(model, ctrl, placement.angle, pinned)
     t1 = time.perf_counter()

@@ -43,26 +43,21 @@ def _render_dispatchers() -> list:
     return [deform._solve, fit._fit_chain, curves._flatten]
 
 
-def _sim_dispatchers() -> list:
-    from .sim import kernels, runner  # noqa: F401  (registers every simulation kernel)
-
-    return [k.serial for k in kernels._KERNELS]
-
-
 def _cached(dispatcher) -> bool:
     return bool(dispatcher._cache._cache_file._load_index())
 
 
 def is_cold() -> bool:
     """True when numba's disk cache holds no entry for any render kernel or for any
-    simulation kernel (the first run, or the sources changed since). False when that
-    cannot be told."""
+    simulation kernel (:func:`repulsionpak.sim.kernels.cache_is_cold`): the first run, or
+    the sources changed since. False when that cannot be told."""
+    from .sim.kernels import cache_is_cold
+
     try:
         render = not any(_cached(d) for d in _render_dispatchers())
-        sim = not any(_cached(d) for d in _sim_dispatchers())
     except Exception:  # noqa: BLE001  (private numba API: stay silent rather than fail)
         return False
-    return render or sim
+    return render or cache_is_cold()
 
 
 # -- the simulation's specialisations ---------------------------------------------------
@@ -97,9 +92,8 @@ def _tiny_simulator():
 
     from . import examples
     from .io import load_elements
-    from .pack import bend_limits, margin_of, prepare, typical_size
+    from .pack import prepare, primary_model
     from .params import Params
-    from .sim.model import SimFrame, build_model
     from .sim.runner import Simulator
     from .types import Container
 
@@ -112,13 +106,7 @@ def _tiny_simulator():
     rng = np.random.default_rng(0)
     elements = load_elements([examples.element_files()[0]])
     templates, placement, gap = prepare(Container("warm-up", region), elements, params, rng)
-    frame = SimFrame.for_region(region)
-    region_sim = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
-    size = typical_size(templates, placement.template_index) / frame.unit
-    cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
-    model, state = build_model(templates, placement, frame, region_sim, cell_size=cell, gap=gap / frame.unit)
-    model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
-    model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
+    model, state, _ = primary_model(region, templates, placement, gap, params)
     return Simulator(model, state, params.sim)
 
 

@@ -18,6 +18,7 @@ from concurrent.futures import Future
 import numpy as np
 import shapely
 
+from ..geometry.mesh import apply_binding
 from ..sim.model import SimFrame
 from .protocol import encode_frame
 
@@ -150,7 +151,7 @@ class LiveController:
                 continue
             t = templates[int(tindex[e])]
             v = x[vstart[e]:vstart[e + 1]] * self.unit
-            art = np.einsum("ik,ikj->ij", t.art_bary, v[t.tris[t.art_tri]])
+            art = apply_binding(v, t.tris, t.art_tri, t.art_bary)
             polys, parts, k = [], [], 0
             for path in t.element.paths:
                 for sub, closed in zip(path.subpaths, path.closed):
@@ -202,9 +203,9 @@ class LiveController:
             ext.append(float(np.ptp(pts, axis=0).max()))
         med = float(np.median(ext))
         # the specks: at most as many as were removed, the smallest, each far below the rest
-        specks = [i for i in np.argsort(ext, kind="stable")[:len(self.removed)]
-                  if ext[i] <= 5 * REMOVED_SCALE * med]
-        return [p for i, p in enumerate(placed) if i not in set(specks)]
+        specks = {int(i) for i in np.argsort(ext, kind="stable")[:len(self.removed)]
+                  if ext[i] <= 5 * REMOVED_SCALE * med}
+        return [p for i, p in enumerate(placed) if i not in specks]
 
     # -- internals (simulation thread) -------------------------------------------------
     def _bind(self, sim, phase: str) -> None:

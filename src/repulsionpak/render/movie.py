@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import OutputError, ParameterError
+from ..geometry.outline import signed_area
 
 __all__ = ["FORMATS", "MovieRecorder", "FrameRenderer", "MovieInfo", "movie_format", "check_movie_output"]
 
@@ -82,11 +83,6 @@ def _rgb(colour: str | None, cache: dict) -> tuple[int, int, int] | None:
         except ValueError:  # a paint server reference or an unusual colour: a neutral grey
             cache[colour] = (150, 150, 150)
     return cache[colour]
-
-
-def _signed_area(p: np.ndarray) -> float:
-    x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
 @dataclass
@@ -183,7 +179,7 @@ class FrameRenderer:
                             ImageDraw.Draw(one).polygon((r - lo).ravel().tolist(), fill=1)
                             mask = ImageChops.logical_xor(mask, one)
                     else:  # nonzero: rings turning like the largest one add, the others cut
-                        areas = [_signed_area(r) for r in closed_rings]
+                        areas = [signed_area(r) for r in closed_rings]
                         sign = np.sign(areas[int(np.argmax(np.abs(areas)))]) or 1.0
                         d = ImageDraw.Draw(mask)
                         for r, a in sorted(zip(closed_rings, areas), key=lambda ra: np.sign(ra[1]) != sign):
