@@ -198,7 +198,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction)
     if not secondary and params.secondary.auto:
         secondary = elements  # the pockets get small copies of the primaries (sec. 9)
-        cap = 5 * len(placement.template_index)
+        cap = 10 * len(placement.template_index)
         mc = params.secondary.max_count
         params = dataclasses.replace(params, secondary=dataclasses.replace(
             params.secondary, max_count=cap if mc is None else min(mc, cap)))

@@ -148,8 +148,9 @@ class SecondaryParams:
         True, "-", "Without secondary elements given, fill the pockets the primaries leave with "
         "small copies of the primaries themselves (false: leave them empty).")
     d_min: float = _doc(
-        1.0, "× gap", "d_min: seeds need at least this distance to the nearest mesh or the "
-        "boundary (paper: 5–10 px on a 1000 px grid, about one gap).")
+        0.8, "× gap", "d_min: seeds need at least this distance to the nearest mesh or the "
+        "boundary (paper: 5–10 px on a 1000 px grid, about one gap); a copy there has art about "
+        "0.3 gap across, so pockets down to about 2.6 gaps wide between neighbouring art get one.")
     d_sep: float = _doc(2.0, "× gap", "d_sep: kept seeds are at least this far apart (paper: 10 px).")
     grid: int = _doc(1000, "pixels", "Longer side of the distance-transform grid.")
     max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")

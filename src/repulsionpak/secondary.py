@@ -4,6 +4,7 @@ primaries frozen (they still repel and can be overlapped into, but never move)."
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -20,8 +21,34 @@ from .sim.runner import Simulator, Snapshot
 from .types import Element
 
 
-def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: SecondaryParams
-                 ) -> tuple[np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class Pockets:
+    """The negative space left by the primaries, on a grid: the distance transform
+    ``dist`` (container units, 0 outside the free space), its grid origin and pixel size,
+    and the seeds chosen in it (points, distances, grid indices)."""
+
+    dist: np.ndarray
+    x0: float
+    y0: float
+    h: float
+    seeds: np.ndarray  # (K, 2)
+    distance: np.ndarray  # (K,)
+    iy: np.ndarray
+    ix: np.ndarray
+
+    def lookup(self, pts: np.ndarray) -> np.ndarray:
+        """Distance to the nearest skin or the boundary at ``pts`` (..., 2); 0 outside the
+        free space and off the grid."""
+        j = np.floor((pts[..., 0] - self.x0) / self.h).astype(np.int64)
+        i = np.floor((pts[..., 1] - self.y0) / self.h).astype(np.int64)
+        ny, nx = self.dist.shape
+        ok = (i >= 0) & (i < ny) & (j >= 0) & (j < nx)
+        out = np.zeros(pts.shape[:-1])
+        out[ok] = self.dist[i[ok], j[ok]]
+        return out
+
+
+def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: SecondaryParams) -> Pockets:
     """Seed points far from every mesh and from the container boundary.
 
     Distance transform of the negative space on a grid of ``params.grid`` pixels along
@@ -29,8 +56,6 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
     d_min = ``params.d_min``·gap, taken by decreasing distance and kept when no kept seed
     is within d_sep = ``params.d_sep``·gap (sec. 9) nor within its own pocket (the disc of
     its distance): a large pocket gets one seed that grows to fill it.
-
-    Returns (seeds (K, 2), distances (K,)) in container units.
     """
     polys = [shapely.make_valid(shapely.Polygon(s)) for s in skins]
     bounds = region.bounds
@@ -41,13 +66,13 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
     dist = distance_transform(neg, h)
     d_min = params.d_min * gap
     d_sep = params.d_sep * gap
+    none = np.zeros(0, np.int64)
     iy, ix = np.nonzero(dist > d_min)
     if len(iy) == 0:
-        return np.zeros((0, 2)), np.zeros(0)
+        return Pockets(dist, info["x0"], info["y0"], h, np.zeros((0, 2)), np.zeros(0), none, none)
     d = dist[iy, ix]
     order = np.argsort(-d, kind="stable")
     iy, ix, d = iy[order], ix[order], d[order]
-    pts = np.column_stack([info["x0"] + (ix + 0.5) * h, info["y0"] + (iy + 0.5) * h])
     # greedy, deepest first: a kept seed claims the disc of its own pocket (radius its
     # distance, at least d_sep), so a large pocket gets one seed, not a crowd of them
     blocked = np.zeros(dist.shape, bool)
@@ -65,7 +90,72 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
         yy, xx = np.ogrid[y0:y1, x0:x1]
         blocked[y0:y1, x0:x1] |= (yy - iy[k]) ** 2 + (xx - ix[k]) ** 2 < r * r
     out = np.asarray(out, dtype=np.int64)
-    return pts[out], d[out]
+    pts = np.column_stack([info["x0"] + (ix[out] + 0.5) * h, info["y0"] + (iy[out] + 0.5) * h])
+    return Pockets(dist, info["x0"], info["y0"], h, pts, d[out], iy[out], ix[out])
+
+
+def pocket_axes(pockets: Pockets) -> np.ndarray:
+    """The long axis (radians, in container coordinates) of the pocket around each seed.
+
+    Within twice the seed's distance, the gradient of the distance transform points away
+    from the walls of the pocket: in a sliver between two elements those gradients are
+    (anti)parallel, across the sliver. The pocket runs along the eigenvector of the
+    smallest eigenvalue of their structure tensor Σ ∇d ∇dᵀ. In a round pocket the
+    tensor is isotropic and the axis is arbitrary, which is harmless: nothing there
+    favours one orientation.
+    """
+    dist = pockets.dist
+    gy, gx = np.gradient(dist)
+    ny, nx = dist.shape
+    out = np.zeros(len(pockets.iy))
+    for k, (cy, cx) in enumerate(zip(pockets.iy, pockets.ix)):
+        r = max(2.0, 2.0 * float(pockets.distance[k]) / pockets.h)
+        y0, y1 = max(0, int(cy - r)), min(ny, int(cy + r) + 1)
+        x0, x1 = max(0, int(cx - r)), min(nx, int(cx + r) + 1)
+        yy, xx = np.ogrid[y0:y1, x0:x1]
+        w = ((yy - cy) ** 2 + (xx - cx) ** 2 < r * r) & (dist[y0:y1, x0:x1] > 0)
+        ax, ay = gx[y0:y1, x0:x1][w], gy[y0:y1, x0:x1][w]
+        jxx, jyy, jxy = float(ax @ ax), float(ay @ ay), float(ax @ ay)
+        # the largest eigenvector is at 0.5·atan2(2jxy, jxx − jyy); the pocket runs ⟂ to it
+        out[k] = 0.5 * np.arctan2(2.0 * jxy, jxx - jyy) + 0.5 * np.pi
+    return out
+
+
+def outline_samples(outline, n: int = 96, n_inside: int = 64) -> np.ndarray:
+    """Points of an element's outline, centred on its centroid, in file units: ``n``
+    along its outer boundaries and about ``n_inside`` on a grid inside them (holes
+    included: the mesh covers them too), so a copy is never fitted around a neighbour."""
+    geoms = [g for g in getattr(outline.geometry, "geoms", [outline.geometry]) if not g.is_empty]
+    rings = [g.exterior for g in geoms]
+    total = sum(r.length for r in rings) or 1.0
+    pts = []
+    for r in rings:
+        k = max(4, int(round(n * r.length / total)))
+        t = np.linspace(0.0, r.length, k, endpoint=False)
+        pts.append(shapely.get_coordinates(shapely.line_interpolate_point(r, t)))
+    filled = shapely.union_all([shapely.Polygon(r) for r in rings])
+    x0, y0, x1, y1 = filled.bounds
+    step = np.sqrt(max(filled.area, 1e-300) / n_inside)
+    gx, gy = np.meshgrid(np.arange(x0 + step / 2, x1, step), np.arange(y0 + step / 2, y1, step))
+    gx, gy = gx.ravel(), gy.ravel()
+    inside = shapely.contains_xy(filled, gx, gy)
+    pts.append(np.column_stack([gx[inside], gy[inside]]))
+    return np.vstack(pts) - outline.center
+
+
+def fit_scale(pockets: Pockets, seed: np.ndarray, pts: np.ndarray, angle: float, offset: float,
+              s0: float, steps: np.ndarray) -> float:
+    """The largest ``s0 · steps[j]`` (steps increasing) at which the outline ``pts``,
+    scaled, turned by ``angle`` and centred on ``seed``, keeps ``offset`` from every skin
+    and the boundary at all its samples, stopping at the first scale that does not fit;
+    ``s0 · steps[0]`` when none does."""
+    c, s = np.cos(angle), np.sin(angle)
+    q = pts @ np.array([[c, s], [-s, c]])  # rotated by angle
+    cand = seed + (s0 * steps)[:, None, None] * q[None, :, :]  # (S, n, 2)
+    ok = (pockets.lookup(cand) >= offset).all(axis=1)
+    bad = np.nonzero(~ok)[0]
+    j = (len(steps) if len(bad) == 0 else int(bad[0])) - 1
+    return float(s0 * steps[max(j, 0)])
 
 
 def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator,
@@ -80,19 +170,13 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     sp = p.secondary
     gap = packing.gap
     t0 = time.perf_counter()
-    seeds, dist = pocket_seeds(packing.container.region, packing.skins(), gap, sp)
+    pockets = pocket_seeds(packing.container.region, packing.skins(), gap, sp)
+    seeds, dist = pockets.seeds, pockets.distance
     packing.seconds["seeding"] = time.perf_counter() - t0
     if len(seeds) == 0:
         packing.stopped_by["secondary"] = "no_pockets"
         return 0
     outlines = [outline_of(e) for e in elements]
-    # templates at the scale of a typical pocket: skin radius ~ median pocket radius
-    target_r = float(np.median(dist))
-    templates = []
-    for o in outlines:
-        r_art = float(np.sqrt(o.area / np.pi))
-        scale = max(target_r - p.preprocess.skin_offset * gap, 0.5 * target_r) / max(r_art, 1e-12)
-        templates.append(build_template(o, scale, gap, p.preprocess))
     ctrls = controls_of(elements)
     controlled = any_controls(elements) or packing.model.rot_on is not None
     weights = [c.weight for c in ctrls]
@@ -102,15 +186,26 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
             return 0
         assign = weighted_assignment(weights, len(seeds), rng)
     else:
-        order = rng.permutation(len(templates))
-        assign = order[np.arange(len(seeds)) % len(templates)]
-    radius = np.array([templates[i].radius for i in assign])
-    shrink = sp.initial_fraction * dist / radius  # each starts at a share of its own pocket
-    angles = rng.uniform(0, 2 * np.pi, len(seeds)) if p.placement.rotate else np.zeros(len(seeds))
-    if controlled:
-        angles = initial_angles(ctrls, assign, angles, rng)
+        order = rng.permutation(len(outlines))
+        assign = order[np.arange(len(seeds)) % len(outlines)]
+    angles, scales = _fit_to_pockets(pockets, outlines, assign, ctrls if controlled else None,
+                                     p.preprocess.skin_offset * gap, p.placement.rotate, sp, rng)
+    # one template per element and size class (factor SIZE_STEP): every copy's skin is
+    # built for about its own final size, so it keeps about half a gap around its art
+    # however small or large its pocket is
+    templates: list = []
+    key_index: dict[tuple[int, int], int] = {}
+    tindex = np.zeros(len(seeds), np.int64)
+    shrink = np.zeros(len(seeds))
+    for k, (i, sc) in enumerate(zip(assign, scales)):
+        b = int(np.round(np.log(sc) / np.log(SIZE_STEP)))
+        if (int(i), b) not in key_index:
+            key_index[(int(i), b)] = len(templates)
+            templates.append(build_template(outlines[int(i)], SIZE_STEP ** b, gap, p.preprocess))
+        tindex[k] = key_index[(int(i), b)]
+        shrink[k] = sp.initial_fraction * sc / SIZE_STEP ** b  # starts at a share of its fit
     base_index = len(packing.templates)
-    placement = Placement(assign + base_index, seeds, angles, shrink)
+    placement = Placement(tindex + base_index, seeds, angles, shrink)
     all_templates = list(packing.templates) + templates
     region_sim = shapely.affinity.scale(packing.container.region, 1 / packing.frame.unit,
                                         1 / packing.frame.unit, origin=(0, 0))
@@ -119,8 +214,8 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
                                cell_size=m0.cell_size, gap=m0.gap,
                                kinds=["secondary"] * len(seeds),
                                frozen=np.ones(m0.n_elements, bool), base=(m0, packing.state))
-    # a secondary's nominal size is its pocket (it starts at initial_fraction of it), not
-    # the template's: big pockets get big secondaries
+    # a secondary's nominal size is the largest that fits its pocket (it starts at
+    # initial_fraction of it): big pockets get big secondaries
     model.max_growth[m0.n_elements:] = 1.0 / sp.initial_fraction
     from .pack import bend_limits  # noqa: PLC0415  (pack imports this module lazily too)
 
@@ -139,3 +234,49 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     packing.stopped_by["secondary"] = res.stopped_by
     packing.area_fraction_meshes = res.area_fraction
     return len(seeds)
+
+
+#: size classes of the secondary templates (a copy's skin is built for its size ± 10 %)
+SIZE_STEP = 1.2
+#: random start angles tried per pocket, besides the two along the pocket's long axis
+ANGLE_TRIES = 6
+#: scales tried per angle, from half the inscribed-circle fit to four times it
+_STEPS = np.geomspace(0.5, 4.0, 37)
+
+
+def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, rotate: bool,
+                    sp: SecondaryParams, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Start angle and nominal scale (file → container units) of each pocket's copy.
+
+    The nominal scale is the largest at which the copy's art, centred on the seed, keeps
+    half a gap (``offset``) from every primary skin and the boundary — measured on the
+    pocket's distance transform at samples of its outline — so its skin just fills the
+    pocket. Free copies try their pocket's long axis (both ways) and ``ANGLE_TRIES``
+    random angles and take the angle with the largest fit: a bar lies along a sliver, a
+    star turns its tips into the corners of a pocket. Rotation-controlled copies keep the
+    angles their controls give (:func:`repulsionpak.controls.initial_angles`).
+    """
+    n = len(assign)
+    axes = pocket_axes(pockets)
+    samples = [outline_samples(o) for o in outlines]
+    radius = [float(np.sqrt((smp ** 2).sum(axis=1).max())) for smp in samples]
+    if rotate:
+        angles = rng.uniform(0.0, 2.0 * np.pi, (n, ANGLE_TRIES))
+    else:
+        angles = np.zeros((n, 1))
+    if ctrls is not None:
+        angles = initial_angles(ctrls, assign, angles[:, 0], rng)[:, None]
+    elif rotate:
+        angles = np.column_stack([angles, axes, axes + np.pi])
+    out_a, out_s = np.zeros(n), np.zeros(n)
+    for k in range(n):
+        i = int(assign[k])
+        # the inscribed-circle fit: the circumscribed skin radius equals the distance
+        s_round = max(pockets.distance[k] - offset, 0.5 * pockets.distance[k]) / max(radius[i], 1e-300)
+        best = (-1.0, 0.0)
+        for a in angles[k]:
+            sc = fit_scale(pockets, pockets.seeds[k], samples[i], float(a), offset, s_round, _STEPS)
+            if sc > best[0] * (1.0 + 1e-9):
+                best = (sc, float(a))
+        out_s[k], out_a[k] = max(best[0], s_round), best[1]
+    return out_a, out_s

@@ -155,7 +155,7 @@ def _centre(g) -> np.ndarray:
 
 
 def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
-           fixed=None):
+           fixed=None, rank=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
@@ -164,7 +164,9 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     smallest art–art and art–edge distances seen (the latter only over the elements that
     are not clearly inside ``inner``, the container shrunk by the margin, unless
     ``exact_edges``). ``fixed[i]`` (pinned copies): element i never moves nor shrinks;
-    its neighbours take the whole of a pair's deficit."""
+    its neighbours take the whole of a pair's deficit. ``rank[i]``: of a pair too close,
+    the element of lower rank (a secondary next to a primary) takes the whole deficit:
+    pocket fillers give way, never the elements they fill around."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
@@ -207,10 +209,14 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 total = min_gap - dd + 2 * tol
                 u = pi - pj
             nu = float(np.hypot(*u))
-            if fixed is not None and (fixed[i] or fixed[j]):
-                if fixed[i] and fixed[j]:
+            fi = fixed is not None and bool(fixed[i])
+            fj = fixed is not None and bool(fixed[j])
+            ri = 0 if rank is None else int(rank[i])
+            rj = 0 if rank is None else int(rank[j])
+            if fi or fj or ri != rj:
+                if fi and fj:
                     continue  # two pins: the designer's choice, reported, not repaired
-                if fixed[i]:  # j takes it all
+                if fi or (not fj and ri > rj):  # j takes it all
                     i, j, gi, gj, pi, pj, u = j, i, gj, gi, pj, pi, -u
                 if nu > 0:
                     push[i] += total * u / nu
@@ -351,8 +357,11 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     def place(i):
         geoms[i] = transform(base[i], i)
 
+    # a secondary element too close to a primary gives way alone (moves, shrinks, or is dropped)
+    rank = np.array([0 if getattr(p, "kind", "primary") == "secondary" else 1 for p in placed])
+
     def check(exact_edges=False):
-        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed)
+        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank)
 
     for r in range(rounds if repair else 0):
         need, rel, push, counts, _, _ = check()
@@ -388,14 +397,14 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     # final verification, exact, on what is returned
     geoms = [transform(exact[i], i) for i in range(n)]
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
-                                                 exact_edges=True, fixed=fixed)
+                                                 exact_edges=True, fixed=fixed, rank=rank)
     if repair:  # anything still violating after the rounds is dropped (never a pinned copy)
         for i in np.flatnonzero(need > 0):
             if fixed is None or not fixed[i]:
                 alive[i] = False
         if (need > 0).any():
             need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin,
-                                                         tol, exact_edges=True, fixed=fixed)
+                                                         tol, exact_edges=True, fixed=fixed, rank=rank)
     dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not exact[i].is_empty]
     for i, src in dropped:
         if placed[i].kind == "primary":

@@ -29,6 +29,8 @@ import os
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError, OutputError
 from ..types import ArtPath, Container, PlacedArt
 from . import svg_read
@@ -255,8 +257,12 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
             cls = _classes(grp)
             kind = "primary" if "primary" in cls else "secondary"
             arts = []
+            # small copies (pocket fillers) are flattened relative to their own size too
+            b = shape_bounds(shapes)
+            size = float(np.hypot(b[2] - b[0], b[3] - b[1])) if b is not None else 0.0
+            el_tol = min(tol, 1e-4 * size) if size > 0 else tol
             for sh in shapes:
-                subs = flatten_shape(p, sh, tol, budget)
+                subs = flatten_shape(p, sh, el_tol, budget)
                 if subs:
                     arts.append(
                         ArtPath(
