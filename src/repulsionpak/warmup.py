@@ -16,8 +16,14 @@ compilation would be.
 Which specialisations? The simulation's are recorded by running a few iterations of a
 tiny packing with every simulation kernel replaced by its plain Python function (the
 argument types are those of the real run: same code, same arrays); the renderer's by
-calling its public wrappers on a tiny input. ``tests/test_warmup.py`` checks that a
-packing after a warm-up compiles no simulation or render kernel.
+calling its public wrappers on a tiny input. The recording (imports and the tiny run:
+~2 s before anything compiles) is done once, at development time, into
+``warmup_signatures.json`` beside this module (``python -m repulsionpak.warmup
+--write-signatures``); the warm-up reads that file and starts compiling at once. It falls
+back to the recording run when the file does not match the kernels (a kernel missing or
+its parameters renamed); ``tests/test_warmup.py`` fails when the file is stale (it
+records again and compares) and checks that a packing after a warm-up compiles no
+simulation or render kernel.
 
 Later runs find everything cached and start nothing.
 """
@@ -25,13 +31,21 @@ Later runs find everything cached and start nothing.
 from __future__ import annotations
 
 import dataclasses
+import importlib
+import json
 import os
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["warm_up", "is_cold", "start", "stop", "wait", "simulation_specialisations"]
+__all__ = ["warm_up", "is_cold", "start", "stop", "wait", "running", "simulation_specialisations",
+           "specialisations", "load_signatures", "write_signatures", "SIGNATURES"]
+
+#: the simulation's specialisations, recorded at development time (see the module docstring)
+SIGNATURES = Path(__file__).with_name("warmup_signatures.json")
 
 #: the warm-up process of this run, if one was started (see :func:`wait`)
 _current: subprocess.Popen | None = None
@@ -140,32 +154,126 @@ def simulation_specialisations() -> list:
     return calls
 
 
+# -- the recorded specialisations, shipped as a data file ------------------------------
+
+def _params(dispatcher) -> list[str]:
+    code = dispatcher.py_func.__code__
+    return list(code.co_varnames[:code.co_argcount])
+
+
+_ARRAY = re.compile(r"array\((\w+), (\d)d, ([CFA])\)")
+
+
+def _parse_type(text: str):
+    """A numba type from its ``str``: ``array(float64, 2d, C)``, ``int64``, ``float64``,
+    ``bool``; ValueError for anything else (the file is then not used)."""
+    from numba.core import types
+
+    m = _ARRAY.fullmatch(text)
+    if m:
+        return types.Array(_parse_type(m[1]), int(m[2]), m[3])
+    if text == "bool":
+        return types.boolean
+    t = getattr(types, text, None)
+    if not isinstance(t, (types.Integer, types.Float)):
+        raise ValueError(f"unsupported argument type {text!r}")
+    return t
+
+
+def _encode(calls: list) -> list[dict]:
+    out = []
+    for dispatcher, sig in calls:
+        f = dispatcher.py_func
+        args = [str(t) for t in sig]
+        if [_parse_type(a) for a in args] != list(sig):
+            raise ValueError(f"{f.__qualname__}: argument types {args} do not read back")
+        out.append({"kernel": f"{f.__module__}.{f.__qualname__}", "params": _params(dispatcher),
+                    "args": args})
+    return out
+
+
+def write_signatures(path: Path = SIGNATURES) -> list[dict]:
+    """Record the specialisations (the tiny packing run) and write them to ``path``."""
+    entries = _encode(simulation_specialisations())
+    about = ("argument types of the kernels a packing calls, in the order of first use; "
+             "regenerate: python -m repulsionpak.warmup --write-signatures")
+    lines = ",\n  ".join(json.dumps(e) for e in entries)  # one kernel a line
+    Path(path).write_text(f'{{"about": {json.dumps(about)},\n "kernels": [\n  {lines}\n ]}}\n',
+                          encoding="utf-8")
+    return entries
+
+
+def load_signatures(path: Path = SIGNATURES) -> list | None:
+    """The specialisations recorded in ``path`` as ``[(dispatcher, argument types), ...]``;
+    None when the file is missing or does not match the kernels (a kernel gone, its
+    parameters changed, a type it cannot read)."""
+    try:
+        entries = json.loads(Path(path).read_text(encoding="utf-8"))["kernels"]
+        calls = []
+        for e in entries:
+            module, name = e["kernel"].rsplit(".", 1)
+            target = getattr(importlib.import_module(module), name)
+            dispatcher = getattr(target, "serial", target)  # a sim.kernels.Kernel or a dispatcher
+            if type(dispatcher).__name__ != "CPUDispatcher" or _params(dispatcher) != e["params"]:
+                return None
+            calls.append((dispatcher, tuple(_parse_type(a) for a in e["args"])))
+        return calls
+    except Exception:  # noqa: BLE001  (any mismatch: record instead)
+        return None
+
+
+def specialisations() -> list:
+    """The shipped specialisations (:func:`load_signatures`), or recorded now when the file
+    does not match the kernels (:func:`simulation_specialisations`)."""
+    calls = load_signatures()
+    return calls if calls is not None else simulation_specialisations()
+
+
 # -- the warm-up ---------------------------------------------------------------------
 
-def _warm_render() -> None:
-    """Compile (or load) the render kernels through the renderer's own wrappers."""
-    from .render.curves import flatten_subpath
+def _warm_tps() -> None:
     from .render.deform import tps_factors
+
+    q, g, _ = _arc()
+    tps_factors(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]), q, g)
+
+
+def _warm_fit() -> None:
     from .render.fit import fit_subpath
+
+    q, g, th = _arc()
+    fit_subpath(np.array([3, 1]), np.array([0, 5, 9]), False, q, g, th, 1e-6)
+
+
+def _warm_flatten() -> None:
+    from .render.curves import flatten_subpath
     from .types import CurveSubpath
 
-    th = np.linspace(0.0, 0.5 * np.pi, 9)
-    q = np.column_stack([np.cos(th), np.sin(th)])
-    g = np.column_stack([-np.sin(th), np.cos(th)])
-    rest = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
-    tps_factors(rest, q, g)
-    fit_subpath(np.array([3, 1]), np.array([0, 5, 9]), False, q, g, th, 1e-6)
     sub = CurveSubpath(np.array([1, 3], np.int8),
                        np.array([[[0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 0.0]],
                                  [[1.0, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 1.0]]]), False)
     flatten_subpath(sub, 1e-3)
 
 
+def _arc():
+    th = np.linspace(0.0, 0.5 * np.pi, 9)
+    return np.column_stack([np.cos(th), np.sin(th)]), np.column_stack([-np.sin(th), np.cos(th)]), th
+
+
+def _warm_render() -> None:
+    """Compile (or load) the render kernels through the renderer's own wrappers: the curve
+    fitter first (the largest, ~70% of the render kernels' compilation), then the two small
+    ones in reverse order of use (:func:`wait` compiles them from the other end)."""
+    _warm_fit()
+    _warm_flatten()
+    _warm_tps()
+
+
 def warm_up(simulation: bool = True, render: bool = True) -> None:
     """Compile (or load from the cache) the kernels a packing uses: the simulation's in
     reverse order of first use, then the renderer's."""
     if simulation:
-        for dispatcher, sig in reversed(simulation_specialisations()):
+        for dispatcher, sig in reversed(specialisations()):
             dispatcher.compile(sig)  # loads it instead when the packing got there first
     if render:
         _warm_render()
@@ -194,12 +302,29 @@ def start() -> subprocess.Popen | None:
     return _current
 
 
+def running() -> subprocess.Popen | None:
+    """The warm-up process :func:`start` started (None when none was)."""
+    return _current
+
+
 def wait(timeout: float = 60.0) -> None:
     """Let a running warm-up finish (the renderer calls this before its first kernel: the
-    warm-up compiles the render kernels last and is further along than a fresh start)."""
+    warm-up compiles the render kernels last and is further along than a fresh start).
+    While it still compiles the curve fitter, this process compiles (or loads) the two small
+    render kernels itself, in the order the renderer calls them: the warm-up compiles them
+    after the fitter in the opposite order, so the two meet in the middle again."""
     proc = _current
     if proc is None or proc.poll() is not None:
         return
+    try:
+        from .render import fit
+
+        for warm in (_warm_tps, _warm_flatten):
+            if _cached(fit._fit_chain):
+                break  # the warm-up is past the fitter: on these two now
+            warm()
+    except Exception:  # noqa: BLE001  (private numba API: just wait)
+        pass
     try:
         proc.wait(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -224,4 +349,7 @@ def stop(proc: subprocess.Popen | None) -> None:
 
 
 if __name__ == "__main__":
-    warm_up()
+    if sys.argv[1:] == ["--write-signatures"]:
+        print(f"{len(write_signatures())} specialisations written to {SIGNATURES}")
+    else:
+        warm_up()
