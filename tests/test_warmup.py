@@ -163,7 +163,7 @@ def test_cli_starts_the_warm_up_first_and_stops_it_on_an_input_error(tmp_path, m
     assert events == ["start", ("stop", proc)]
 
 
-def test_wait_compiles_the_small_render_kernels_while_the_fitter_is_compiled(monkeypatch):
+def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_path, monkeypatch):
     from repulsionpak import warmup
 
     class Running:
@@ -177,10 +177,42 @@ def test_wait_compiles_the_small_render_kernels_while_the_fitter_is_compiled(mon
     monkeypatch.setattr(warmup, "_current", Running())
     monkeypatch.setattr(warmup, "_warm_tps", lambda: calls.append("tps"))
     monkeypatch.setattr(warmup, "_warm_flatten", lambda: calls.append("flatten"))
-    monkeypatch.setattr(warmup, "_cached", lambda d: False)  # the fitter is not compiled yet
-    warmup.wait()
+    monkeypatch.setattr(warmup, "_claims", str(tmp_path))
+    warmup.wait()  # the warm-up still compiles the curve fitter
     assert calls == ["tps", "flatten", "waited"]  # in the order the renderer calls them
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["_warm_flatten", "_warm_tps"]
     calls.clear()
-    monkeypatch.setattr(warmup, "_cached", lambda d: True)  # the warm-up is past the fitter
-    warmup.wait()
-    assert calls == ["waited"]
+    (tmp_path / "_warm_tps").unlink()
+    warmup.wait()  # the warm-up claimed _flatten (it works from the other end): tps only
+    assert calls == ["tps", "waited"]
+
+
+def test_claims_split_the_kernels_between_the_two_processes(tmp_path, monkeypatch):
+    """compile_forward claims kernels in the order of use until it meets one the warm-up
+    claimed; the warm-up (reverse order) stops at the first one the packing claimed."""
+    from repulsionpak import warmup
+
+    calls = warmup.load_signatures()
+    names = [warmup._name(d) for d, _ in calls]
+    claims = tmp_path / "claims"
+    claims.mkdir()
+    for n in names[12:]:  # the warm-up's share so far (its kernels are compiled below)
+        (claims / n).touch()
+
+    class Running:
+        def poll(self):
+            return None
+
+    compiled = []
+    monkeypatch.setattr(warmup, "_current", Running())
+    monkeypatch.setattr(warmup, "_claims", str(claims))
+    monkeypatch.setattr(warmup, "_cached", lambda d: True)  # the warm-up's kernel is done
+    for d, sig in calls:
+        monkeypatch.setattr(d, "compile", lambda sig, d=d: compiled.append(warmup._name(d)))
+        monkeypatch.setattr(d, "overloads", {})
+    warmup.compile_forward()
+    assert compiled == names[:12]
+    assert sorted(p.name for p in claims.iterdir()) == sorted(names)
+    compiled.clear()
+    warmup.warm_up(render=False)  # everything is claimed: the warm-up compiles nothing more
+    assert compiled == []

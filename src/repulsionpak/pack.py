@@ -174,6 +174,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
+    warmup.compile_forward()  # first run: this process's share of the kernels, from the start
     ctrl = None
     if any_controls(elements):  # designer controls (controls.py); none: the paper's way
         gap = checked_gap(container, elements, params)

@@ -41,7 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["warm_up", "is_cold", "start", "stop", "wait", "running", "simulation_specialisations",
+__all__ = ["warm_up", "is_cold", "start", "stop", "wait", "running", "compile_forward",
+           "simulation_specialisations",
            "specialisations", "load_signatures", "write_signatures", "SIGNATURES"]
 
 #: the simulation's specialisations, recorded at development time (see the module docstring)
@@ -229,6 +230,60 @@ def specialisations() -> list:
     return calls if calls is not None else simulation_specialisations()
 
 
+# -- who compiles what: one claim file per kernel --------------------------------------
+
+_CLAIMS_ENV = "REPULSIONPAK_WARMUP_CLAIMS"
+#: this process's claim folder (shared with the warm-up process), while one runs
+_claims: str | None = os.environ.get(_CLAIMS_ENV)
+
+
+def _claim(name: str) -> bool:
+    """Claim the compilation of kernel ``name`` for this process: True when no process
+    claimed it before (an atomic file creation). Always True without a claim folder."""
+    if _claims is None:
+        return True
+    try:
+        os.close(os.open(os.path.join(_claims, name), os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        return True
+    except FileExistsError:
+        return False
+    except OSError:
+        return True
+
+
+def _name(dispatcher) -> str:
+    f = dispatcher.py_func
+    return f"{f.__module__}.{f.__qualname__}"
+
+
+def compile_forward() -> None:
+    """While a warm-up process runs (:func:`start`), compile the kernels a packing calls in
+    the order it calls them, each one only after claiming it, until reaching one the warm-up
+    claimed (it works from the other end): wait until that one is in the cache, and stop —
+    the warm-up has done the rest. So no kernel is compiled twice, and the packing never
+    compiles one the warm-up is compiling. Nothing to do without a warm-up process."""
+    import time
+
+    proc = _current
+    if proc is None or proc.poll() is not None or _claims is None:
+        return
+    calls = load_signatures()
+    if calls is None:  # the shipped file does not match: compile lazily, as without a warm-up
+        return
+    try:
+        for dispatcher, sig in calls:
+            if sig in dispatcher.overloads:
+                continue  # compiled (or loaded) in this process already
+            if _claim(_name(dispatcher)):
+                dispatcher.compile(sig)  # or loads it, if the cache has it
+                continue
+            while not _cached(dispatcher) and proc.poll() is None:
+                time.sleep(0.01)
+            return
+    except Exception:  # noqa: BLE001  (private numba API: the run compiles what it needs)
+        return
+
+
 # -- the warm-up ---------------------------------------------------------------------
 
 def _warm_tps() -> None:
@@ -264,9 +319,9 @@ def _warm_render() -> None:
     """Compile (or load) the render kernels through the renderer's own wrappers: the curve
     fitter first (the largest, ~70% of the render kernels' compilation), then the two small
     ones in reverse order of use (:func:`wait` compiles them from the other end)."""
-    _warm_fit()
-    _warm_flatten()
-    _warm_tps()
+    for name in ("_warm_fit", "_warm_flatten", "_warm_tps"):
+        if _claim(name):
+            globals()[name]()
 
 
 def warm_up(simulation: bool = True, render: bool = True) -> None:
@@ -274,7 +329,9 @@ def warm_up(simulation: bool = True, render: bool = True) -> None:
     reverse order of first use, then the renderer's."""
     if simulation:
         for dispatcher, sig in reversed(specialisations()):
-            dispatcher.compile(sig)  # loads it instead when the packing got there first
+            if not _claim(_name(dispatcher)):
+                break  # the packing got there first (compile_forward): it has the rest
+            dispatcher.compile(sig)  # loads it instead when the cache has it
     if render:
         _warm_render()
 
@@ -290,15 +347,23 @@ def start() -> subprocess.Popen | None:
     """Start :func:`warm_up` in a background process when kernels are not cached yet and
     the machine has a spare core; returns the process (or None). The environment variable
     ``REPULSIONPAK_NO_WARMUP=1`` turns it off."""
-    global _current
+    global _current, _claims
     if os.environ.get("REPULSIONPAK_NO_WARMUP") or _spare_cores() < 1 or not is_cold():
         return None
+    import shutil
+    import tempfile
+
+    claims = None
     try:
+        claims = tempfile.mkdtemp(prefix="repulsionpak-warmup-")  # see compile_forward
         _current = subprocess.Popen([sys.executable, "-m", "repulsionpak.warmup"],
                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                    stderr=subprocess.DEVNULL)
+                                    stderr=subprocess.DEVNULL, env={**os.environ, _CLAIMS_ENV: claims})
     except OSError:
+        if claims is not None:
+            shutil.rmtree(claims, ignore_errors=True)
         return None
+    _claims = claims
     return _current
 
 
@@ -311,20 +376,15 @@ def wait(timeout: float = 60.0) -> None:
     """Let a running warm-up finish (the renderer calls this before its first kernel: the
     warm-up compiles the render kernels last and is further along than a fresh start).
     While it still compiles the curve fitter, this process compiles (or loads) the two small
-    render kernels itself, in the order the renderer calls them: the warm-up compiles them
-    after the fitter in the opposite order, so the two meet in the middle again."""
+    render kernels itself, in the order the renderer calls them, those the warm-up has not
+    claimed: it compiles them after the fitter in the opposite order, so the two meet in the
+    middle again."""
     proc = _current
     if proc is None or proc.poll() is not None:
         return
-    try:
-        from .render import fit
-
-        for warm in (_warm_tps, _warm_flatten):
-            if _cached(fit._fit_chain):
-                break  # the warm-up is past the fitter: on these two now
-            warm()
-    except Exception:  # noqa: BLE001  (private numba API: just wait)
-        pass
+    for name in ("_warm_tps", "_warm_flatten"):
+        if _claim(name):
+            globals()[name]()
     try:
         proc.wait(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -334,10 +394,11 @@ def wait(timeout: float = 60.0) -> None:
 def stop(proc: subprocess.Popen | None) -> None:
     """End a background warm-up (numba writes its cache files atomically, so stopping it
     loses nothing)."""
-    global _current
+    global _current, _claims
     if proc is None:
         return
-    if proc is _current:
+    ours = proc is _current
+    if ours:
         _current = None
     if proc.poll() is None:
         proc.terminate()
@@ -346,6 +407,11 @@ def stop(proc: subprocess.Popen | None) -> None:
     except subprocess.TimeoutExpired:
         proc.kill()
         proc.wait()
+    if ours and _claims is not None:
+        import shutil
+
+        shutil.rmtree(_claims, ignore_errors=True)
+        _claims = None
 
 
 if __name__ == "__main__":
