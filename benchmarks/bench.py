@@ -210,17 +210,23 @@ def bench_firstrun() -> None:
 
     runs = [("first run (cold cache)", {}), ("second run", {}),
             ("first run without the warm-up process", {"REPULSIONPAK_NO_WARMUP": "1"})]
+    walls = []
     with tempfile.TemporaryDirectory() as tmp:
         for k, (label, extra) in enumerate(runs):
             cache = os.path.join(tmp, "numba" if k < 2 else "numba-nowarm")
             env = dict(os.environ, NUMBA_CACHE_DIR=cache, **extra)
+            load = os.getloadavg()[0]
             t0 = time.perf_counter()
             r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
             subprocess.run([sys.executable, "-m", "repulsionpak.cli", "demo", "-o", os.path.join(tmp, "d.svg")],
                            check=True, env=env, stderr=subprocess.DEVNULL)
             r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
             cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-            print(f"demo, {label}: wall {time.perf_counter() - t0:.1f} s, CPU {cpu:.1f} s", flush=True)
+            walls.append(time.perf_counter() - t0)
+            ratio = f", {walls[-1] / walls[1]:.2f}× the second run" if k != 1 and len(walls) > 1 else ""
+            print(f"demo, {label}: wall {walls[-1]:.1f} s, CPU {cpu:.1f} s (load before: {load:.1f})"
+                  f"{ratio}", flush=True)
+        print(f"first run ÷ second run: {walls[0] / walls[1]:.2f}", flush=True)
 
 
 def bench_controls(seeds=(1, 2, 3)) -> None:
