@@ -4,14 +4,17 @@ A fresh install compiles every numba kernel the first time it is called: about 1
 seconds for a packing, more than the packing itself takes. The run calls its kernels in a
 fixed order (preprocessing, then the simulation kernels in the order one iteration calls
 them, then the renderer's curve fitting). On a machine with a spare core :func:`start`
-launches ``python -m repulsionpak.warmup``, which compiles the same specialisations in
-**reverse** order into numba's disk cache: the packing compiles forward from the start,
-the warm-up backward from the end, and each finds in the cache what the other has done
-(numba looks there before compiling a new specialisation). They meet in the middle, so
-the compilation is split between the two cores without any coordination beyond the
-cache, and at most one kernel is compiled twice. Before rendering, the packing waits for a
-warm-up that is still compiling (:func:`wait`): it is then further along than a fresh
-compilation would be.
+launches ``python -m repulsionpak.warmup`` (the CLI does so before it reads its inputs),
+which compiles the same specialisations in **reverse** order into numba's disk cache: the
+packing compiles forward from the start (:func:`compile_forward`, at the start of
+:func:`repulsionpak.pack.pack`), the warm-up backward from the end, and each finds in the
+cache what the other has done (numba looks there before compiling a new specialisation).
+Each process claims a kernel before compiling it (an atomic file creation in a temporary
+folder the two share), so they meet in the middle without compiling any kernel twice:
+the packing waits for the one kernel the warm-up is still compiling when they meet, the
+warm-up stops at the packing's first claim. Before rendering, the packing waits for a
+warm-up that is still compiling (:func:`wait`), compiling meanwhile the small render
+kernels the warm-up has not claimed yet.
 
 Which specialisations? The simulation's are recorded by running a few iterations of a
 tiny packing with every simulation kernel replaced by its plain Python function (the
