@@ -174,7 +174,6 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
     t0 = time.perf_counter()
-    warmup.compile_forward()  # first run: this process's share of the kernels, from the start
     ctrl = None
     if any_controls(elements):  # designer controls (controls.py); none: the paper's way
         gap = checked_gap(container, elements, params)
@@ -188,6 +187,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     sim.templates = templates
+    warmup.compile_forward(serial=sim.threads() == 1)  # first run: this process's share of the kernels
     res = sim.run_resumable((resume or {}).get("primary"),
                             None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
                             checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop,

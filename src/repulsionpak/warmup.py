@@ -6,8 +6,8 @@ fixed order (preprocessing, then the simulation kernels in the order one iterati
 them, then the renderer's curve fitting). On a machine with a spare core :func:`start`
 launches ``python -m repulsionpak.warmup`` (the CLI does so before it reads its inputs),
 which compiles the same specialisations in **reverse** order into numba's disk cache: the
-packing compiles forward from the start (:func:`compile_forward`, at the start of
-:func:`repulsionpak.pack.pack`), the warm-up backward from the end, and each finds in the
+packing compiles forward from the start (lazily, then :func:`compile_forward` just
+before its simulation starts), the warm-up backward from the end, and each finds in the
 cache what the other has done (numba looks there before compiling a new specialisation).
 Each process claims a kernel before compiling it (an atomic file creation in a temporary
 folder the two share), so they meet in the middle without compiling any kernel twice:
@@ -259,16 +259,18 @@ def _name(dispatcher) -> str:
     return f"{f.__module__}.{f.__qualname__}"
 
 
-def compile_forward() -> None:
+def compile_forward(serial: bool = True) -> None:
     """While a warm-up process runs (:func:`start`), compile the kernels a packing calls in
-    the order it calls them, each one only after claiming it, until reaching one the warm-up
-    claimed (it works from the other end): wait until that one is in the cache, and stop —
-    the warm-up has done the rest. So no kernel is compiled twice, and the packing never
-    compiles one the warm-up is compiling. Nothing to do without a warm-up process."""
+    the order it calls them (those not compiled in this process yet), each one only after
+    claiming it, until reaching one the warm-up claimed (it works from the other end): wait
+    until that one is in the cache, and stop — the warm-up has done the rest. So no kernel
+    is compiled twice, and the packing never compiles one the warm-up is compiling. Nothing
+    to do without a warm-up process, or when the run uses the parallel builds (``serial``
+    False: the warm-up compiles the serial ones, as before, but not on the critical path)."""
     import time
 
     proc = _current
-    if proc is None or proc.poll() is not None or _claims is None:
+    if not serial or proc is None or proc.poll() is not None or _claims is None:
         return
     calls = load_signatures()
     if calls is None:  # the shipped file does not match: compile lazily, as without a warm-up
