@@ -200,27 +200,85 @@ def bench_mesh() -> None:
               f"| {spent[0] * 1e3:.0f} |")
 
 
+#: loaded into the demo's processes by bench_firstrun (a sitecustomize on PYTHONPATH, so the
+#: warm-up process has it too): logs every top-level numba compilation with its CPU time
+_COMPILE_LOGGER = """
+import os, sys, time
+if os.environ.get("BENCH_COMPILE_LOG"):
+    from numba.core import event
+
+    class _Log(event.Listener):
+        stack = []
+
+        def on_start(self, ev):
+            self.stack.append(time.process_time())
+
+        def on_end(self, ev):
+            c0 = self.stack.pop()
+            if not self.stack:
+                f = ev.data["dispatcher"].py_func
+                role = "warm-up" if sys.argv[0].endswith("warmup.py") else "packing"
+                with open(os.environ["BENCH_COMPILE_LOG"], "a") as fh:
+                    fh.write(f"{role}\\t{f.__module__}.{f.__qualname__}\\t{time.process_time() - c0:.3f}\\n")
+
+    event.register("numba:compile", _Log())
+"""
+
+
+def _compile_summary(log: str) -> str:
+    import collections
+    import os
+
+    if not os.path.exists(log):
+        return "no compilation"
+    cpu: dict = collections.defaultdict(float)
+    count: dict = collections.Counter()
+    per_kernel: dict = collections.Counter()
+    for line in open(log):
+        role, name, sec = line.rstrip("\n").split("\t")
+        cpu[role] += float(sec)
+        count[role] += 1
+        per_kernel[name] += 1
+    twice = [n.rsplit(".", 1)[1] for n, c in per_kernel.items() if c > 1]
+    parts = [f"{role} {cpu[role]:.1f} CPU s ({count[role]} kernels)" for role in ("packing", "warm-up") if count[role]]
+    return "compilation: " + ", ".join(parts) + f"; compiled twice: {', '.join(twice) or 'none'}"
+
+
 def bench_firstrun() -> None:
     """``repulsionpak demo`` twice with an empty numba cache (NUMBA_CACHE_DIR in a fresh
     temporary folder): the first run compiles the kernels, the second loads them. Wall
     and CPU time of the whole process (the warm-up process included); then the first run
-    again with the warm-up turned off (``REPULSIONPAK_NO_WARMUP=1``)."""
+    again with the warm-up turned off (``REPULSIONPAK_NO_WARMUP=1``). The compilation's CPU
+    time per process (numba's ``numba:compile`` events): the packing's is on the critical
+    path."""
     import os
     import tempfile
 
     runs = [("first run (cold cache)", {}), ("second run", {}),
             ("first run without the warm-up process", {"REPULSIONPAK_NO_WARMUP": "1"})]
+    walls = []
     with tempfile.TemporaryDirectory() as tmp:
+        site = os.path.join(tmp, "site")
+        os.makedirs(site)
+        with open(os.path.join(site, "sitecustomize.py"), "w") as fh:
+            fh.write(_COMPILE_LOGGER)
+        path = os.pathsep.join(p for p in (site, os.environ.get("PYTHONPATH")) if p)
         for k, (label, extra) in enumerate(runs):
             cache = os.path.join(tmp, "numba" if k < 2 else "numba-nowarm")
-            env = dict(os.environ, NUMBA_CACHE_DIR=cache, **extra)
+            log = os.path.join(tmp, f"compile{k}.tsv")
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=path, BENCH_COMPILE_LOG=log, **extra)
+            load = os.getloadavg()[0]
             t0 = time.perf_counter()
             r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
             subprocess.run([sys.executable, "-m", "repulsionpak.cli", "demo", "-o", os.path.join(tmp, "d.svg")],
                            check=True, env=env, stderr=subprocess.DEVNULL)
             r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
             cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-            print(f"demo, {label}: wall {time.perf_counter() - t0:.1f} s, CPU {cpu:.1f} s", flush=True)
+            walls.append(time.perf_counter() - t0)
+            ratio = f", {walls[-1] / walls[1]:.2f}× the second run" if k != 1 and len(walls) > 1 else ""
+            print(f"demo, {label}: wall {walls[-1]:.1f} s, CPU {cpu:.1f} s (load before: {load:.1f})"
+                  f"{ratio}; {_compile_summary(log)}", flush=True)
+        print(f"first run ÷ second run: {walls[0] / walls[1]:.2f}", flush=True)
 
 
 def bench_controls(seeds=(1, 2, 3)) -> None:

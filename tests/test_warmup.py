@@ -94,3 +94,127 @@ def test_start_can_be_turned_off(monkeypatch):
     monkeypatch.setattr(warmup, "_spare_cores", lambda: 1)
     monkeypatch.setenv("REPULSIONPAK_NO_WARMUP", "1")
     assert warmup.start() is None
+
+
+def test_shipped_signatures_are_current():
+    """The data file the warm-up starts from holds exactly what a recording run records
+    now: regenerate with ``python -m repulsionpak.warmup --write-signatures`` when this fails."""
+    import json
+
+    from repulsionpak import warmup
+
+    shipped = json.loads(warmup.SIGNATURES.read_text(encoding="utf-8"))["kernels"]
+    recorded = warmup._encode(warmup.simulation_specialisations())
+    assert shipped == recorded, "stale: python -m repulsionpak.warmup --write-signatures"
+    loaded = warmup.load_signatures()
+    assert loaded == warmup.simulation_specialisations()
+    names = [d.py_func.__name__ for d, _ in loaded]
+    assert names[:2] == ["_greedy_chords", "squared_edt"]  # preprocessing first
+    assert "contact_query" in names and "window_change" in names
+
+
+def test_stale_signatures_fall_back_to_recording(tmp_path, monkeypatch):
+    import json
+
+    from numba.core import types
+
+    from repulsionpak import warmup
+
+    data = json.loads(warmup.SIGNATURES.read_text(encoding="utf-8"))
+    assert warmup.load_signatures(tmp_path / "missing.json") is None
+    renamed = json.loads(json.dumps(data))
+    renamed["kernels"][0]["params"][0] = "renamed"  # a kernel's parameters changed
+    gone = json.loads(json.dumps(data))
+    gone["kernels"][1]["kernel"] = "repulsionpak.geometry.edt.no_such_kernel"
+    odd = json.loads(json.dumps(data))
+    odd["kernels"][0]["args"][0] = "list(float64)"  # a type the file format does not hold
+    for k, bad in enumerate([renamed, gone, odd]):
+        path = tmp_path / f"bad{k}.json"
+        path.write_text(json.dumps(bad), encoding="utf-8")
+        assert warmup.load_signatures(path) is None
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps(data), encoding="utf-8")
+    calls = warmup.load_signatures(good)
+    assert calls[1][1] == (types.Array(types.boolean, 2, "C"),)  # squared_edt(mask)
+    # the warm-up uses the file when it matches, and records when it does not
+    monkeypatch.setattr(warmup, "simulation_specialisations", lambda: ["recorded"])
+    assert warmup.specialisations() == warmup.load_signatures()
+    monkeypatch.setattr(warmup, "SIGNATURES", tmp_path / "bad0.json")
+    monkeypatch.setattr(warmup.load_signatures, "__defaults__", (tmp_path / "bad0.json",))
+    assert warmup.specialisations() == ["recorded"]
+
+
+def test_cli_starts_the_warm_up_first_and_stops_it_on_an_input_error(tmp_path, monkeypatch):
+    from repulsionpak import warmup
+    from repulsionpak.cli import run_pack
+    from repulsionpak.errors import RepulsionPakError
+
+    events = []
+
+    class Fake:
+        pass
+
+    proc = Fake()
+    monkeypatch.setattr(warmup, "start", lambda: events.append("start") or proc)
+    monkeypatch.setattr(warmup, "stop", lambda p: events.append(("stop", p)))
+    with pytest.raises((RepulsionPakError, OSError)):
+        run_pack(tmp_path / "missing.svg", [examples.element_files()[0]], tmp_path / "out.svg",
+                 progress=False)
+    assert events == ["start", ("stop", proc)]
+
+
+def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_path, monkeypatch):
+    from repulsionpak import warmup
+
+    class Running:
+        def poll(self):
+            return None
+
+        def wait(self, timeout=None):
+            calls.append("waited")
+
+    calls = []
+    monkeypatch.setattr(warmup, "_current", Running())
+    monkeypatch.setattr(warmup, "_warm_tps", lambda: calls.append("tps"))
+    monkeypatch.setattr(warmup, "_warm_flatten", lambda: calls.append("flatten"))
+    monkeypatch.setattr(warmup, "_claims", str(tmp_path))
+    warmup.wait()  # the warm-up still compiles the curve fitter
+    assert calls == ["tps", "flatten", "waited"]  # in the order the renderer calls them
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["_warm_flatten", "_warm_tps"]
+    calls.clear()
+    (tmp_path / "_warm_tps").unlink()
+    warmup.wait()  # the warm-up claimed _flatten (it works from the other end): tps only
+    assert calls == ["tps", "waited"]
+
+
+def test_claims_split_the_kernels_between_the_two_processes(tmp_path, monkeypatch):
+    """compile_forward claims kernels in the order of use until it meets one the warm-up
+    claimed; the warm-up (reverse order) stops at the first one the packing claimed."""
+    from repulsionpak import warmup
+
+    calls = warmup.load_signatures()
+    names = [warmup._name(d) for d, _ in calls]
+    claims = tmp_path / "claims"
+    claims.mkdir()
+    for n in names[12:]:  # the warm-up's share so far (its kernels are compiled below)
+        (claims / n).touch()
+
+    class Running:
+        def poll(self):
+            return None
+
+    compiled = []
+    monkeypatch.setattr(warmup, "_current", Running())
+    monkeypatch.setattr(warmup, "_claims", str(claims))
+    monkeypatch.setattr(warmup, "_cached", lambda d: True)  # the warm-up's kernel is done
+    for d, sig in calls:
+        monkeypatch.setattr(d, "compile", lambda sig, d=d: compiled.append(warmup._name(d)))
+        monkeypatch.setattr(d, "overloads", {})
+    warmup.compile_forward(serial=False)  # a run on the parallel builds: not its business
+    assert compiled == []
+    warmup.compile_forward()
+    assert compiled == names[:12]
+    assert sorted(p.name for p in claims.iterdir()) == sorted(names)
+    compiled.clear()
+    warmup.warm_up(render=False)  # everything is claimed: the warm-up compiles nothing more
+    assert compiled == []

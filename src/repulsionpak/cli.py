@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import json
 import secrets
 import signal
@@ -195,6 +196,23 @@ def resolve_params(config: Path | None = None, gap: float | None = None, seed: i
     return params.validate()
 
 
+def _warm_up_meanwhile(run):
+    """First run: start the warm-up process (a second process compiling the kernels from
+    the far end, :mod:`repulsionpak.warmup`) before anything else, so that it compiles while
+    the inputs are read, and end it however the run ends (an input error included)."""
+    @functools.wraps(run)
+    def wrapped(*args, **kwargs):
+        from . import warmup
+
+        compiling = warmup.start()
+        try:
+            return run(*args, **kwargs)
+        finally:
+            warmup.stop(compiling)
+    return wrapped
+
+
+@_warm_up_meanwhile
 def run_pack(container: Path, elements: list[Path], output: Path, secondary: list[Path] | None = None,
              gap: float | None = None, seed: int | None = None, config: Path | None = None,
              report: Path | None = None, png: Path | None = None, count: int | None = None,
@@ -270,7 +288,6 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
             typer.echo("compiling the simulation kernels, first run only…", err=True)
     from . import warmup
 
-    compiling = warmup.start()  # first run: a second process compiles kernels from the far end
     viewer = None
     try:
         with _Progress(progress) as prog, _StopFlag() as stop:
@@ -295,7 +312,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
             viewer.close()
         raise
     finally:
-        warmup.stop(compiling)
+        warmup.stop(warmup.running())  # started by _warm_up_meanwhile; done before rendering
     if viewer is not None:
         viewer.drop_removed(packing)
     t_eval = time.perf_counter()

@@ -187,6 +187,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     sim.templates = templates
+    warmup.compile_forward(serial=sim.threads() == 1)  # first run: this process's share of the kernels
     res = sim.run_resumable((resume or {}).get("primary"),
                             None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
                             checkpoint_every, on_snapshot=on_snapshot, should_stop=should_stop,

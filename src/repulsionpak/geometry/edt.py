@@ -14,9 +14,13 @@ from numba import njit
 _FAR = 1e20  # "no background pixel yet" (squared pixels; any real value is < 1e15)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _envelope_1d(f, n, out, v, z):
-    """Squared distance transform of the sampled function f[:n] into out[:n]."""
+    """Squared distance transform of the sampled function f[:n] into out[:n].
+
+    Not inlined into :func:`squared_edt` (which calls it twice): that took 0.3-0.5 s off
+    the first run's compilation, and the transform is no slower (1200² pixels: 55-58 ms
+    vs 70-78 ms inlined, loaded machine)."""
     k = 0
     v[0] = 0
     z[0] = -np.inf
