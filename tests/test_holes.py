@@ -13,7 +13,7 @@ from repulsionpak.controls import ElementControls
 from repulsionpak.errors import ConfigError, ParameterError
 from repulsionpak.evaluate import art_geometry, scp
 from repulsionpak.geometry.outline import art_area
-from repulsionpak.holes import HoleLibrary, fill_holes
+from repulsionpak.holes import HoleLibrary, fill_holes, fill_pockets
 from repulsionpak.io import load_container, load_element
 from repulsionpak.pack import pack
 from repulsionpak.params import Params, params_from_dict
@@ -30,7 +30,7 @@ def ring_scene(tmp_path_factory):
     cont = load_container(d / "circle.svg")
     elems = [load_element(d / "ring.svg"), load_element(d / "o.svg")]
     params = params_from_dict({"gap": GAP, "seed": 2, "placement": {"count": 8},
-                               "secondary": {"fill_holes": False}})
+                               "secondary": {"fill_holes": False, "fill_leftover": False}})
     packing = pack(cont, elems, params)
     return cont, elems, packing
 
@@ -96,10 +96,11 @@ def test_small_holes_are_left_alone(ring_scene):
 
 
 def test_pack_fills_holes_by_default_and_not_without_pocket_fill(ring_scene):
-    assert Params().secondary.fill_holes
+    assert Params().secondary.fill_holes and Params().secondary.fill_leftover
     from repulsionpak.cli import resolve_params
 
-    assert not resolve_params(pocket_fill=False).secondary.fill_holes
+    off = resolve_params(pocket_fill=False).secondary
+    assert not off.fill_holes and not off.fill_leftover and not off.auto
     with pytest.raises((ConfigError, ParameterError)):
         params_from_dict({"secondary": {"hole_min_radius": 0}})
 
@@ -129,3 +130,29 @@ def test_copies_in_a_pinched_hole_keep_the_gap_from_each_other(tmp_path):
             assert shapely.distance(g, hg) >= GAP
             for h in gs[i + 1:]:
                 assert shapely.distance(g, h) >= GAP, seed
+
+
+def test_leftover_pockets_get_copies_a_gap_from_everything(ring_scene):
+    """fill_pockets: the room left after the verification (here: one primary taken out of
+    the packing, as the verification does when it must drop one) gets undeformed copies,
+    each a gap from all art and the margin from the edge."""
+    cont, elems, packing = ring_scene
+    placed = list(packing.placed)
+    areas = [art_area(p.paths, p.stroke_scale).area for p in placed]
+    del placed[int(np.argmax(areas))]  # a dropped primary leaves its room empty
+    margin = GAP / 2
+    extra = fill_pockets(placed, HoleLibrary.of(elems), cont.region, GAP, margin,
+                         np.random.default_rng(0), min_radius=GAP)
+    assert len(extra) >= 1
+    geoms = [art_area(p.paths, p.stroke_scale) for p in placed]
+    new = [art_area(e.paths, e.stroke_scale) for e in extra]
+    biggest = max(g.area for g in new)
+    assert biggest >= 0.3 * max(areas)  # the dropped element's room is used, not dusted
+    for k, g in enumerate(new):
+        assert cont.region.contains(g)
+        assert g.distance(cont.region.boundary) >= margin
+        assert min(g.distance(h) for h in geoms) >= GAP
+        assert all(g.distance(h) >= GAP for j, h in enumerate(new) if j != k)
+    assert all(e.kind == "secondary" and e.deformation == 0.0 for e in extra)
+    # the negative space gets more even
+    assert _ratio(cont, placed + extra) < _ratio(cont, placed) - 0.02

@@ -180,8 +180,8 @@ def resolve_params(config: Path | None = None, gap: float | None = None, seed: i
     if seed is not None:
         params = dataclasses.replace(params, seed=seed)
     if not pocket_fill:
-        params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, auto=False,
-                                                                             fill_holes=False))
+        params = dataclasses.replace(params, secondary=dataclasses.replace(
+            params.secondary, auto=False, fill_holes=False, fill_leftover=False))
     if margin is not None:
         if not margin >= 0:
             raise ParameterError(f"--margin must be a number >= 0, got {margin:g}")

@@ -33,7 +33,7 @@ from .render.curves import decimals_for, flatten_subpath, round_curves
 from .render.placed import FLATTEN_SHARE, curve_tolerance
 from .types import ArtPath, Element, PlacedArt
 
-__all__ = ["fill_holes", "HoleLibrary"]
+__all__ = ["fill_holes", "fill_pockets", "HoleLibrary"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,6 +115,48 @@ def _holes(geom) -> list:
     return out
 
 
+def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, min_radius: float,
+              render: RenderParams, trials: int):
+    """One undeformed copy inside the polygon ``part`` (a free region: everything in it is
+    at least the gap from all art), centred on its largest inscribed circle and scaled up
+    until it touches the edge, the largest of ``trials`` random picks; (copy, its art
+    area) or None when the circle is below ``min_radius`` or nothing fits."""
+    line = shapely.maximum_inscribed_circle(part, 0.01 * gap)
+    at = np.asarray(line.coords[0])
+    r = float(line.length)
+    if r < min_radius:
+        return None
+    shapely.prepare(part)
+    best = None
+    for _ in range(trials):
+        k = int(rng.choice(len(library.elements), p=library.weights))
+        angle = _angle(library.controls[k], rng)
+        lo = r / library.radii[k]  # fits: inside the inscribed circle
+        g0 = library.geoms[k]
+        if not part.contains(_place(g0, lo, angle, at)):
+            continue
+        hi = 3.0 * lo
+        for _ in range(12):  # grow until it touches the free part's edge
+            mid = 0.5 * (lo + hi)
+            if part.contains(_place(g0, mid, angle, at)):
+                lo = mid
+            else:
+                hi = mid
+        area = lo * lo * g0.area
+        if best is None or area > best[0]:
+            best = (area, lo, k, angle)
+    if best is None:
+        return None
+    _, s, k, angle = best
+    e = library.elements[k]
+    m = _matrix(s, angle, library.centres[k], at)
+    tol = curve_tolerance(2.0 * s * library.radii[k], gap, render)
+    paths = tuple(_written(a, m, tol) for a in e.paths)
+    copy = PlacedArt(e.source, "secondary", paths, stroke_scale=s, deformation=0.0,
+                     paint_servers=dict(e.paint_servers), frame=m, tolerance=tol)
+    return copy, _place(library.geoms[k], s, angle, at)
+
+
 def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: np.random.Generator,
                min_radius: float, depth: int = 2, render: RenderParams = RenderParams(),
                trials: int = 6) -> list[PlacedArt]:
@@ -149,42 +191,49 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
                     part = max(part.geoms, key=lambda q: q.area)
                 if part.is_empty or not isinstance(part, shapely.Polygon):
                     continue
-                line = shapely.maximum_inscribed_circle(part, 0.01 * gap)
-                at = np.asarray(line.coords[0])
-                r = float(line.length)
-                if r < min_radius:
+                got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
+                if got is None:
                     continue
-                shapely.prepare(part)
-                best = None
-                for _ in range(trials):
-                    k = int(rng.choice(len(library.elements), p=library.weights))
-                    angle = _angle(library.controls[k], rng)
-                    lo = r / library.radii[k]  # fits: inside the inscribed circle
-                    g0 = library.geoms[k]
-                    if not part.contains(_place(g0, lo, angle, at)):
-                        continue
-                    hi = 3.0 * lo
-                    for _ in range(12):  # grow until it touches the free part's edge
-                        mid = 0.5 * (lo + hi)
-                        if part.contains(_place(g0, mid, angle, at)):
-                            lo = mid
-                        else:
-                            hi = mid
-                    area = lo * lo * g0.area
-                    if best is None or area > best[0]:
-                        best = (area, lo, k, angle)
-                if best is None:
-                    continue
-                _, s, k, angle = best
-                e = library.elements[k]
-                m = _matrix(s, angle, library.centres[k], at)
-                tol = curve_tolerance(2.0 * s * library.radii[k], gap, render)
-                paths = tuple(_written(a, m, tol) for a in e.paths)
-                copy = PlacedArt(e.source, "secondary", paths, stroke_scale=s, deformation=0.0,
-                                 paint_servers=dict(e.paint_servers), frame=m, tolerance=tol)
-                g = _place(library.geoms[k], s, angle, at)
+                copy, g = got
                 out.append(copy)
                 added.append(g)
                 here.append(g)
                 queue.append((g, level + 1))
+    return out
+
+
+def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,
+                 rng: np.random.Generator, min_radius: float, render: RenderParams = RenderParams(),
+                 trials: int = 6, per_pocket: int = 8) -> list[PlacedArt]:
+    """Undeformed copies in what is left of the negative space after the verification:
+    the container shrunk by the edge margin, minus every element's art dilated by the
+    gap, split into its connected pockets; each pocket whose largest inscribed circle is
+    at least ``min_radius`` gets a copy (:func:`_fit_copy`), then what is left of it is
+    tried again, up to ``per_pocket`` copies. These pockets are the room an element left
+    when the verification had to drop it, or that the simulated pocket fill did not
+    reach; every copy is a gap from all art and the margin from the edge by construction.
+    Returns the new copies only."""
+    keep = 1.005 * gap
+    eps = 0.01 * gap
+    geoms = [shapely.simplify(art_area(p.paths, p.stroke_scale), eps) for p in placed]
+    taken = shapely.union_all([g.buffer(keep + eps, quad_segs=4) for g in geoms if not g.is_empty])
+    free = shapely.buffer(region, -(1.005 * margin)).difference(taken)
+    if free.is_empty:
+        return []
+    parts = [q for q in getattr(free, "geoms", [free]) if isinstance(q, shapely.Polygon)]
+    parts = [q for q in parts if q.area >= math.pi * min_radius ** 2]
+    parts.sort(key=lambda q: -q.area)
+    out: list[PlacedArt] = []
+    for part in parts:
+        for _ in range(per_pocket):
+            got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
+            if got is None:
+                break
+            copy, g = got
+            out.append(copy)
+            part = part.difference(g.buffer(keep + eps, quad_segs=4))
+            if isinstance(part, shapely.MultiPolygon):
+                part = max(part.geoms, key=lambda q: q.area)
+            if part.is_empty or not isinstance(part, shapely.Polygon) or part.area < math.pi * min_radius ** 2:
+                break
     return out

@@ -160,6 +160,11 @@ class SecondaryParams:
         True, "-", "Put an undeformed secondary copy in every hole of the packed art (a ring's "
         "middle, a letter's counter) that can hold one a gap away from its edge; part of the pocket "
         "fill (off with it).")
+    fill_leftover: bool = _doc(
+        True, "-", "After the verification, every pocket of the negative space still wide enough "
+        "to hold a circle of hole_min_radius a gap from all art (room left by an element the "
+        "verification dropped, or that the simulated fill did not reach) gets undeformed "
+        "secondary copies, like a hole; part of the pocket fill (off with it).")
     hole_min_radius: float = _doc(
         1.0, "× gap", "Smallest inscribed circle of a hole's free part (the hole shrunk by the gap) "
         "that gets a copy.")

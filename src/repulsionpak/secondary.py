@@ -189,7 +189,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
         order = rng.permutation(len(outlines))
         assign = order[np.arange(len(seeds)) % len(outlines)]
     angles, scales = _fit_to_pockets(pockets, outlines, assign, ctrls if controlled else None,
-                                     p.preprocess.skin_offset * gap, p.placement.rotate, sp, rng)
+                                     p.preprocess.skin_offset * gap, p.placement.rotate, rng)
     # one template per element and size class (factor SIZE_STEP): every copy's skin is
     # built for about its own final size, so it keeps about half a gap around its art
     # however small or large its pocket is
@@ -245,13 +245,13 @@ _STEPS = np.geomspace(0.5, 4.0, 37)
 
 
 def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, rotate: bool,
-                    sp: SecondaryParams, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Start angle and nominal scale (file → container units) of each pocket's copy.
 
     The nominal scale is the largest at which the copy's art, centred on the seed, keeps
-    half a gap (``offset``) from every primary skin and the boundary — measured on the
-    pocket's distance transform at samples of its outline — so its skin just fills the
-    pocket. Free copies try their pocket's long axis (both ways) and ``ANGLE_TRIES``
+    its skin offset (``offset``) from every primary skin and the boundary — measured on
+    the pocket's distance transform at samples on and inside its outline
+    (:func:`outline_samples`) — so its skin just fills the pocket. Free copies try their pocket's long axis (both ways) and ``ANGLE_TRIES``
     random angles and take the angle with the largest fit: a bar lies along a sliver, a
     star turns its tips into the corners of a pocket. Rotation-controlled copies keep the
     angles their controls give (:func:`repulsionpak.controls.initial_angles`).

@@ -1,0 +1,98 @@
+"""Pocket fill (secondary.py): seeds, the pocket's long axis, copies sized to their pocket."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+
+from repulsionpak.params import SecondaryParams
+from repulsionpak.preprocess import outline_of
+from repulsionpak.secondary import SIZE_STEP, fit_scale, outline_samples, pocket_axes, pocket_seeds
+from repulsionpak.types import ArtPath, Element
+
+
+def _box(x0, y0, x1, y1):
+    return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], float)
+
+
+def _bar_element(length=50.0, width=10.0) -> Element:
+    pts = _box(0, 0, length, width)
+    return Element("bar", "bar.svg", (ArtPath((pts,), (True,)),))
+
+
+def _sliver(angle_deg: float):
+    """A 200×200 container crossed by a sliver 16 units wide at ``angle_deg``, the rest
+    covered by two skins."""
+    region = shapely.box(-100, -100, 100, 100)
+    a = math.radians(angle_deg)
+    rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    top = _box(-300, 8, 300, 300) @ rot.T
+    bottom = _box(-300, -300, 300, -8) @ rot.T
+    return region, [top, bottom]
+
+
+def test_pocket_axis_runs_along_a_sliver():
+    for deg in (0.0, 30.0, 75.0, 120.0):
+        region, skins = _sliver(deg)
+        pockets = pocket_seeds(region, skins, gap=2.0, params=SecondaryParams(grid=400))
+        assert len(pockets.seeds) >= 3  # a long sliver gets a row of seeds
+        axes = pocket_axes(pockets)
+        # deepest seeds, away from the container's edges
+        inner = np.abs(pockets.seeds).max(axis=1) < 60
+        assert inner.any()
+        for ax in axes[inner]:
+            diff = (math.degrees(ax) - deg + 90.0) % 180.0 - 90.0
+            assert abs(diff) < 5.0, (deg, math.degrees(ax))
+
+
+def test_a_bar_fits_larger_along_its_sliver_and_keeps_the_offset():
+    region, skins = _sliver(30.0)
+    pockets = pocket_seeds(region, skins, gap=2.0, params=SecondaryParams(grid=400))
+    k = int(np.argmin(np.hypot(*pockets.seeds.T)))
+    seed = pockets.seeds[k]
+    outline = outline_of(_bar_element())
+    pts = outline_samples(outline)
+    offset = 1.0
+    steps = np.geomspace(0.05, 2.0, 80)
+    along = fit_scale(pockets, seed, pts, math.radians(30.0), offset, 1.0, steps)
+    across = fit_scale(pockets, seed, pts, math.radians(120.0), offset, 1.0, steps)
+    assert along > 2.5 * across
+    # the fitted copy is inside the sliver with the offset kept (to a pixel)
+    art = shapely.affinity.translate(
+        shapely.affinity.rotate(shapely.affinity.scale(
+            shapely.affinity.translate(outline.geometry, *(-outline.center)), along, along, origin=(0, 0)),
+            30.0, origin=(0, 0)), *seed)
+    for s in skins:
+        assert shapely.distance(art, shapely.Polygon(s)) >= offset - 2 * pockets.h
+    # width across the sliver (16) minus the offset on both sides: the bar is 10 wide
+    assert along * 10.0 <= 16.0 - 2 * offset + 2 * pockets.h
+    assert along * 10.0 >= 0.8 * (16.0 - 2 * offset)
+
+
+def test_outline_samples_cover_the_inside():
+    outline = outline_of(_bar_element(40.0, 40.0))
+    pts = outline_samples(outline, n=40, n_inside=64)
+    assert np.allclose(pts.mean(axis=0), 0.0, atol=2.0)  # centred on the centroid
+    inside = np.abs(pts).max(axis=1) < 15
+    assert inside.sum() >= 30  # points on a grid inside, not only on the boundary
+    assert np.abs(pts).max() <= 20 + 1e-9
+
+
+def test_pack_sizes_secondaries_to_their_pockets():
+    """Copies come in size classes (one template each), a skin built for about their
+    own size: the smallest and the largest copy differ by more than one class."""
+    from repulsionpak import pack
+    from repulsionpak.params import Params, PlacementParams
+    from repulsionpak.types import Container
+
+    region = shapely.box(0, 0, 300, 200)
+    el = _bar_element(60.0, 12.0)
+    p = Params(gap=4.0, seed=2, placement=PlacementParams(count=8))
+    packing = pack(Container("box.svg", region), [el], p)
+    sec = [i for i, k in enumerate(packing.model.kind) if k == "secondary"]
+    assert len(sec) >= 5
+    scales = sorted({packing.templates[int(packing.model.template_index[i])].scale for i in sec})
+    assert len(scales) >= 2 and scales[-1] / scales[0] >= SIZE_STEP ** 2 * 0.999
+    assert packing.verification.ok
