@@ -41,6 +41,9 @@ SNAP_ANGLE = math.radians(2.0)
 LSQ_ITERATIONS = 4
 #: largest number of cubics the search over the two tangent lengths evaluates
 SEARCH_EVALS = 48
+#: ... and only from a cubic whose score (largest error / tolerance, or direction error /
+#: angle tolerance) is at most this
+SEARCH_FROM = 5.0
 
 
 @njit(cache=True)
@@ -310,30 +313,25 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
     c[1, 0], c[1, 1] = p0x + d0x / 3.0, p0y + d0y / 3.0
     c[2, 0], c[2, 1] = p3x - d3x / 3.0, p3y - d3y / 3.0
     c[3, 0], c[3, 1] = p3x, p3y
-    err = _max_error(c, u, q, a, b)
-    if not _forward(c, u, g, a, b, cos_tol):
-        err = 1e299
-    if err <= tol:
+    score = _score(c, u, q, g, a, b, tol, ang_tol)
+    if score <= 1.0:
         return 3
     _copy4(best, c)
-    best_err = err
+    best_score = score
     # least squares, same tangent directions, refined parameters
     for _ in range(LSQ_ITERATIONS):
         _lsq(q, u, a, b, c)
-        err = _max_error(c, u, q, a, b)
-        if not _forward(c, u, g, a, b, cos_tol):
-            err = 1e299
-        if err <= tol:
+        score = _score(c, u, q, g, a, b, tol, ang_tol)
+        if score <= 1.0:
             return 3
-        if err < best_err:
+        if score < best_score:
             _copy4(best, c)
-            best_err = err
+            best_score = score
     # the least-squares cubic minimises the mean error, not the largest one: search the
     # two tangent lengths for one within the distance and angle tolerances
-    _copy4(c, best)
-    if _search(c, u, q, g, a, b, tol, ang_tol, SEARCH_EVALS) <= 1.0:
-        err = _max_error(c, u, q, a, b)
-        if err <= tol and _forward(c, u, g, a, b, cos_tol):
+    if best_score <= SEARCH_FROM:
+        _copy4(c, best)
+        if _search(c, u, q, g, a, b, tol, ang_tol, SEARCH_EVALS) <= 1.0:
             return 3
     return 0
 
@@ -451,6 +449,11 @@ def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
     for k in range(n):
         for i in range(seg_start[k], seg_start[k + 1]):
             tc[i] = k + t[i]
+    ang_tol = math.acos(min(1.0, max(-1.0, cos_tol)))
+    c = np.empty((4, 2))
+    best = np.empty((4, 2))
+    u = np.empty(len(t))
+    kind = 0
     k = 0
     while k < n:
         # a run: curved segments meeting at smooth joints (mapped tangents within the snap
@@ -462,14 +465,25 @@ def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
             if not (gn > 0 and (g[e, 0] * g[s, 0] + g[e, 1] * g[s, 1]) > cos_snap * gn):
                 break
             j += 1
-        c0 = count[0]
-        for i in range(k, j + 1):  # each segment on its own: kept when none had to be split
-            _fit_piece(order[i], q, g, tc, seg_start[i], seg_start[i + 1], tol, cos_tol,
-                       ts[i, 0], ts[i, 1], use_ts[i], te[i, 0], te[i, 1], use_te[i], out_o, out_c, count)
-        if count[0] - c0 > j - k + 1:  # refit the run as a whole, joints anywhere on it
-            count[0] = c0
-            _fit_piece(3, q, g, tc, seg_start[k], seg_start[j + 1], tol, cos_tol,
-                       ts[k, 0], ts[k, 1], use_ts[k], te[j, 0], te[j, 1], use_te[j], out_o, out_c, count)
+        if j == k:
+            _fit_piece(order[k], q, g, tc, seg_start[k], seg_start[k + 1], tol, cos_tol,
+                       ts[k, 0], ts[k, 1], use_ts[k], te[k, 0], te[k, 1], use_te[k], out_o, out_c, count)
+        else:
+            # each segment of the run in one piece, as in the source, when every one fits;
+            # else the run as a whole, joints wherever they are needed
+            n0 = count[0]
+            for i in range(k, j + 1):
+                kind = _try_span(order[i], q, g, tc, seg_start[i], seg_start[i + 1], tol, cos_tol, ang_tol,
+                                 ts[i, 0], ts[i, 1], use_ts[i], te[i, 0], te[i, 1], use_te[i], c, u, best)
+                if kind == 0:
+                    break
+                if kind > 0:
+                    _emit(kind, c, out_o, out_c, count[0])
+                    count[0] += 1
+            if kind == 0:
+                count[0] = n0
+                _fit_piece(3, q, g, tc, seg_start[k], seg_start[j + 1], tol, cos_tol,
+                           ts[k, 0], ts[k, 1], use_ts[k], te[j, 0], te[j, 1], use_te[j], out_o, out_c, count)
         k = j + 1
     n_out = count[0]
     return out_o[:n_out], out_c[:n_out]
