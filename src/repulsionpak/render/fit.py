@@ -123,6 +123,23 @@ def _line_error(q, lo, hi):
 
 
 @njit(cache=True)
+def _line_fits(q, g, lo, hi, tol, cos_tol):
+    """True when the chord q[lo] -> q[hi-1] is within ``tol`` of every sample and within
+    the angle tolerance of the mapped curve's direction at every sample (the test every
+    fitted piece passes: a line kept straight where the map bends it would otherwise meet
+    its smooth neighbours at a visible angle)."""
+    if _line_error(q, lo, hi) > tol:
+        return False
+    vx, vy = q[hi - 1, 0] - q[lo, 0], q[hi - 1, 1] - q[lo, 1]
+    for i in range(lo, hi):
+        dot = vx * g[i, 0] + vy * g[i, 1]
+        n = math.hypot(vx, vy) * math.hypot(g[i, 0], g[i, 1])
+        if n > 0 and dot < cos_tol * n:
+            return False
+    return True
+
+
+@njit(cache=True)
 def _lsq(q, u, lo, hi, c):
     """Least-squares tangent lengths for cubic c (ends and unit tangents fixed); in place."""
     p0x, p0y, p3x, p3y = c[0, 0], c[0, 1], c[3, 0], c[3, 1]
@@ -259,7 +276,7 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
     if ext <= 1e-12 * (1.0 + big):
         return -1
     chord = math.hypot(p3x - p0x, p3y - p0y)
-    if order == 1 and chord > 0 and _line_error(q, a, b) <= tol:
+    if order == 1 and chord > 0 and _line_fits(q, g, a, b, tol, cos_tol):
         c[0, 0], c[0, 1] = p0x, p0y
         for r in range(1, 4):
             c[r, 0], c[r, 1] = p3x, p3y
@@ -409,7 +426,7 @@ def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
         if order[k] == 1:
             a, b = seg_start[k], seg_start[k + 1]
             if math.hypot(q[b - 1, 0] - q[a, 0], q[b - 1, 1] - q[a, 1]) > 0:
-                straight[k] = _line_error(q, a, b) <= tol
+                straight[k] = _line_fits(q, g, a, b, tol, cos_tol)
     ts = np.zeros((n, 2))
     te = np.zeros((n, 2))
     use_ts = np.zeros(n, np.int64)
