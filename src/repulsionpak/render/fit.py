@@ -55,8 +55,9 @@ def _eval(c, u):
 
 
 @njit(cache=True)
-def _max_error(c, u, q, lo, hi):
-    """Largest distance of samples q[lo:hi] from cubic c (refines u in place)."""
+def _max_error(c, u, q, lo, hi, stop=1e300):
+    """Largest distance of samples q[lo:hi] from cubic c (refines u in place); returns
+    early, with a value above ``stop``, once one sample is further than that."""
     worst = 0.0
     for i in range(lo, hi):
         k = i - lo
@@ -86,6 +87,8 @@ def _max_error(c, u, q, lo, hi):
         u[k] = uu
         if best > worst:
             worst = best
+            if worst > stop * stop:
+                break
     return math.sqrt(worst)
 
 
@@ -206,9 +209,12 @@ def _min_cos(c, u, g, lo, hi):
 
 
 @njit(cache=True)
-def _score(c, u, q, g, lo, hi, tol, ang_tol):
-    """max(distance / tol, direction error / angle tolerance) of cubic c: <= 1 fits."""
-    err = _max_error(c, u, q, lo, hi) / tol
+def _score(c, u, q, g, lo, hi, tol, ang_tol, stop=1e300):
+    """max(distance / tol, direction error / angle tolerance) of cubic c: <= 1 fits.
+    Above ``stop``, only a lower bound of the score (the search then rejects c anyway)."""
+    err = _max_error(c, u, q, lo, hi, stop * tol) / tol
+    if err > stop:
+        return err
     ang = math.acos(min(1.0, max(-1.0, _min_cos(c, u, g, lo, hi)))) / ang_tol
     return max(err, ang)
 
@@ -243,7 +249,7 @@ def _search(c, u, q, g, lo, hi, tol, ang_tol, max_evals):
                 continue
             trial[1, 0], trial[1, 1] = p0x + al * t0x, p0y + al * t0y
             trial[2, 0], trial[2, 1] = p3x + be * t3x, p3y + be * t3y
-            f = _score(trial, u, q, g, lo, hi, tol, ang_tol)
+            f = _score(trial, u, q, g, lo, hi, tol, ang_tol, f0)
             evals += 1
             if f < f0:
                 f0 = f
@@ -330,7 +336,7 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
     c[1, 0], c[1, 1] = p0x + d0x / 3.0, p0y + d0y / 3.0
     c[2, 0], c[2, 1] = p3x - d3x / 3.0, p3y - d3y / 3.0
     c[3, 0], c[3, 1] = p3x, p3y
-    score = _score(c, u, q, g, a, b, tol, ang_tol)
+    score = _score(c, u, q, g, a, b, tol, ang_tol, SEARCH_FROM)
     if score <= 1.0:
         return 3
     _copy4(best, c)
@@ -338,7 +344,7 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
     # least squares, same tangent directions, refined parameters
     for _ in range(LSQ_ITERATIONS):
         _lsq(q, u, a, b, c)
-        score = _score(c, u, q, g, a, b, tol, ang_tol)
+        score = _score(c, u, q, g, a, b, tol, ang_tol, SEARCH_FROM)
         if score <= 1.0:
             return 3
         if score < best_score:
