@@ -37,6 +37,14 @@ __all__ = ["fit_subpath"]
 #: curve beside a straight line then takes the line's direction as its end tangent, and
 #: curves meeting there may be refitted together (a corner never is)
 SNAP_ANGLE = math.radians(2.0)
+#: shortest tangent arm (control point to end point) of a fitted piece, × its chord: a
+#: piece whose arm is much shorter turns by up to the angle tolerance within a tiny
+#: length next to its joint, which looks like a kink (found by the search otherwise)
+ARM_MIN = 0.1
+#: samples next to each end of a piece whose direction must be within END_SHARE of the
+#: angle tolerance
+END_SAMPLES = 2
+END_SHARE = 0.6
 #: least-squares passes (each followed by a Newton reparametrisation) before the search
 LSQ_ITERATIONS = 4
 #: largest number of cubics the search over the two tangent lengths evaluates
@@ -192,31 +200,42 @@ def _copy4(dst, src):
 
 
 @njit(cache=True)
-def _min_cos(c, u, g, lo, hi):
-    """Smallest cosine of the angle between the cubic's direction B'(u_i) and the mapped
-    curve's g_i over samples [lo, hi) (-1 where B' vanishes)."""
-    worst = 1.0
+def _angle_score(c, u, g, lo, hi, ang_tol):
+    """Largest angle between the cubic's direction B'(u_i) and the mapped curve's g_i over
+    samples [lo, hi), over the angle tolerance; next to the ends (END_SAMPLES samples) over
+    END_SHARE of it, so the curvature at a joint follows the exact curve's and neighbouring
+    pieces meet without a visible change of curvature (π / ang_tol where B' vanishes)."""
+    worst = 0.0
     for i in range(lo, hi):
         uu = u[i - lo]
         s = 1.0 - uu
         dx = 3.0 * (s * s * (c[1, 0] - c[0, 0]) + 2.0 * s * uu * (c[2, 0] - c[1, 0]) + uu * uu * (c[3, 0] - c[2, 0]))
         dy = 3.0 * (s * s * (c[1, 1] - c[0, 1]) + 2.0 * s * uu * (c[2, 1] - c[1, 1]) + uu * uu * (c[3, 1] - c[2, 1]))
-        n = math.hypot(dx, dy) * math.hypot(g[i, 0], g[i, 1])
-        cs = (dx * g[i, 0] + dy * g[i, 1]) / n if n > 0 else -1.0
-        if cs < worst:
-            worst = cs
+        if dx == 0.0 and dy == 0.0:
+            return math.pi / ang_tol
+        a = abs(math.atan2(dx * g[i, 1] - dy * g[i, 0], dx * g[i, 0] + dy * g[i, 1])) / ang_tol
+        if i - lo <= END_SAMPLES or hi - 1 - i <= END_SAMPLES:
+            a /= END_SHARE
+        if a > worst:
+            worst = a
     return worst
 
 
 @njit(cache=True)
 def _score(c, u, q, g, lo, hi, tol, ang_tol, stop=1e300):
-    """max(distance / tol, direction error / angle tolerance) of cubic c: <= 1 fits.
+    """max(distance / tol, direction error / angle tolerance, ARM_MIN × chord / shorter
+    tangent arm) of cubic c: <= 1 fits.
     Above ``stop``, only a lower bound of the score (the search then rejects c anyway)."""
+    chord = math.hypot(c[3, 0] - c[0, 0], c[3, 1] - c[0, 1])
+    arm = min(math.hypot(c[1, 0] - c[0, 0], c[1, 1] - c[0, 1]), math.hypot(c[2, 0] - c[3, 0], c[2, 1] - c[3, 1]))
+    short = ARM_MIN * chord / arm if arm > 0 else 1e300
+    if short > stop:
+        return short
     err = _max_error(c, u, q, lo, hi, stop * tol) / tol
     if err > stop:
         return err
-    ang = math.acos(min(1.0, max(-1.0, _min_cos(c, u, g, lo, hi)))) / ang_tol
-    return max(err, ang)
+    ang = _angle_score(c, u, g, lo, hi, ang_tol)
+    return max(err, ang, short)
 
 
 @njit(cache=True)
@@ -317,7 +336,7 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
         vx, vy = p3x - p0x, p3y - p0y
         al = (vx * t3y - t3x * vy) / det
         be = (t0x * vy - t0y * vx) / det
-        if al > 0 and be > 0 and al < 4 * chord and be < 4 * chord:
+        if al > 1.5 * ARM_MIN * chord and be > 1.5 * ARM_MIN * chord and al < 4 * chord and be < 4 * chord:
             cx, cy = p0x + al * t0x, p0y + al * t0y
             c[0, 0], c[0, 1] = p0x, p0y
             c[1, 0], c[1, 1] = p0x + 2.0 / 3.0 * (cx - p0x), p0y + 2.0 / 3.0 * (cy - p0y)
