@@ -254,10 +254,10 @@ def _search(c, u, q, g, lo, hi, tol, ang_tol, max_evals):
     t0x, t0y, t3x, t3y = t0x / n0, t0y / n0, t3x / n3, t3y / n3
     la, lb = math.log(n0), math.log(n3)
     f0 = _score(c, u, q, g, lo, hi, tol, ang_tol)
-    step = 0.25
     evals = 0
     trial = np.empty((4, 2))
     _copy4(trial, c)
+    step = 0.25
     while f0 > 1.0 and step > 1e-3 and evals < max_evals:
         moved = False
         for k in range(8):
@@ -360,7 +360,16 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
         return 3
     _copy4(best, c)
     best_score = score
-    # least squares, same tangent directions, refined parameters
+    # least squares, same tangent directions, refined parameters; starting from the
+    # chord-length parameters (the segment parameter's speed can differ along a span,
+    # most across the joints of a run)
+    total = 0.0
+    u[0] = 0.0
+    for i in range(a + 1, b):
+        total += math.hypot(q[i, 0] - q[i - 1, 0], q[i, 1] - q[i - 1, 1])
+        u[i - a] = total
+    for i in range(a, b):
+        u[i - a] = u[i - a] / total if total > 0 else (i - a) / max(1, m - 1)
     for _ in range(LSQ_ITERATIONS):
         _lsq(q, u, a, b, c)
         score = _score(c, u, q, g, a, b, tol, ang_tol, SEARCH_FROM)
