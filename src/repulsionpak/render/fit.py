@@ -9,7 +9,11 @@ one fits (its control point where the two end tangents meet: two numbers fewer t
 cubic), otherwise a cubic with the exact end tangents: the Hermite piece (exact end
 derivatives), then least squares with Newton reparametrisation, then a pattern search
 over the two tangent lengths for the largest error (the least-squares cubic minimises
-the mean error; a piece must keep the largest one within the tolerance).
+the mean error; a piece must keep the largest one within the tolerance). A piece fits
+when every sample is within the tolerance of it, its direction within the angle
+tolerance of the mapped curve's at every sample (half of it next to its ends, so joints
+keep the exact curve's curvature) and both tangent arms are at least ``ARM_MIN`` of its
+chord (a shorter arm turns the curve right next to its joint: a near-kink).
 
 Each source segment is fitted on its own first, and kept so when every segment of its
 run (curved segments meeting at smooth joints) takes one piece: a copy that is only
