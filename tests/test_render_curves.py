@@ -15,7 +15,7 @@ from repulsionpak.io.svg_source import arc_to_cubics
 from repulsionpak.params import RenderParams
 from repulsionpak.preprocess import build_template, outline_of
 from repulsionpak.render import render_copy
-from repulsionpak.render.curves import bezier, decimals_for, flatten_subpath, path_data
+from repulsionpak.render.curves import bezier, bezier_deriv, decimals_for, flatten_subpath, path_data
 from repulsionpak.render.deform import map_plan, tps_weights
 from repulsionpak.render.fit import fit_subpath
 from repulsionpak.render.quality import (curve_share, dense_polyline, deviation, exact_outlines,
@@ -179,8 +179,9 @@ def test_affine_copy_keeps_every_segment_exactly(tmp_path):
         want = s.transformed(A @ rest)
         # end points exact up to rounding; the curves within the tolerance
         assert np.abs(c.end_points() - want.end_points()).max() <= 10.0 ** -decimals_for(tol)
-        d = shapely.hausdorff_distance(shapely.LinearRing(dense_polyline(c)),
-                                       shapely.LinearRing(dense_polyline(want)), densify=0.02)
+        a, b = dense_polyline(c), dense_polyline(want)  # 256 samples per segment, both ways
+        d = max(shapely.distance(shapely.points(a), shapely.LinearRing(b)).max(),
+                shapely.distance(shapely.points(b), shapely.LinearRing(a)).max())
         assert d <= tol
 
 
@@ -190,7 +191,10 @@ def test_square_keeps_exactly_four_corners_when_bent(tmp_path):
         paths, tol = render_copy(t, _bend(t.verts, jitter=jitter), GAP)
         sub = paths[0].source.curves[0]
         assert _corners(sub) == 4
-        assert (sub.order > 1).sum() >= 4  # bent sides are curves, not facets
+        # bent sides are curves, not facets: a line is only ever a whole side kept straight
+        sides = np.hypot(*(sub.ctrl[:, 1] - sub.ctrl[:, 0]).T)[sub.order == 1]
+        assert (sides > 0.9 * t.scale * 90).all()
+        assert (sub.order > 1).sum() >= 2 + (jitter > 0) * 2
 
 
 def test_straight_lines_stay_lines_when_the_map_keeps_them_straight(tmp_path):
@@ -243,6 +247,66 @@ def test_letters_are_mostly_curves_and_compact(tmp_path):
             "ns0:", "").replace(' xmlns:ns0="http://www.w3.org/2000/svg"', ""))
             for e in root.iter() if e.tag.endswith("path"))
         assert written <= 1.5 * source, (ch, written, source)
+
+
+def _source_bytes(text):
+    import xml.etree.ElementTree as ET
+
+    return sum(len(ET.tostring(e, encoding="unicode").replace("ns0:", "").replace(
+        ' xmlns:ns0="http://www.w3.org/2000/svg"', "")) for e in ET.fromstring(text).iter()
+        if e.tag.endswith("path"))
+
+
+def test_pressed_letters_stay_compact_and_keep_their_corners(tmp_path):
+    """Letters deformed like pressed primaries: strong waves plus the small per-vertex
+    ripple the simulation leaves (0.1 units, ~ the curve tolerance). Measured: 1.36× the
+    source's markup on average, 1.89× at most (R, whose long straight stems become curves),
+    against 1.83× / 2.70× for the previous fitter (split at the middle sample)."""
+    from repulsionpak.render.svg import _art_path_xml
+
+    ratios = []
+    for ch in "aegRS&":
+        text = letter_svg(ch)
+        el = _element(tmp_path, text, f"p{ord(ch)}.svg")
+        t = _template(el, 1.0)
+        src = el.paths[0].source.curves
+        for seed in range(2):
+            rng = np.random.default_rng(seed)
+            verts = _squeeze(t.verts, amount=4.0, seed=seed) + 0.1 * rng.standard_normal(t.verts.shape)
+            paths, tol = render_copy(t, verts, GAP)
+            ratios.append(sum(len(_art_path_xml(a, 1.0, "")) for a in paths) / _source_bytes(text))
+            curved, total = curve_share(paths)
+            assert curved >= 0.5 * total
+            assert deviation(paths, exact_outlines(t, verts), tol) <= tol
+            out = paths[0].source.curves
+            assert [_corners(c) for c in out] == [_corners(c) for c in src], ch  # corners kept
+            # every other joint is smooth: its turn is within 1° (rounding of short arms)
+            for c in out:
+                for k in range(len(c.order)):
+                    j = (k + 1) % len(c.order)
+                    a = c.ctrl[k, int(c.order[k])] - c.ctrl[k, int(c.order[k]) - 1]
+                    b = c.ctrl[j, 1] - c.ctrl[j, 0]
+                    turn = math.degrees(math.acos(np.clip(a @ b / np.hypot(*a) / np.hypot(*b), -1, 1)))
+                    assert turn <= 1.0 or turn > 10.0, (ch, turn)
+    assert np.mean(ratios) <= 1.5, ratios
+    assert max(ratios) <= 2.1, ratios
+
+
+def test_fit_one_cubic_with_another_parametrisation():
+    """A mapped segment that is exactly one cubic, sampled at a parameter whose speed
+    differs from the cubic's (as across the joints of a run): the exact end derivatives
+    give a wrong Hermite piece, least squares from chord-length parameters and the search
+    over the tangent lengths give at most two pieces (the middle-split fitter wrote 3–4)."""
+    c = np.array([[0.0, 0.0], [30.0, 40.0], [80.0, 45.0], [100.0, 0.0]])
+    for k in (0.5, 1.0, 2.0, 4.0):
+        s = np.linspace(0.0, 1.0, 41)
+        t = (s + k * s * s) / (1 + k)
+        q = bezier(c, 3, t)
+        g = bezier_deriv(c, 3, t) * ((1 + 2 * k * s) / (1 + k))[:, None]
+        sub = fit_subpath(np.array([3]), np.array([0, 41]), False, q, g, s, 0.05, 2.0)
+        assert len(sub.order) <= 2
+        d = shapely.distance(shapely.points(q), shapely.LineString(dense_polyline(sub))).max()
+        assert d <= 0.05
 
 
 def test_strongly_bent_bar_follows_the_bend_without_folding(tmp_path):

@@ -192,7 +192,7 @@ class RenderParams:
         0.0, "-", "λ of a smoothing thin-plate spline (coordinates scaled to the element's "
         "size); 0 passes exactly through every mesh vertex. 0.002 irons out the small ripples "
         "the simulation leaves in pressed skins, which the fitter otherwise writes as waves "
-        "(letters' primaries: 1.89 → 1.50× their source's markup), but moves the art off the "
+        "(letters' primaries: 1.49 → 1.23× their source's markup), but moves the art off the "
         "mesh (≤ 0.2 gap) and the verification then leaves the negative space a little less "
         "even (Q_s(gap/2)/Q_s(0) +0.01–0.04 on letter scenes): see docs/quality.md.")
     samples: float = _doc(
