@@ -4,8 +4,8 @@ primaries frozen (they still repel and can be overlapped into, but never move)."
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
@@ -171,7 +171,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     gap = packing.gap
     t0 = time.perf_counter()
     pockets = pocket_seeds(packing.container.region, packing.skins(), gap, sp)
-    seeds, dist = pockets.seeds, pockets.distance
+    seeds = pockets.seeds
     packing.seconds["seeding"] = time.perf_counter() - t0
     if len(seeds) == 0:
         packing.stopped_by["secondary"] = "no_pockets"
