@@ -71,3 +71,23 @@ def test_without_repair_violations_are_reported_not_fixed():
     assert not v.ok
     assert v.overlap_pairs == 1 and v.outside == 1 and v.margin_violations == 1
     assert out == placed
+
+
+def test_a_secondary_too_close_to_a_primary_gives_way_alone():
+    """Of a primary and a secondary too close, only the secondary moves or shrinks (a
+    pocket filler never costs the element it fills around); two primaries share."""
+    import dataclasses
+
+    small = dataclasses.replace(square(42, 30, side=10.0, source="small.svg"), kind="secondary")
+    placed = [square(20, 30), small]  # 2 units apart, overlapping in y
+    before = geoms(placed)
+    out, v = verify_and_repair(placed, CONTAINER, gap=5, margin=2.5, min_gap=4.5, grow_to=0.0)
+    assert v.ok and len(out) == 2
+    check(out, 5, 2.5, 4.5)
+    after = geoms(out)
+    assert after[0].equals(before[0])  # the primary is untouched
+    assert not after[1].equals(before[1])
+    # the same pair as two primaries: both give way (the push is shared)
+    both = [square(20, 30), square(42, 30, side=10.0, source="small.svg")]
+    out2, v2 = verify_and_repair(both, CONTAINER, gap=5, margin=2.5, min_gap=4.5, grow_to=0.0)
+    assert v2.ok and not geoms(out2)[0].equals(before[0])
