@@ -234,21 +234,21 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         min_scale=v.min_scale, repair=v.repair, straightened=straightened,
         grow_to=v.grow_to * gap, max_scale=v.max_grow)
     packing.seconds["verify"] = time.perf_counter() - t4
-    sp = params.secondary
-    if (sp.fill_holes or sp.fill_leftover) and secondary and not packing.partial:
+    sec = params.secondary
+    if (sec.fill_holes or sec.fill_leftover) and secondary and not packing.partial:
         from .holes import HoleLibrary, fill_holes, fill_pockets  # noqa: PLC0415
 
         library = HoleLibrary.of(secondary)
-        if library is not None and sp.fill_leftover:  # what the verification left (holes.py)
+        if library is not None and sec.fill_leftover:  # what the verification left (holes.py)
             t5 = time.perf_counter()
             packing.placed = packing.placed + fill_pockets(
                 packing.placed, library, container.region, gap, margin_of(params, gap), rng,
-                sp.hole_min_radius * gap, params.render)
+                sec.hole_min_radius * gap, params.render)
             packing.seconds["leftover"] = time.perf_counter() - t5
-        if library is not None and sp.fill_holes:  # the holes of the art are pockets too (holes.py)
+        if library is not None and sec.fill_holes:  # the holes of the art are pockets too (holes.py)
             t5 = time.perf_counter()
             packing.placed = packing.placed + fill_holes(
-                packing.placed, library, gap, rng, sp.hole_min_radius * gap, sp.hole_depth, params.render)
+                packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render)
             packing.seconds["holes"] = time.perf_counter() - t5
     packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0

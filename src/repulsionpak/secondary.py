@@ -251,9 +251,10 @@ def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, ro
     The nominal scale is the largest at which the copy's art, centred on the seed, keeps
     its skin offset (``offset``) from every primary skin and the boundary — measured on
     the pocket's distance transform at samples on and inside its outline
-    (:func:`outline_samples`) — so its skin just fills the pocket. Free copies try their pocket's long axis (both ways) and ``ANGLE_TRIES``
-    random angles and take the angle with the largest fit: a bar lies along a sliver, a
-    star turns its tips into the corners of a pocket. Rotation-controlled copies keep the
+    (:func:`outline_samples`) — so its skin just fills the pocket. Free copies try their
+    pocket's long axis (both ways) and ``ANGLE_TRIES`` random angles and take the angle
+    with the largest fit: a bar lies along a sliver, a star turns its tips into the
+    corners of a pocket. Rotation-controlled copies keep the
     angles their controls give (:func:`repulsionpak.controls.initial_angles`).
     """
     n = len(assign)
