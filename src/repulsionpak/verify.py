@@ -370,6 +370,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
             break
         translate = r < rounds // 2  # local separation first: a move keeps shape and size
         moved = []
+        shrunk = []
         for i in bad:
             if fixed is not None and fixed[i]:
                 continue
@@ -383,6 +384,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 if scale[i] < (min_scale if placed[i].kind == "primary" else 0.5 * min_scale):
                     alive[i] = False
                     continue
+                shrunk.append(i)
             place(i)
         if moved:  # keep only the moves that helped the element that made them
             after = check()[0]
@@ -391,6 +393,26 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                     shift[i] -= step
                     stuck[i] = True
                     place(i)
+        if shrunk:
+            # the smaller copies may now fit a step away: a thin part squeezed sideways
+            # gains little from shrinking about its centroid (the heart's snake was
+            # dropped so). Each copy still short tries its move from where it shrank and
+            # keeps it only if that helped.
+            need, _, push, _, _, _ = check()
+            moved = []
+            for i in shrunk:
+                ln = float(np.hypot(*push[i]))
+                if need[i] > 0 and ln > 0:
+                    step = push[i] * min(1.0 + slack / need[i], (need[i] + slack) / ln)
+                    shift[i] += step
+                    moved.append((i, step))
+                    place(i)
+            if moved:
+                after = check()[0]
+                for i, step in moved:
+                    if after[i] >= need[i]:
+                        shift[i] -= step
+                        place(i)
     if repair and grow_to > 0:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed)
