@@ -535,11 +535,12 @@ _H_MIXED = ("heart", "gear", "arrow", "thinring", "ellipse", "glyph-K", "glyph-@
 
 
 def holdout_suite() -> list[Scene]:
-    """A held-out suite (20 scenes) never used to tune the packing: new element kinds
+    """A held-out suite (25 scenes) never used to tune the packing: new element kinds
     (heart, bean, gear, arrow, L, keyhole, thin ring, pentagon, 3:1 ellipse; glyphs
     K M W x % @ 3 y) and new containers (triangle, 2:1 ellipse, wide annulus, L shape,
     a big letter C, hexagon) mixed with the old ones; gaps 0.5–3 %, scales 0.01×–100×,
-    5 to 200 elements; seeds from 201."""
+    5 to 200 elements; seeds from 201. The last five ("ho-stress-*") push the ranges
+    corners (0.5 % gaps with thin parts or letters, 5–6 elements at a 3 % gap)."""
     S = Scene
     return [
         # convex, elongated
@@ -569,6 +570,14 @@ def holdout_suite() -> list[Scene]:
         S("ho-mixed-ellipse-5", "ellipse", ("heart", "glyph-W"), gap=0.03, count=5, seed=218),
         S("ho-mixed-hexagon-150", "hexagon", _H_MIXED, gap=0.005, count=150, seed=219),
         S("ho-mixed-star-200-x0.01", "star", _H_MIXED, gap=0.005, count=200, seed=220, scale=0.01),
+        # stress: the corners of the ranges where the first 20 came closest to a limit
+        S("ho-stress-thin-ell", "ell", ("arrow", "ell", "bar"), gap=0.005, count=60, seed=221),
+        S("ho-stress-few-triangle", "triangle", ("gear", "glyph-%"), gap=0.03, count=5, seed=222),
+        S("ho-stress-letters-glyph", "glyph", tuple(f"glyph-{c}" for c in "%@MW"), gap=0.005, count=60,
+          seed=223),
+        S("ho-stress-keyholes-star-x0.01", "star", ("keyhole", "thinring"), gap=0.005, count=50, seed=224,
+          scale=0.01),
+        S("ho-stress-few-annulus", "annulus", ("heart", "bean"), gap=0.03, count=6, seed=225),
     ]
 
 
