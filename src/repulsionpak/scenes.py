@@ -535,11 +535,11 @@ _H_MIXED = ("heart", "gear", "arrow", "thinring", "ellipse", "glyph-K", "glyph-@
 
 
 def holdout_suite() -> list[Scene]:
-    """A held-out suite (25 scenes) never used to tune the packing: new element kinds
+    """A held-out suite (27 scenes) never used to tune the packing: new element kinds
     (heart, bean, gear, arrow, L, keyhole, thin ring, pentagon, 3:1 ellipse; glyphs
     K M W x % @ 3 y) and new containers (triangle, 2:1 ellipse, wide annulus, L shape,
     a big letter C, hexagon) mixed with the old ones; gaps 0.5–3 %, scales 0.01×–100×,
-    5 to 200 elements; seeds from 201. The last five ("ho-stress-*") push the ranges
+    5 to 200 elements; seeds from 201. The last seven ("ho-stress-*") push the ranges
     corners (0.5 % gaps with thin parts or letters, 5–6 elements at a 3 % gap)."""
     S = Scene
     return [
@@ -578,6 +578,8 @@ def holdout_suite() -> list[Scene]:
         S("ho-stress-keyholes-star-x0.01", "star", ("keyhole", "thinring"), gap=0.005, count=50, seed=224,
           scale=0.01),
         S("ho-stress-few-annulus", "annulus", ("heart", "bean"), gap=0.03, count=6, seed=225),
+        S("ho-stress-at-hexagon", "hexagon", ("glyph-@",), gap=0.005, count=60, seed=226),
+        S("ho-stress-discs-glyph", "glyph", ("disc", "ellipse"), gap=0.005, count=60, seed=227),
     ]
 
 
