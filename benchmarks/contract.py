@@ -308,6 +308,9 @@ def main(argv=None) -> int:
         ap.error("--jobs must be >= 1")
     partial = bool(args.only or args.fast or args.suite != "main")
     out_dir = args.out_dir if args.out_dir is not None else (None if partial else ROOT / "docs")
+    if args.suite == "holdout" and out_dir is not None and out_dir.resolve() == (ROOT / "docs").resolve():
+        ap.error("--suite holdout never writes docs/ (the published numbers are the main suite's); "
+                 "give another --out-dir")
     pic_dir = None
     if out_dir is not None:
         pic_dir = out_dir / "images"
