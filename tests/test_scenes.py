@@ -214,3 +214,18 @@ def test_holdout_suite_is_new_and_writes_valid_files(tmp_path):
             g = art_area(load_element(e, tolerance=1e-3 * sc.scale).paths)
             assert g.area > 500 * sc.scale**2, e.name  # drawn about 100 x scale units across
         assert set(files.categories().values()) == set(sc.tags)
+
+
+def test_contract_holdout_never_writes_docs(capsys):
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("contract_bench", root / "benchmarks" / "contract.py")
+    contract = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(contract)
+    with pytest.raises(SystemExit):  # refused before anything is packed
+        contract.main(["--suite", "holdout", "--out-dir", str(root / "docs"), "--only", "ho-mixed-ellipse-5"])
+    assert "never writes docs" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        contract.main(["--suite", "holdout", "--only", "no-such-scene"])
