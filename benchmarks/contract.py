@@ -6,6 +6,9 @@
     python benchmarks/contract.py --fast          # the tests' fast subset, table on stdout only
     python benchmarks/contract.py --only rings-circle --only bars-square   # chosen scenes, stdout only
     python benchmarks/contract.py --only NAME --out-dir /tmp/q   # ... and write the files there
+    python benchmarks/contract.py --suite holdout --jobs 2       # the held-out scenes, stdout only
+    python benchmarks/contract.py --suite holdout --out-dir /tmp/h   # ... files (and pictures of every
+                                                  #   scene) in /tmp/h; never docs/
 
 Every scene of :func:`repulsionpak.scenes.suite` is written to a scratch directory,
 packed through ``repulsionpak pack``'s own code path (:func:`repulsionpak.cli.run_pack`),
@@ -108,7 +111,7 @@ def run_one(name: str, workdir: str, picture_dir: str | None) -> dict:
     from repulsionpak import scenes
     from repulsionpak.io import read_packing_svg, render_png
 
-    scene = {s.name: s for s in scenes.suite() + scenes.fast_suite()}[name]
+    scene = {s.name: s for s in scenes.suite() + scenes.fast_suite() + scenes.holdout_suite()}[name]
     t0 = time.perf_counter()
     try:
         run = scenes.run_scene(scene, workdir)
@@ -276,6 +279,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--only", action="append", default=[], help="run only this scene (repeatable)")
     ap.add_argument("--fast", action="store_true", help="run the tests' fast subset")
+    ap.add_argument("--suite", choices=("main", "holdout"), default="main",
+                    help="main: scenes.suite() (default; a full run rewrites docs/quality.md); holdout: "
+                         "scenes.holdout_suite(), never tuned on (never writes docs/; files only with --out-dir)")
     ap.add_argument("--jobs", type=int, default=1, help="scenes packed at the same time (processes)")
     ap.add_argument("--out-dir", type=Path, default=None,
                     help="where quality.md / quality.json / images go (default: docs/ for a full run; "
@@ -286,7 +292,7 @@ def main(argv=None) -> int:
     from repulsionpak import scenes
     from repulsionpak.io.svg_write import atomic_write_bytes
 
-    every = {s.name: s for s in scenes.suite() + scenes.fast_suite()}
+    every = {s.name: s for s in scenes.suite() + scenes.fast_suite() + scenes.holdout_suite()}
     if args.only:
         unknown = [n for n in args.only if n not in every]
         if unknown:
@@ -294,12 +300,17 @@ def main(argv=None) -> int:
         chosen = [every[n] for n in args.only]
     elif args.fast:
         chosen = scenes.fast_suite()
+    elif args.suite == "holdout":
+        chosen = scenes.holdout_suite()
     else:
         chosen = scenes.suite()
     if args.jobs < 1:
         ap.error("--jobs must be >= 1")
-    partial = bool(args.only or args.fast)
+    partial = bool(args.only or args.fast or args.suite != "main")
     out_dir = args.out_dir if args.out_dir is not None else (None if partial else ROOT / "docs")
+    if args.suite == "holdout" and out_dir is not None and out_dir.resolve() == (ROOT / "docs").resolve():
+        ap.error("--suite holdout never writes docs/ (the published numbers are the main suite's); "
+                 "give another --out-dir")
     pic_dir = None
     if out_dir is not None:
         pic_dir = out_dir / "images"
@@ -341,6 +352,7 @@ def main(argv=None) -> int:
     ordered = [results[s.name] for s in chosen]
     meta = {"revision": revision, "date": time.strftime("%Y-%m-%d"), "machine": machine(),
             "command": "python benchmarks/contract.py" + (f" --jobs {args.jobs}" if args.jobs > 1 else "")
+            + (f" --suite {args.suite}" if args.suite != "main" else "")
             + "".join(f" --only {n}" for n in args.only) + (" --fast" if args.fast else ""),
             "jobs": args.jobs, "wall_seconds": wall}
     print(totals(ordered))

@@ -93,6 +93,12 @@ def test_glyph_rejects_non_characters():
     ("band", (240 / 360) * math.pi * (500**2 - 275**2), 1, 0),
     ("holed", 1000.0**2 - math.pi * 175**2, 1, 1),
     ("two", math.pi * 230**2 + 480 * 460, 2, 0),
+    # holdout containers
+    ("triangle", math.sqrt(3) / 4 * 1000.0**2, 1, 0),
+    ("ellipse", math.pi * 500 * 250, 1, 0),
+    ("annulus", math.pi * (500**2 - 225**2), 1, 1),
+    ("ell", 1000.0**2 - 550.0**2, 1, 0),
+    ("hexagon", 3 * math.sqrt(3) / 2 * 500**2, 1, 0),
 ])
 def test_containers_read_back_exactly(tmp_path, kind, area, parts, holes):
     f = tmp_path / f"{kind}.svg"
@@ -108,7 +114,7 @@ def test_containers_read_back_exactly(tmp_path, kind, area, parts, holes):
 def test_suite_spans_the_matrix():
     suite = scenes.suite()
     assert len(suite) >= 24 and len({s.name for s in suite}) == len(suite)
-    assert {s.container for s in suite} == set(scenes.CONTAINER_KINDS)
+    assert {s.container for s in suite} == {"circle", "square", "star", "band", "holed", "two"}
     tags = {t for s in suite for t in s.tags}
     assert {"convex", "spiky", "thin", "holed", "letter"} <= tags
     assert min(s.gap for s in suite) == 0.005 and max(s.gap for s in suite) == 0.03
@@ -134,10 +140,92 @@ def test_scene_writes_files_and_knows_its_gap(tmp_path):
         scenes.write_suite([sc, sc], tmp_path)
 
 
-@pytest.mark.parametrize("kw", [dict(container="hexagon"), dict(elements=()), dict(gap=0.0),
+@pytest.mark.parametrize("kw", [dict(container="blob"), dict(elements=()), dict(gap=0.0),
                                 dict(count=0), dict(scale=-1.0), dict(name="a b"), dict(elements=("blob",))])
 def test_scene_validates(kw):
     args = dict(name="x", container="circle", elements=("square",))
     args.update(kw)
     with pytest.raises(ParameterError):
         scenes.Scene(**args)
+
+
+# --------------------------------------------------------------------------- holdout suite
+
+HOLDOUT_EXPECTED = {  # element kind -> (category, area at scale 1 or None, holes)
+    "heart": ("spiky", None, 0),
+    "bean": ("spiky", None, 0),
+    "gear": ("spiky", None, 0),
+    "arrow": ("thin", 65 * 16 + 0.5 * 50 * 35, 0),
+    "ell": ("thin", 100 * 25 + 75 * 25, 0),
+    "keyhole": ("thin", None, 0),
+    "thinring": ("holed", math.pi * (50**2 - 42.5**2), 1),
+    "pentagon": ("convex", 2.5 * 50**2 * math.sin(2 * math.pi / 5), 0),
+    "ellipse": ("convex", math.pi * 50 * 50 / 3, 0),
+}
+
+
+@pytest.mark.parametrize("kind", list(HOLDOUT_EXPECTED))
+def test_holdout_elements_have_their_category_and_area(tmp_path, kind):
+    cat, area, holes = HOLDOUT_EXPECTED[kind]
+    assert scenes.element_category(f"{kind}.svg") == cat
+    g = _element_area(tmp_path, kind)
+    assert g.geom_type == "Polygon" and len(g.interiors) == holes
+    minx, miny, maxx, maxy = g.bounds
+    assert max(maxx - minx, maxy - miny) == pytest.approx(100.0, abs=6.0) and min(minx, miny) > -1e-6
+    if area is not None:
+        assert g.area == pytest.approx(area, rel=2e-3)
+    else:  # a concave / necked shape: well inside its box, but not a sliver
+        assert 0.35 * (maxx - minx) * (maxy - miny) < g.area < 0.85 * (maxx - minx) * (maxy - miny)
+        assert g.convex_hull.area > 1.03 * g.area  # genuinely non-convex (heart: 1.036)
+
+
+def test_glyph_container_is_a_big_letter(tmp_path):
+    f = tmp_path / "glyph.svg"
+    f.write_text(scenes.container_svg("glyph", scale=0.1))
+    c = load_container(f, tolerance=0.001)
+    (poly,) = shapely.get_parts(c.region)  # 'C': one region, no hole
+    assert len(poly.interiors) == 0
+    assert max(c.bounds[2] - c.bounds[0], c.bounds[3] - c.bounds[1]) == pytest.approx(100.0, rel=1e-3)
+    assert 0.15 * 100.0**2 < c.area < 0.4 * 100.0**2  # a stroke, not a box
+    assert poly.convex_hull.area > 2 * poly.area
+
+
+def test_holdout_suite_is_new_and_writes_valid_files(tmp_path):
+    hold, main = scenes.holdout_suite(), scenes.suite() + scenes.fast_suite()
+    assert 18 <= len(hold) <= 28 and len({s.name for s in hold}) == len(hold)
+    assert not {s.name for s in hold} & {s.name for s in main}
+    assert not {s.seed for s in hold} & {s.seed for s in main} and min(s.seed for s in hold) >= 200
+    main_glyphs = {e for s in main for e in s.elements if e.startswith("glyph-")}
+    hold_glyphs = {e for s in hold for e in s.elements if e.startswith("glyph-")}
+    assert len(hold_glyphs) >= 6 and not hold_glyphs & main_glyphs
+    new_kinds = set(HOLDOUT_EXPECTED)
+    assert new_kinds <= {e for s in hold for e in s.elements}
+    assert {"triangle", "ellipse", "annulus", "ell", "glyph", "hexagon"} <= {s.container for s in hold}
+    assert 0.005 <= min(s.gap for s in hold) and max(s.gap for s in hold) <= 0.03
+    assert min(s.scale for s in hold) == 0.01 and max(s.scale for s in hold) == 100.0
+    assert all(5 <= s.count <= 200 for s in hold) and sum(s.count > 100 for s in hold) <= 2
+    assert sum(s.count <= 60 for s in hold) >= len(hold) - 2
+    for files in scenes.write_suite(hold, tmp_path):
+        sc = files.scene
+        c = load_container(files.container, tolerance=files.gap / 50)
+        assert max(c.bounds[2] - c.bounds[0], c.bounds[3] - c.bounds[1]) == pytest.approx(sc.size, rel=1e-3)
+        assert files.gap == pytest.approx(sc.gap * sc.size, rel=1e-5)
+        for e in files.elements:
+            g = art_area(load_element(e, tolerance=1e-3 * sc.scale).paths)
+            assert g.area > 500 * sc.scale**2, e.name  # drawn about 100 x scale units across
+        assert set(files.categories().values()) == set(sc.tags)
+
+
+def test_contract_holdout_never_writes_docs(capsys):
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("contract_bench", root / "benchmarks" / "contract.py")
+    contract = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(contract)
+    with pytest.raises(SystemExit):  # refused before anything is packed
+        contract.main(["--suite", "holdout", "--out-dir", str(root / "docs"), "--only", "ho-mixed-ellipse-5"])
+    assert "never writes docs" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        contract.main(["--suite", "holdout", "--only", "no-such-scene"])

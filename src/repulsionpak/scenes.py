@@ -21,6 +21,7 @@ changes, a permissive licence) through :class:`matplotlib.textpath.TextPath`.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,6 +42,7 @@ __all__ = [
     "SceneFiles",
     "suite",
     "fast_suite",
+    "holdout_suite",
     "write_suite",
 ]
 
@@ -56,10 +58,24 @@ ELEMENT_KINDS: dict[str, str] = {
     "cross": "thin",
     "crescent": "thin",
     "ring": "holed",
+    # holdout kinds (scenes.holdout_suite); concave smooth shapes take the 0.15 limit ("spiky")
+    "heart": "spiky",
+    "bean": "spiky",
+    "gear": "spiky",
+    "arrow": "thin",
+    "ell": "thin",
+    "keyhole": "thin",
+    "thinring": "holed",
+    "pentagon": "convex",
+    "ellipse": "convex",
 }
 #: glyphs whose outline has a counter (a hole)
 _HOLED_GLYPHS = set("ABDOPQRabdegopq&0689")
-CONTAINER_KINDS = ("circle", "square", "star", "band", "holed", "two")
+CONTAINER_KINDS = ("circle", "square", "star", "band", "holed", "two",
+                   # holdout containers (scenes.holdout_suite)
+                   "triangle", "ellipse", "annulus", "ell", "glyph", "hexagon")
+#: the letter the ``glyph`` container is drawn as
+GLYPH_CONTAINER_CHAR = "C"
 #: issue 10: p95 of the distortion per element category
 DISTORTION_LIMITS = {"convex": 0.08, "spiky": 0.15, "thin": 0.15, "holed": 0.15, "letter": 0.15}
 
@@ -67,6 +83,8 @@ _COLOURS = {
     "square": "#4e79a7", "disc": "#f28e2b", "triangle": "#e15759", "hexagon": "#76b7b2",
     "star5": "#edc948", "star8": "#b07aa1", "bar": "#59a14f", "cross": "#9c755f",
     "crescent": "#ff9da7", "ring": "#17becf", "glyph": "#333333",
+    "heart": "#d62728", "bean": "#8c564b", "gear": "#7f7f7f", "arrow": "#2ca02c", "ell": "#1f77b4",
+    "keyhole": "#bcbd22", "thinring": "#9467bd", "pentagon": "#e377c2", "ellipse": "#ff7f0e",
 }
 _GLYPH_PREFIX = "glyph-"
 
@@ -181,6 +199,63 @@ def element_svg(kind: str, size: float = 100.0, scale: float = 1.0, fill: str | 
         body = (f'  <path d="M {_num(top[0])} {_num(top[1])} '
                 f'A {_num(r)} {_num(r)} 0 {large_out} 0 {_num(bot[0])} {_num(bot[1])} '
                 f'A {_num(ri)} {_num(ri)} 0 {large_in} 1 {_num(top[0])} {_num(top[1])} Z" {paint}/>')
+    elif kind == "heart":
+        # two lobes (cubic Béziers) meeting in a notch at the top and a point at the bottom
+        h = 0.9 * s
+        body = (f'  <path d="M {_num(0.5 * s)} {_num(0.22 * s)} '
+                f'C {_num(0.5 * s)} {_num(0.0)} {_num(0.0)} {_num(-0.02 * s)} {_num(0.02 * s)} {_num(0.3 * s)} '
+                f'C {_num(0.04 * s)} {_num(0.55 * s)} {_num(0.35 * s)} {_num(0.7 * s)} {_num(0.5 * s)} {_num(h)} '
+                f'C {_num(0.65 * s)} {_num(0.7 * s)} {_num(0.96 * s)} {_num(0.55 * s)} {_num(0.98 * s)} {_num(0.3 * s)} '
+                f'C {_num(s)} {_num(-0.02 * s)} {_num(0.5 * s)} {_num(0.0)} {_num(0.5 * s)} {_num(0.22 * s)} Z" '
+                f'{paint}/>')
+    elif kind == "bean":
+        # a kidney: two round ends joined by a convex back and a concave (dented) front
+        h = 0.6 * s
+        body = (f'  <path d="M {_num(0.25 * s)} {_num(0.0)} '
+                f'C {_num(0.45 * s)} {_num(0.0)} {_num(0.45 * s)} {_num(0.14 * s)} {_num(0.5 * s)} {_num(0.14 * s)} '
+                f'C {_num(0.55 * s)} {_num(0.14 * s)} {_num(0.55 * s)} {_num(0.0)} {_num(0.75 * s)} {_num(0.0)} '
+                f'C {_num(0.92 * s)} {_num(0.0)} {_num(s)} {_num(0.14 * s)} {_num(s)} {_num(0.3 * s)} '
+                f'C {_num(s)} {_num(0.5 * s)} {_num(0.8 * s)} {_num(h)} {_num(0.5 * s)} {_num(h)} '
+                f'C {_num(0.2 * s)} {_num(h)} {_num(0.0)} {_num(0.5 * s)} {_num(0.0)} {_num(0.3 * s)} '
+                f'C {_num(0.0)} {_num(0.14 * s)} {_num(0.08 * s)} {_num(0.0)} {_num(0.25 * s)} {_num(0.0)} Z" '
+                f'{paint}/>')
+    elif kind == "gear":
+        # 10 trapezoidal teeth: root radius 0.78 r, tip radius r
+        n, pts = 10, []
+        for i in range(n):
+            t0 = -math.pi / 2 + i * 2 * math.pi / n
+            for dt, rad in ((-0.5, 0.78), (-0.3, 1.0), (0.0, 1.0), (0.2, 0.78)):
+                t = t0 + dt * 2 * math.pi / n
+                pts.append((c + rad * r * math.cos(t), c + rad * r * math.sin(t)))
+        body = f'  <polygon points="{_pts(pts)}" {paint}/>'
+    elif kind == "arrow":
+        # a shaft 0.16 wide and a triangular head 0.5 wide, 0.35 long, pointing right
+        h = 0.5 * s
+        a, b = 0.25 * s - 0.08 * s, 0.25 * s + 0.08 * s
+        pts = [(0, a), (0.65 * s, a), (0.65 * s, 0), (s, 0.25 * s), (0.65 * s, h), (0.65 * s, b), (0, b)]
+        body = f'  <polygon points="{_pts(pts)}" {paint}/>'
+    elif kind == "ell":
+        # an L: two arms 0.25 wide
+        t = 0.25 * s
+        pts = [(0, 0), (t, 0), (t, s - t), (s, s - t), (s, s), (0, s)]
+        body = f'  <polygon points="{_pts(pts)}" {paint}/>'
+    elif kind == "keyhole":
+        # a disc (radius 0.3) on a neck 0.12 wide, on a foot 0.6 wide: one outline
+        rr, cy, hw = 0.3 * s, 0.3 * s, 0.06 * s
+        yj = cy + math.sqrt(rr * rr - hw * hw)  # where the neck leaves the disc
+        body = (f'  <path d="M {_num(c - hw)} {_num(yj)} A {_num(rr)} {_num(rr)} 0 1 1 {_num(c + hw)} {_num(yj)} '
+                f'L {_num(c + hw)} {_num(0.72 * s)} L {_num(0.8 * s)} {_num(0.72 * s)} L {_num(0.8 * s)} {_num(s)} '
+                f'L {_num(0.2 * s)} {_num(s)} L {_num(0.2 * s)} {_num(0.72 * s)} L {_num(c - hw)} {_num(0.72 * s)} Z" '
+                f'{paint}/>')
+    elif kind == "thinring":
+        body = (f'  <path fill-rule="evenodd" d="{_circle_d(c, c, r)} {_circle_d(c, c, 0.85 * r)}" {paint}/>')
+    elif kind == "pentagon":
+        pts = _regular(c, c, r, 5)
+        body = f'  <polygon points="{_pts(pts)}" {paint}/>'
+        h = float(pts[:, 1].max())
+    elif kind == "ellipse":
+        h = s / 3
+        body = f'  <ellipse cx="{_num(c)}" cy="{_num(h / 2)}" rx="{_num(r)}" ry="{_num(h / 2)}" {paint}/>'
     else:  # ring
         body = (f'  <path fill-rule="evenodd" d="{_circle_d(c, c, r)} {_circle_d(c, c, 0.6 * r)}" {paint}/>')
     return _svg(w, h, body)
@@ -277,6 +352,31 @@ def container_svg(kind: str, size: float = 1000.0, scale: float = 1.0) -> str:
         q0 = 0.52 * s
         body = (f'  <circle cx="{_num(rr)}" cy="{_num(rr)}" r="{_num(rr)}" {style}/>\n'
                 f'  <rect x="{_num(q0)}" y="0" width="{_num(s - q0)}" height="{_num(h)}" {style}/>')
+    elif kind == "triangle":
+        h = s * math.sqrt(3) / 2
+        body = f'  <polygon points="{_pts([(c, 0.0), (s, h), (0.0, h)])}" {style}/>'
+    elif kind == "ellipse":
+        h = 0.5 * s
+        body = f'  <ellipse cx="{_num(c)}" cy="{_num(h / 2)}" rx="{_num(r)}" ry="{_num(h / 2)}" {style}/>'
+    elif kind == "annulus":
+        body = f'  <path fill-rule="evenodd" d="{_circle_d(c, c, r)} {_circle_d(c, c, 0.45 * r)}" {style}/>'
+    elif kind == "ell":
+        t = 0.45 * s
+        body = f'  <polygon points="{_pts([(0, 0), (t, 0), (t, s - t), (s, s - t), (s, s), (0, s)])}" {style}/>'
+    elif kind == "hexagon":
+        pts = _regular(0.0, 0.0, 1.0, 6, phase=0.0)  # flat top and bottom, corners left and right
+        pts -= pts.min(axis=0)
+        pts *= s / pts.max()
+        w, h = float(pts[:, 0].max()), float(pts[:, 1].max())
+        body = f'  <polygon points="{_pts(pts)}" {style}/>'
+    elif kind == "glyph":
+        m = re.search(r'width="([^"]+)" height="([^"]+)"', glyph_svg(GLYPH_CONTAINER_CHAR, 100.0))
+        k = s / max(float(m.group(1)), float(m.group(2)))  # the glyph's larger side is s
+        g = glyph_svg(GLYPH_CONTAINER_CHAR, 100.0 * k)
+        m = re.search(r'width="([^"]+)" height="([^"]+)"', g)
+        w, h = float(m.group(1)), float(m.group(2))
+        d = re.search(r' d="([^"]+)"', g).group(1)
+        body = f'  <path fill-rule="evenodd" d="{d}" {style}/>'
     else:
         raise ParameterError(f"unknown container kind {kind!r}; known: {', '.join(CONTAINER_KINDS)}")
     return _svg(w, h, body)
@@ -424,6 +524,62 @@ def fast_suite() -> list[Scene]:
         S("fast-spiky-thin", "square", ("star5", "bar", "crescent"), gap=0.02, count=10, seed=102),
         S("fast-rings-x10", "circle", ("ring",), gap=0.03, count=6, seed=103, scale=10.0),
         S("fast-letters", "holed", ("glyph-A", "glyph-g", "glyph-R"), gap=0.02, count=10, seed=104),
+    ]
+
+
+_H_CONVEX = ("pentagon", "ellipse")
+_H_SMOOTH = ("heart", "bean")
+_H_THIN = ("arrow", "ell", "keyhole")
+_H_LETTERS = tuple(f"glyph-{c}" for c in "KMWx%@3y")
+_H_MIXED = ("heart", "gear", "arrow", "thinring", "ellipse", "glyph-K", "glyph-@", "disc", "cross")
+
+
+def holdout_suite() -> list[Scene]:
+    """A held-out suite (27 scenes) never used to tune the packing: new element kinds
+    (heart, bean, gear, arrow, L, keyhole, thin ring, pentagon, 3:1 ellipse; glyphs
+    K M W x % @ 3 y) and new containers (triangle, 2:1 ellipse, wide annulus, L shape,
+    a big letter C, hexagon) mixed with the old ones; gaps 0.5–3 %, scales 0.01×–100×,
+    5 to 200 elements; seeds from 201. The last seven ("ho-stress-*") push the ranges
+    corners (0.5 % gaps with thin parts or letters, 5–6 elements at a 3 % gap)."""
+    S = Scene
+    return [
+        # convex, elongated
+        S("ho-ellipses-triangle", "triangle", ("ellipse",), gap=0.01, count=40, seed=201),
+        S("ho-pentagons-annulus", "annulus", ("pentagon",), gap=0.015, count=35, seed=202),
+        S("ho-convex-ell-x100", "ell", _H_CONVEX + ("square",), gap=0.01, count=40, seed=203, scale=100.0),
+        # smooth concave and spiky
+        S("ho-hearts-ellipse", "ellipse", ("heart",), gap=0.01, count=40, seed=204),
+        S("ho-beans-hexagon", "hexagon", ("bean",), gap=0.02, count=25, seed=205),
+        S("ho-gears-circle", "circle", ("gear",), gap=0.008, count=40, seed=206),
+        S("ho-gears-glyph", "glyph", ("gear", "star5"), gap=0.01, count=30, seed=207),
+        # thin
+        S("ho-arrows-square", "square", ("arrow",), gap=0.006, count=50, seed=208),
+        S("ho-ells-triangle-x0.01", "triangle", ("ell",), gap=0.02, count=25, seed=209, scale=0.01),
+        S("ho-keyholes-annulus", "annulus", ("keyhole",), gap=0.01, count=40, seed=210),
+        S("ho-thin-glyph", "glyph", _H_THIN + ("bar",), gap=0.008, count=45, seed=211),
+        # holed
+        S("ho-thinrings-hexagon", "hexagon", ("thinring",), gap=0.01, count=30, seed=212),
+        S("ho-thinrings-ell-x10", "ell", ("thinring", "ring"), gap=0.03, count=8, seed=213, scale=10.0),
+        # letters
+        S("ho-letters-circle", "circle", _H_LETTERS, gap=0.01, count=40, seed=214),
+        S("ho-letters-triangle-x0.1", "triangle", _H_LETTERS, gap=0.012, count=35, seed=215, scale=0.1),
+        S("ho-letters-annulus", "annulus", _H_LETTERS, gap=0.008, count=50, seed=216),
+        S("ho-letters-glyph-x100", "glyph", ("glyph-x", "glyph-y", "glyph-3", "glyph-%"), gap=0.01, count=40,
+          seed=217, scale=100.0),
+        # mixed, and the two large ones
+        S("ho-mixed-ellipse-5", "ellipse", ("heart", "glyph-W"), gap=0.03, count=5, seed=218),
+        S("ho-mixed-hexagon-150", "hexagon", _H_MIXED, gap=0.005, count=150, seed=219),
+        S("ho-mixed-star-200-x0.01", "star", _H_MIXED, gap=0.005, count=200, seed=220, scale=0.01),
+        # stress: the corners of the ranges where the first 20 came closest to a limit
+        S("ho-stress-thin-ell", "ell", ("arrow", "ell", "bar"), gap=0.005, count=60, seed=221),
+        S("ho-stress-few-triangle", "triangle", ("gear", "glyph-%"), gap=0.03, count=5, seed=222),
+        S("ho-stress-letters-glyph", "glyph", tuple(f"glyph-{c}" for c in "%@MW"), gap=0.005, count=60,
+          seed=223),
+        S("ho-stress-keyholes-star-x0.01", "star", ("keyhole", "thinring"), gap=0.005, count=50, seed=224,
+          scale=0.01),
+        S("ho-stress-few-annulus", "annulus", ("heart", "bean"), gap=0.03, count=6, seed=225),
+        S("ho-stress-at-hexagon", "hexagon", ("glyph-@",), gap=0.005, count=60, seed=226),
+        S("ho-stress-discs-glyph", "glyph", ("disc", "ellipse"), gap=0.005, count=60, seed=227),
     ]
 
 
