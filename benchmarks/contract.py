@@ -235,7 +235,7 @@ a 100 000-unit container), 5 to 300 elements. Every scene has a fixed seed and c
 ## The metrics
 
 All are measured on the **output SVG** read back from disk, against the scene's own
-container file (re-read with curves flattened to gap/200, i.e. the true outline, not the
+container file (re-read with curves flattened to gap/2000, i.e. the true outline, not the
 polygon the simulation used) and the source element files — never on the simulation's
 meshes. Lengths are divided by the requested gap.
 

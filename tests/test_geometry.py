@@ -215,8 +215,10 @@ def test_skin_of_two_parts_is_one_bridged_polygon():
     art = MultiPolygon([box(0, 0, 4, 4), box(10, 0, 14, 4)])
     skin = check_skin(art, 1.0)
     one = 36 - 4 + np.pi  # area of one square offset by 1 with round corners
-    # the bridge (width = offset = 1) spans the 4 units between the two offset squares
-    assert skin.area - 2 * one == pytest.approx(4.0 * 1.0, rel=0.05)
+    # the bridge spans the 4 units between the two offset squares, as wide as their mean
+    # thickness 2·area/perimeter (≈ 3.15, less than its length 4)
+    w = 2 * one / (16 + 2 * np.pi)
+    assert 4.0 * w * 0.95 <= skin.area - 2 * one <= 4.0 * w + np.pi * (w / 2) ** 2  # (+ round caps)
     for part in art.geoms:
         assert skin.contains(part.buffer(0.99))
 
@@ -244,9 +246,25 @@ def test_connect_parts_gives_one_polygon_containing_all_parts(parts):
         assert merged.contains(p.buffer(-1e-9))
     total = sum(p.area for p in parts)
     assert merged.area > total
-    # bridges are thin: width 1 along the shortest links (plus round caps)
+    # bridges are no wider than the thickest part's mean thickness 2·area/perimeter (here
+    # 2), along the shortest links (plus round caps)
+    w = max(2 * p.area / p.length for p in parts)
     links = sum(p.distance(q) for p, q in itertools.pairwise(parts))  # upper bound of the MST
-    assert merged.area - total <= 1.0 * links + np.pi + 1e-6
+    assert merged.area - total <= w * links + np.pi * (w / 2) ** 2 * len(parts) + 1e-6
+
+
+def test_a_long_bridge_is_as_thick_as_the_parts_a_short_one_as_its_length():
+    """Two discs of radius 10 four radii apart: the bridge is as wide as their mean
+    thickness (10), not the half-gap asked (a bridge thinner than a mesh spacing was
+    crossed by the neighbours); two discs 0.3 apart keep the asked width, 1."""
+    a, b = Point(0, 0).buffer(10, 64), Point(60, 0).buffer(10, 64)
+    merged = connect_parts(MultiPolygon([a, b]), width=1.0)
+    middle = merged.intersection(shapely.LineString([(30, -50), (30, 50)]))
+    assert middle.length == pytest.approx(2 * a.area / a.length, rel=1e-6)
+    c = Point(20.3, 0).buffer(10, 64)
+    merged = connect_parts(MultiPolygon([a, c]), width=1.0)
+    middle = merged.intersection(shapely.LineString([(10.15, -50), (10.15, 50)]))
+    assert middle.length == pytest.approx(1.0, rel=1e-3)
 
 
 def test_connect_parts_of_one_polygon_is_identity():

@@ -255,16 +255,18 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill)
     if params.seed is None:
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
-    from .pack import default_gap
+    from .pack import CONTAINER_TOLERANCE, default_gap
 
-    # the container's curves are flattened finely (gap/100; without a gap, read twice:
+    # the container's curves are flattened finely (gap/1000; without a gap, read twice:
     # the default gap comes from the container's size), so the edge margin is checked
     # against the outline as drawn, not a polygon that cuts its curves by the tolerance
-    tol = None if params.gap is None else 0.01 * params.gap
+    # (on a concave stretch the chords lie outside the curve: art kept gap/2 from a
+    # gap/100 polygon came 0.494 gap from the drawn curve inside a letter C)
+    tol = None if params.gap is None else CONTAINER_TOLERANCE * params.gap
     cont = load_container(container, tolerance=tol)
     g = params.gap if params.gap is not None else default_gap(cont)
     if tol is None:
-        cont = load_container(container, tolerance=0.01 * g)
+        cont = load_container(container, tolerance=CONTAINER_TOLERANCE * g)
     params = dataclasses.replace(params, gap=g)
     from .io.manifest import load_element_args  # element manifests (.toml) and controls
 

@@ -89,6 +89,12 @@ def bend_limits(templates, template_index, sim) -> np.ndarray:
     return np.array([out[int(ti)] for ti in template_index])
 
 
+#: ``repulsionpak pack`` and ``batch`` flatten the container's curves to within this
+#: share of the gap: the edge margin is checked against that polygon, whose chords lie
+#: outside the drawn curve on concave stretches by up to this much
+CONTAINER_TOLERANCE = 0.001
+
+
 def margin_of(params: Params, gap: float) -> float:
     """The edge margin in container units: ``params.margin``, or half the gap."""
     return 0.5 * gap if params.margin is None else float(params.margin)

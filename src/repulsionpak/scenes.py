@@ -603,7 +603,7 @@ def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None)
     """Issue 10's metrics of a packing of ``files`` read back from its output SVG.
 
     The container is re-read from the scene's own file with a fine flattening tolerance
-    (gap/200), so distances and 'outside' are measured against the true curved outline,
+    (gap/2000, finer than the gap/1000 the packing used), so distances and 'outside' are measured against the true curved outline,
     not the polygon the simulation used; the sources are the scene's element files.
     Returns the :func:`repulsionpak.evaluate.evaluate` result plus ``promises``
     (:func:`repulsionpak.metrics.check_promises`) and ``sources`` (each element's
@@ -613,7 +613,7 @@ def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None)
     from .io import load_container, load_elements, read_packing_svg
     from .metrics import check_promises, source_geometries
 
-    container = load_container(files.container, tolerance=files.gap / 200)
+    container = load_container(files.container, tolerance=files.gap / 2000)
     _, placed, _ = read_packing_svg(packing_svg)
     sources = source_geometries(load_elements(files.elements))
     res = evaluate(container, placed, files.gap, grid=grid or scp_grid(files.scene), sources=sources)

@@ -54,10 +54,12 @@ def _n_combos(settings) -> int:
 
 
 def _tolerance(jobs: Sequence[Job]) -> float:
-    """Curve flattening tolerance of the shared container read: gap/100 like
+    """Curve flattening tolerance of the shared container read: gap/1000 like
     ``repulsionpak pack`` (the edge margin is checked against the outline as drawn), for
     the smallest gap of the batch (the same read as ``pack`` when all jobs share a gap)."""
-    return 0.01 * min(j.params.gap for j in jobs)
+    from ..pack import CONTAINER_TOLERANCE
+
+    return CONTAINER_TOLERANCE * min(j.params.gap for j in jobs)
 
 
 def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: str,

@@ -243,8 +243,9 @@ def polygons_of(geom) -> list[Polygon]:
 def connect_parts(geom, width: float):
     """Join disjoint polygons into one connected polygon by adding bridges.
 
-    Bridges of ``width`` follow the shortest line between a component and the rest
-    (Kruskal-like: repeatedly connect the nearest pair of components).
+    Bridges follow the shortest line between a component and the rest (Kruskal-like:
+    repeatedly connect the nearest pair of components); each is at least ``width``
+    wide, and as wide as the smaller of the two parts' mean thickness and its own length.
     """
     polys = polygons_of(geom)
     if not polys:
@@ -258,7 +259,14 @@ def connect_parts(geom, width: float):
                     best = (d, i, j)
         _, i, j = best
         line = shapely.shortest_line(polys[i], polys[j])
-        bridge = shapely.buffer(line, width / 2, cap_style="round")
+        # at least ``width``; a long bridge as thick as the thinner part it joins (its
+        # mean thickness 2·area/perimeter), a short one as thick as it is long: a
+        # bridge thinner than a mesh spacing has no vertex inside, and neighbours
+        # pressed against it went straight through (two dots two diameters apart:
+        # 10 of 20 copies dropped with a half-gap bridge, 1 with this one)
+        w = max(width, min(2 * polys[i].area / polys[i].length, 2 * polys[j].area / polys[j].length,
+                           line.length))
+        bridge = shapely.buffer(line, w / 2, cap_style="round")
         merged = polygons_of(shapely.union_all([polys[i], polys[j], bridge]))
         merged = max(merged, key=lambda g: g.area)
         polys = [p for k, p in enumerate(polys) if k not in (i, j)] + [merged]
