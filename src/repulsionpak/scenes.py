@@ -603,8 +603,9 @@ def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None)
     """Issue 10's metrics of a packing of ``files`` read back from its output SVG.
 
     The container is re-read from the scene's own file with a fine flattening tolerance
-    (gap/2000, finer than the gap/1000 the packing used), so distances and 'outside' are measured against the true curved outline,
-    not the polygon the simulation used; the sources are the scene's element files.
+    (gap/2000, finer than the gap/1000 the packing used), so distances and 'outside' are
+    measured against the true curved outline, not the polygon the simulation used; the
+    sources are the scene's element files.
     Returns the :func:`repulsionpak.evaluate.evaluate` result plus ``promises``
     (:func:`repulsionpak.metrics.check_promises`) and ``sources`` (each element's
     ``data-source``).
