@@ -25,16 +25,20 @@ from .types import Element
 class Pockets:
     """The negative space left by the primaries, on a grid: the distance transform
     ``dist`` (container units, 0 outside the free space), its grid origin and pixel size,
-    and the seeds chosen in it (points, distances, grid indices)."""
+    and the seeds chosen in it (grid indices, distances; :attr:`seeds` their points)."""
 
     dist: np.ndarray
     x0: float
     y0: float
     h: float
-    seeds: np.ndarray  # (K, 2)
     distance: np.ndarray  # (K,)
     iy: np.ndarray
     ix: np.ndarray
+
+    @property
+    def seeds(self) -> np.ndarray:
+        """The seeds' points (K, 2): their pixels' centres, container units."""
+        return np.column_stack([self.x0 + (self.ix + 0.5) * self.h, self.y0 + (self.iy + 0.5) * self.h])
 
     def lookup(self, pts: np.ndarray) -> np.ndarray:
         """Distance to the nearest skin or the boundary at ``pts`` (..., 2); 0 outside the
@@ -69,7 +73,7 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
     none = np.zeros(0, np.int64)
     iy, ix = np.nonzero(dist > d_min)
     if len(iy) == 0:
-        return Pockets(dist, info["x0"], info["y0"], h, np.zeros((0, 2)), np.zeros(0), none, none)
+        return Pockets(dist, info["x0"], info["y0"], h, np.zeros(0), none, none)
     d = dist[iy, ix]
     order = np.argsort(-d, kind="stable")
     iy, ix, d = iy[order], ix[order], d[order]
@@ -90,8 +94,7 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
         yy, xx = np.ogrid[y0:y1, x0:x1]
         blocked[y0:y1, x0:x1] |= (yy - iy[k]) ** 2 + (xx - ix[k]) ** 2 < r * r
     out = np.asarray(out, dtype=np.int64)
-    pts = np.column_stack([info["x0"] + (ix[out] + 0.5) * h, info["y0"] + (iy[out] + 0.5) * h])
-    return Pockets(dist, info["x0"], info["y0"], h, pts, d[out], iy[out], ix[out])
+    return Pockets(dist, info["x0"], info["y0"], h, d[out], iy[out], ix[out])
 
 
 def pocket_axes(pockets: Pockets) -> np.ndarray:
@@ -269,6 +272,7 @@ def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, ro
         angles = initial_angles(ctrls, assign, angles[:, 0], rng)[:, None]
     elif rotate:
         angles = np.column_stack([angles, axes, axes + np.pi])
+    seeds = pockets.seeds
     out_a, out_s = np.zeros(n), np.zeros(n)
     for k in range(n):
         i = int(assign[k])
@@ -276,7 +280,7 @@ def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, ro
         s_round = max(pockets.distance[k] - offset, 0.5 * pockets.distance[k]) / max(radius[i], 1e-300)
         best = (-1.0, 0.0)
         for a in angles[k]:
-            sc = fit_scale(pockets, pockets.seeds[k], samples[i], float(a), offset, s_round, _STEPS)
+            sc = fit_scale(pockets, seeds[k], samples[i], float(a), offset, s_round, _STEPS)
             if sc > best[0] * (1.0 + 1e-9):
                 best = (sc, float(a))
         out_s[k], out_a[k] = max(best[0], s_round), best[1]

@@ -363,6 +363,19 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     def check(exact_edges=False):
         return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank)
 
+    def move(i, ln):
+        """The step that takes element i its need (plus the slack) along its push (length ln)."""
+        return push[i] * min(1.0 + slack / need[i], (need[i] + slack) / ln)
+
+    def keep_helpful(moved, before, mark_stuck):
+        """Undo the moves that did not lower their own element's need below ``before``."""
+        after = check()[0]
+        for i, step in moved:
+            if after[i] >= before[i]:
+                shift[i] -= step
+                stuck[i] |= mark_stuck
+                place(i)
+
     for r in range(rounds if repair else 0):
         need, rel, push, counts, _, _ = check()
         bad = np.flatnonzero(need > 0)
@@ -376,7 +389,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 continue
             ln = float(np.hypot(*push[i]))
             if translate and ln > 0 and not stuck[i]:
-                step = push[i] * min(1.0 + slack / need[i], (need[i] + slack) / ln)
+                step = move(i, ln)
                 shift[i] += step
                 moved.append((i, step))
             else:
@@ -389,12 +402,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                     shrunk.append(i)
             place(i)
         if moved:  # keep only the moves that helped the element that made them
-            after = check()[0]
-            for i, step in moved:
-                if after[i] >= need[i]:
-                    shift[i] -= step
-                    stuck[i] = True
-                    place(i)
+            keep_helpful(moved, need, True)
         if shrunk:
             # a copy half-way to being dropped may fit a step away: a thin part squeezed
             # sideways gains little from shrinking about its centroid (the heart's snake
@@ -407,16 +415,12 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
             for i in shrunk:
                 ln = float(np.hypot(*push[i]))
                 if need[i] > 0 and ln > 0:
-                    step = push[i] * min(1.0 + slack / need[i], (need[i] + slack) / ln)
+                    step = move(i, ln)
                     shift[i] += step
                     moved.append((i, step))
                     place(i)
             if moved:
-                after = check()[0]
-                for i, step in moved:
-                    if after[i] >= need[i]:
-                        shift[i] -= step
-                        place(i)
+                keep_helpful(moved, need, False)
     if repair and grow_to > 0:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed)
