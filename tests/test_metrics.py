@@ -137,6 +137,42 @@ def test_bent_copy_is_distorted_and_more_bending_is_more():
     assert values[3] > 0.5
 
 
+def test_distortion_from_a_known_angle_finds_the_same_fit():
+    """A packing knows each copy's rotation roughly (its mesh frame): the search starting
+    there, a few degrees off, finds what the search over all angles finds."""
+    bar = shapely.segmentize(box(-50, -5, 50, 5), 1.0)
+    bent = shapely.transform(bar, lambda xy: np.stack([xy[:, 0], xy[:, 1] + 0.004 * xy[:, 0] ** 2], axis=1))
+    L = Polygon([(0, 0), (4, 0), (4, 1), (1, 1), (1, 3), (0, 3)])
+    for src, copy in [(bar, affinity.rotate(bent, 63.0, origin="centroid")),
+                      (L, affinity.scale(affinity.rotate(L, -120.0), 3.0, 2.6))]:
+        full, (ang, *_rest) = metrics.distortion(src, copy, return_fit=True)
+        assert full > 0.02
+        for off in (-3.0, 0.0, 2.5):
+            warm = metrics.distortion(src, copy, angle=math.radians(ang + off))
+            assert warm == pytest.approx(full, abs=1e-3)
+
+
+def test_distortions_in_threads_equal_one_thread():
+    src = {"a.svg": box(0, 0, 1, 1), "b.svg": STAR}
+    geoms = [affinity.rotate(box(0, 0, 1, 1), 10 * k) for k in range(5)] + \
+            [affinity.scale(affinity.rotate(STAR, 7 * k), 1.0 + 0.05 * k, 1.0) for k in range(5)]
+    names = ["a.svg"] * 5 + ["b.svg"] * 5
+    angles = [math.radians(10 * k) for k in range(5)] + [None] * 5
+    one = metrics.distortions(geoms, names, src, angles=angles)
+    assert metrics.distortions(geoms, names, src, angles=angles, workers=3) == one
+    assert max(one[:5]) < 1e-4 and one[9] > one[6] > 0.01
+    with pytest.raises(ParameterError):
+        metrics.distortions(geoms, names, src, workers=0)
+    with pytest.raises(ParameterError):
+        metrics.distortions(geoms, names, src, angles=[0.0])
+
+
+def test_frame_angle():
+    t = math.radians(30.0)
+    m = np.array([[2 * math.cos(t), -2 * math.sin(t), 5.0], [2 * math.sin(t), 2 * math.cos(t), 1.0], [0, 0, 1]])
+    assert metrics.frame_angle(m) == pytest.approx(t) and metrics.frame_angle(None) is None
+
+
 def test_distortion_none_for_empty_and_bad_arguments():
     assert metrics.distortion(Polygon(), box(0, 0, 1, 1)) is None
     assert metrics.distortion(box(0, 0, 1, 1), Polygon()) is None

@@ -11,6 +11,7 @@ import contextlib
 import dataclasses
 import functools
 import json
+import os
 import secrets
 import signal
 import sys
@@ -60,6 +61,15 @@ def _same_file(a: Path, b: Path) -> bool:
         return a.resolve() == b.resolve()
     except OSError:
         return False
+
+
+def _fit_workers() -> int:
+    """Threads for the distortion fits of a report (this process's cores, at most 4)."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on every platform
+        n = os.cpu_count() or 1
+    return max(1, min(4, n))
 
 
 def _check_outputs(outputs: list[Path | None], inputs: list[Path]) -> None:
@@ -320,7 +330,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     t_eval = time.perf_counter()
     # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
     metrics = evaluate(cont, packing.placed, g, with_scp=False,
-                       sources=[*elems, *secs] if report is not None else None)
+                       sources=[*elems, *secs] if report is not None else None, workers=_fit_workers())
     checks = invariants(packing, metrics)
     text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
     if viewer is not None:  # serve the result until Ctrl-C, then write it
@@ -529,7 +539,8 @@ def evaluate(
             from .metrics import source_geometries
 
             sources = source_geometries(load_elements(elements))
-        results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources)) for p in packings]
+        results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources, workers=_fit_workers()))
+                   for p in packings]
         if json_out:
             data = results[0][1] if len(results) == 1 else {str(p): r for p, r in results}
             typer.echo(json.dumps(data, indent=2))

@@ -475,6 +475,7 @@ def evaluate(
     with_scp: bool = True,
     sources=None,
     margin: float | None = None,
+    workers: int = 1,
 ) -> dict:
     """All metrics of a packing as a JSON-serialisable dict (DESIGN.md "Evaluate JSON").
 
@@ -495,7 +496,9 @@ def evaluate(
     {median, p95, max, values}: per element, area(best similar copy of its source △
     the placed art) / its area. ``sources`` gives the source art: a mapping
     ``data-source`` name → shapely geometry, or the library :class:`Element` s; without
-    it (or for an unknown name) the distortion values are ``None``.
+    it (or for an unknown name) the distortion values are ``None``. A copy that carries its
+    ``frame`` starts the fit from that rotation; ``workers`` threads fit several copies at
+    once (the values do not depend on it).
     """
     if gap is None or not np.isfinite(gap) or gap <= 0:
         raise ParameterError(f"gap must be a positive number, got {gap!r}")
@@ -516,7 +519,9 @@ def evaluate(
     known_edges = [e for e in edges if e is not None]
     if sources is not None and not isinstance(sources, dict):
         sources = _metrics.source_geometries(sources)
-    dist = (_metrics.distortions(geoms, [p.source for p in placed], sources) if sources
+    dist = (_metrics.distortions(geoms, [p.source for p in placed], sources,
+                                 angles=[_metrics.frame_angle(p.frame) for p in placed],
+                                 workers=workers) if sources
             else [None] * len(placed))
     s = q_half = q0 = None
     if with_scp:
@@ -554,7 +559,7 @@ def evaluate(
 
 
 def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int = 1000,
-                  sources=None) -> dict:
+                  sources=None, workers: int = 1) -> dict:
     """:func:`evaluate` of a packing SVG written by repulsionpak.
 
     The gap is ``gap`` if given, else the root's ``data-gap``; :class:`ParameterError`
@@ -575,7 +580,7 @@ def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int =
                 break
     if gap is None:
         raise ParameterError(f"{path}: the file has no data-gap; give the gap explicitly (--gap)")
-    result = evaluate(container, placed, gap, grid=grid, sources=sources)
+    result = evaluate(container, placed, gap, grid=grid, sources=sources, workers=workers)
     result["file"] = str(path)
     return result
 

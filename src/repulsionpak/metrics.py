@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -121,7 +122,7 @@ def _sym_areas(a: shapely.Geometry, b: shapely.Geometry, params: np.ndarray) -> 
 
 
 def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
-               return_fit: bool = False):
+               return_fit: bool = False, angle: float | None = None):
     """How far ``copy`` is from a similar copy of ``source``: min over similarity
     transforms T of area(T(source) △ copy) / area(copy).
 
@@ -135,6 +136,11 @@ def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
     finer grids (to ~0.01°); with ``fit_translation`` a final Nelder–Mead search
     refines angle, scale and translation together (it only ever lowers the value). Without it,
     the value is the centroid-aligned, area-matched fit (an upper bound).
+    ``angle`` (radians): the copy's rotation relative to the source when it is known
+    approximately (a packing knows each copy's frame: the least-squares similarity of its
+    mesh): the search then starts there, refining within half a grid step of it, instead
+    of trying all ``coarse`` angles (about half the work; the fit found is the same unless
+    the copy is bent so far that its best angle lies elsewhere).
     ``return_fit``: also return ``(angle_degrees, scale, dx, dy)`` of T in the copy's
     units (``source`` rotated about its centroid, scaled, centroid moved onto the
     copy's centroid plus (dx, dy)).
@@ -157,22 +163,25 @@ def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
     if a_s.is_empty or not a_s.is_valid or b_s.is_empty or not b_s.is_valid:
         a_s, b_s = an, bn
     step = 2 * math.pi / coarse
-    grid = np.zeros((coarse, 4))
-    grid[:, 0] = np.arange(coarse) * step
-    vals = _sym_areas(a_s, b_s, grid)
-    order = np.argsort(vals)
-    starts = [grid[order[0], 0]]
-    for i in order[1:]:  # a second, distinct local minimum when it is nearly as good
-        d = abs((grid[i, 0] - starts[0] + math.pi) % (2 * math.pi) - math.pi)
-        if d > 1.5 * step:
-            if vals[i] <= 1.25 * vals[order[0]] + 1e-3:
-                starts.append(grid[i, 0])
-            break
+    if angle is not None and math.isfinite(angle):
+        starts, first = [float(angle)], 0.5 * step
+    else:
+        grid = np.zeros((coarse, 4))
+        grid[:, 0] = np.arange(coarse) * step
+        vals = _sym_areas(a_s, b_s, grid)
+        order = np.argsort(vals)
+        starts, first = [grid[order[0], 0]], step
+        for i in order[1:]:  # a second, distinct local minimum when it is nearly as good
+            d = abs((grid[i, 0] - starts[0] + math.pi) % (2 * math.pi) - math.pi)
+            if d > 1.5 * step:
+                if vals[i] <= 1.25 * vals[order[0]] + 1e-3:
+                    starts.append(grid[i, 0])
+                break
     best_p, best_v = None, np.inf
     offsets = np.linspace(-1.0, 1.0, 7)
     stop = math.radians(0.01)
     for t0 in starts:
-        t, half = t0, step
+        t, half = t0, first
         while half > stop:
             cand = np.zeros((len(offsets), 4))
             cand[:, 0] = t + offsets * half
@@ -247,18 +256,40 @@ def source_geometries(elements) -> dict[str, shapely.Geometry]:
 
 
 def distortions(art_geoms: Sequence, names: Sequence[str],
-                sources: Mapping[str, shapely.Geometry], **kw) -> list[float | None]:
+                sources: Mapping[str, shapely.Geometry], angles: Sequence[float | None] | None = None,
+                workers: int = 1, **kw) -> list[float | None]:
     """:func:`distortion` of each placed element against the source named by
     ``names[i]`` (its ``data-source``); ``None`` when the source is unknown or either
-    has no area. ``kw`` goes to :func:`distortion`."""
+    has no area. ``angles[i]``: the copy's approximate rotation, where known (see
+    :func:`distortion`). ``workers`` > 1 fits that many elements at once in threads
+    (shapely's overlays release the GIL: 1.7x with two on two cores); the values do
+    not depend on it. ``kw`` goes to :func:`distortion`."""
     if len(art_geoms) != len(names):
         raise ParameterError(f"{len(art_geoms)} elements but {len(names)} source names")
-    out: list[float | None] = []
+    if angles is not None and len(angles) != len(names):
+        raise ParameterError(f"{len(art_geoms)} elements but {len(angles)} angles")
+    if int(workers) < 1:
+        raise ParameterError(f"workers must be at least 1, got {workers!r}")
     prepared = {k: _polygonal(g) for k, g in sources.items()}
-    for g, n in zip(art_geoms, names):
-        src = prepared.get(n)
-        out.append(None if src is None else distortion(src, g, **kw))
-    return out
+
+    def one(i: int) -> float | None:
+        src = prepared.get(names[i])
+        a = None if angles is None else angles[i]
+        return None if src is None else distortion(src, art_geoms[i], angle=a, **kw)
+
+    if int(workers) == 1 or len(names) < 2:
+        return [one(i) for i in range(len(names))]
+    with ThreadPoolExecutor(int(workers)) as pool:
+        return list(pool.map(one, range(len(names))))
+
+
+def frame_angle(frame) -> float | None:
+    """Rotation (radians) of a placed copy's ``frame`` (its (3, 3) similarity from the
+    source's orientation), ``None`` without one."""
+    if frame is None:
+        return None
+    m = np.asarray(frame, dtype=float)
+    return math.atan2(m[1, 0], m[0, 0])
 
 
 def distortion_summary(values: Sequence[float | None]) -> dict:
