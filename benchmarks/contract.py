@@ -40,6 +40,9 @@ sys.path.insert(0, str(ROOT / "src"))  # measure this checkout's code, whatever 
 #: scenes drawn in docs/quality.md (when they are run)
 PICTURES = ("convex-circle", "stars-circle", "thin-circle", "holed-band", "letters-holed", "mixed-circle-120")
 
+#: sections of docs/quality.md written by other benchmarks, kept when the page is regenerated
+KEPT_SECTIONS = ("Output curves", "Area at the gap actually produced")
+
 PROMISES = ("gap_median", "gap_p10", "overlap", "outside", "edge_margin", "distortion", "scp_ratio")
 
 
@@ -364,11 +367,12 @@ def main(argv=None) -> int:
         pics = [r for r in ordered if r.get("picture")]
         page = markdown(ordered, meta, pics)
         old = out_dir / "quality.md"
-        if old.exists():  # sections other benchmarks own (e.g. "## Output curves") are kept
+        if old.exists():  # sections other benchmarks own (output_curves.py, equal_gap.py) are kept
             text = old.read_text()
-            m = re.search(r"^## Output curves\n.*?(?=^## |\Z)", text, re.S | re.M)
-            if m:
-                page = page.rstrip("\n") + "\n\n" + m.group(0).rstrip("\n") + "\n"
+            for title in KEPT_SECTIONS:
+                m = re.search(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", text, re.S | re.M)
+                if m:
+                    page = page.rstrip("\n") + "\n\n" + m.group(0).rstrip("\n") + "\n"
         atomic_write_bytes(out_dir / "quality.md", page.encode())
         data = {"meta": meta, "limits": limits_dict(), "scenes": ordered}
         atomic_write_bytes(out_dir / "quality.json", (json.dumps(data, indent=1) + "\n").encode())
