@@ -10,8 +10,10 @@ exact art polygons of every element:
 
 An element that breaks one of them is first *moved* away from what it is too close to
 (local separation, a few rounds: a moved element may make room for, or crowd, its
-neighbours), then *shrunk* about its own centroid by just enough (both are similarities:
-its shape is untouched); an element that would have to shrink below ``min_scale`` (half
+neighbours), then *shrunk* by just enough (both are similarities: its shape is untouched)
+about its own centroid, or, when that would pull it towards what it is too close to (a
+bent or curled element whose centroid lies off its body), about the point of it that
+moves its contacts away with the least shrink; an element that would have to shrink below ``min_scale`` (half
 that for secondary elements, which are small by nature) is dropped, with a warning naming it. What remains is verified once more and reported; the CLI exits
 non-zero if anything is still violated (on valid input it never is).
 """
