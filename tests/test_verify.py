@@ -91,3 +91,51 @@ def test_a_secondary_too_close_to_a_primary_gives_way_alone():
     both = [square(20, 30), square(42, 30, side=10.0, source="small.svg")]
     out2, v2 = verify_and_repair(both, CONTAINER, gap=5, margin=2.5, min_gap=4.5, grow_to=0.0)
     assert v2.ok and not geoms(out2)[0].equals(before[0])
+
+
+def _arch(x0, y0, width, height, wall):
+    """A ∩: two legs of thickness ``wall`` joined by a bar on top (its centroid lies in
+    the hollow between the legs)."""
+    pts = np.array([[x0, y0], [x0 + wall, y0], [x0 + wall, y0 + height - wall],
+                    [x0 + width - wall, y0 + height - wall], [x0 + width - wall, y0],
+                    [x0 + width, y0], [x0 + width, y0 + height], [x0, y0 + height]], dtype=float)
+    return PlacedArt("arch.svg", "primary", (ArtPath((pts,), (True,), Style()),))
+
+
+def test_a_bent_element_shrinks_away_from_a_neighbour_in_its_hollow():
+    """A ∩ held at the edge margin with a pinned disc too close inside its left leg: it
+    cannot move away, and shrinking about its centroid (in the hollow) would pull the leg
+    towards the disc. It shrinks about a point of its outer left side instead: the leg
+    moves left, the outer side stays put, and it keeps 0.86 of its size (about its
+    centroid: 0.59, after a shrink that cleared the edge and a move)."""
+    import dataclasses
+
+    t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    ring = np.c_[22.56 + 5 * np.cos(t), 36 + 5 * np.sin(t)]  # 3 units inside the leg (x = 14.56)
+    disc = PlacedArt("disc.svg", "primary", (ArtPath((ring,), (True,), Style()),), pinned=True)
+    placed = [_arch(2.56, 30, 50, 40, 12), disc]
+    out, v = verify_and_repair(placed, CONTAINER, gap=5, margin=2.5, min_gap=4.5)
+    assert v.ok and not v.dropped and len(out) == 2
+    check(out, 5, 2.5, 4.5)
+    g0, g1 = geoms(placed)[0], geoms(out)[0]
+    s = np.sqrt(g1.area / g0.area)
+    assert s == pytest.approx(v.shrunk[0]) and s > 0.8
+    assert g1.bounds[0] == pytest.approx(2.56, abs=1e-6)  # shrunk about its outer left side
+    assert geoms(out)[1].equals(geoms(placed)[1])  # the pin is untouched
+
+
+def test_a_convex_element_still_shrinks_about_its_centroid():
+    from repulsionpak.verify import _shrink_centre
+
+    g = shapely.box(10, 10, 30, 30)
+    c = np.array([20.0, 20.0])
+    # pressed from above and from the left: the centroid moves both contacts away
+    contacts = [(np.array([20.0, 30.0]), np.array([0.0, -1.0]), 1.0),
+                (np.array([10.0, 20.0]), np.array([1.0, 0.0]), 1.0)]
+    centre, pred = _shrink_centre(g, c, contacts)
+    assert pred is None and np.array_equal(centre, c)
+    # a contact the centroid would move the wrong way: a point beyond it is chosen
+    bent = shapely.Polygon(_arch(0, 0, 50, 40, 12).paths[0].subpaths[0])
+    cb = np.asarray(bent.centroid.coords[0])
+    centre, pred = _shrink_centre(bent, cb, [(np.array([12.0, 6.0]), np.array([-1.0, 0.0]), 1.0)])
+    assert centre[0] == pytest.approx(0.0) and pred == pytest.approx(1.0 / 12.0)

@@ -10,8 +10,10 @@ exact art polygons of every element:
 
 An element that breaks one of them is first *moved* away from what it is too close to
 (local separation, a few rounds: a moved element may make room for, or crowd, its
-neighbours), then *shrunk* about its own centroid by just enough (both are similarities:
-its shape is untouched); an element that would have to shrink below ``min_scale`` (half
+neighbours), then *shrunk* by just enough (both are similarities: its shape is untouched)
+about its own centroid, or, when that would pull it towards what it is too close to (a
+bent or curled element whose centroid lies off its body), about the point of it that
+moves its contacts away with the least shrink; an element that would have to shrink below ``min_scale`` (half
 that for secondary elements, which are small by nature) is dropped, with a warning naming it. What remains is verified once more and reported; the CLI exits
 non-zero if anything is still violated (on valid input it never is).
 """
@@ -24,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
+from shapely.ops import polylabel
 
 from .geometry.outline import art_area, _polygonal
 from .types import PlacedArt
@@ -155,7 +158,7 @@ def _centre(g) -> np.ndarray:
 
 
 def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
-           fixed=None, rank=None):
+           fixed=None, rank=None, contacts=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
@@ -166,7 +169,10 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     ``exact_edges``). ``fixed[i]`` (pinned copies): element i never moves nor shrinks;
     its neighbours take the whole of a pair's deficit. ``rank[i]``: of a pair too close,
     the element of lower rank (a secondary next to a primary) takes the whole deficit:
-    pocket fillers give way, never the elements they fill around."""
+    pocket fillers give way, never the elements they fill around. ``contacts`` (a dict,
+    filled when given): for each element that is to shrink, the contacts that set its
+    ``rel`` as (point, unit direction away from what it is too close to, distance to
+    gain), from which :func:`_shrink_centre` predicts the shrink about other points."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
@@ -223,6 +229,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 need[i] = max(need[i], total)
                 rho = float(np.hypot(*(pi - centre(i))))
                 rel[i] = max(rel[i], total / rho if rho > 0 else 0.05)
+                if contacts is not None and nu > 0:
+                    contacts.setdefault(i, []).append((pi, u / nu, total))
                 continue
             if nu > 0:
                 push[i] += 0.5 * total * u / nu
@@ -240,6 +248,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 k, pk = (i, pi) if gi.area <= gj.area else (j, pj)
             rho = float(np.hypot(*(pk - centre(k))))
             rel[k] = max(rel[k], total / rho if rho > 0 else 0.05)
+            if contacts is not None and nu > 0:
+                contacts.setdefault(k, []).append((pk, (u if k == i else -u) / nu, total))
     if exact_edges or inner is None:
         near = idx
     else:
@@ -271,8 +281,56 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         need[i] = max(need[i], deficit)
         rho = float(np.hypot(*(pt - c)))
         rel[i] = max(rel[i], deficit / rho if rho > 0 else 0.05)
+        if contacts is not None and nu > 0:
+            contacts.setdefault(i, []).append((pt, u / nu, deficit))
     return (need, rel, push, counts, (None if not np.isfinite(dmin) else dmin),
             (None if not np.isfinite(emin) else emin))
+
+
+def _predicted_shrink(cands: np.ndarray, contacts: list) -> np.ndarray:
+    """For each candidate centre c (rows of ``cands``), the relative shrink about c that
+    takes every contact (p, û, total) its ``total`` away along û: shrinking by f about c
+    moves p by (1 − f)(c − p), so it is the largest total / ((c − p)·û); infinite where
+    a contact would not move away at all."""
+    p = np.array([q[0] for q in contacts], dtype=float)
+    u = np.array([q[1] for q in contacts], dtype=float)
+    t = np.array([q[2] for q in contacts], dtype=float)
+    proj = ((cands[:, None, :] - p[None, :, :]) * u[None, :, :]).sum(axis=2)
+    r = np.full(proj.shape, np.inf)
+    ok = proj > 0
+    r[ok] = (t[None, :] * np.ones_like(proj))[ok] / proj[ok]
+    return r.max(axis=1)
+
+
+def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float = 1.25,
+                   max_points: int = 64) -> tuple[np.ndarray, float | None]:
+    """The point an element (current geometry ``g``) should shrink about to clear its
+    ``contacts`` (see :func:`_check`), and the relative shrink predicted there; ``None``
+    for the latter: its centroid, as before. Shrinking about the centroid moves a contact
+    away only if the centroid lies beyond it, seen from what it is too close to: not so
+    for a curled or bent element whose centroid lies in its hollow or off its body (the
+    centroid then pulls the body towards its neighbour). Candidates: the centroid, the
+    vertices of ``g`` (at most ``max_points``) and the pole of inaccessibility of its
+    largest part; the centroid is kept when it lies on the element and moves every
+    contact away, or when its prediction is within ``prefer`` of the best."""
+    if not contacts or g.is_empty:
+        return centroid, None
+    xy = np.asarray(shapely.get_coordinates(g), dtype=float)
+    xy = xy[::max(1, -(-len(xy) // max_points))]
+    cands = [np.asarray(centroid, dtype=float)[None, :], xy]
+    part = max(getattr(g, "geoms", [g]), key=lambda q: q.area)
+    if part.geom_type == "Polygon" and part.area > 0:
+        pole = polylabel(part, tolerance=0.01 * float(np.sqrt(part.area)))
+        cands.append(np.array([[pole.x, pole.y]]))
+    cands = np.concatenate(cands)
+    pred = _predicted_shrink(cands, contacts)
+    best = int(np.argmin(pred))
+    if np.isfinite(pred[0]) and (pred[0] <= prefer * pred[best]
+                                 or shapely.covers(g, shapely.points(cands[0]))):
+        return centroid, None
+    if not np.isfinite(pred[best]):
+        return centroid, None
+    return cands[best], float(pred[best])
 
 
 def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
@@ -360,8 +418,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     # a secondary element too close to a primary gives way alone (moves, shrinks, or is dropped)
     rank = np.array([0 if getattr(p, "kind", "primary") == "secondary" else 1 for p in placed])
 
-    def check(exact_edges=False):
-        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank)
+    def check(exact_edges=False, contacts=None):
+        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank,
+                      contacts)
 
     def move(i, ln):
         """The step that takes element i its need (plus the slack) along its push (length ln)."""
@@ -377,7 +436,8 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 place(i)
 
     for r in range(rounds if repair else 0):
-        need, rel, push, counts, _, _ = check()
+        contacts: dict = {}
+        need, rel, push, counts, _, _ = check(contacts=contacts)
         bad = np.flatnonzero(need > 0)
         if len(bad) == 0:
             break
@@ -393,7 +453,13 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 shift[i] += step
                 moved.append((i, step))
             else:
-                scale[i] *= max(0.85, 1.0 - rel[i] * (1.0 + slack / max(need[i], 1e-300)))
+                # about the point that moves its contacts away (mostly its centroid):
+                # scale f about c folded into (scale about centre[i], shift)
+                c, r_c = _shrink_centre(geoms[i], centre[i] + shift[i], contacts.get(i))
+                f = max(0.85, 1.0 - (rel[i] if r_c is None else r_c) * (1.0 + slack / max(need[i], 1e-300)))
+                scale[i] *= f
+                if r_c is not None:
+                    shift[i] = f * (centre[i] + shift[i] - c) + c - centre[i]
                 lowest = min_scale if placed[i].kind == "primary" else 0.5 * min_scale
                 if scale[i] < lowest:
                     alive[i] = False
