@@ -124,15 +124,26 @@ def test_a_bent_element_shrinks_away_from_a_neighbour_in_its_hollow():
     assert geoms(out)[1].equals(geoms(placed)[1])  # the pin is untouched
 
 
-def test_a_convex_element_still_shrinks_about_its_centroid():
+def test_shrink_centre_of_a_pressed_square():
     from repulsionpak.verify import _shrink_centre
 
     g = shapely.box(10, 10, 30, 30)
     c = np.array([20.0, 20.0])
-    # pressed from above and from the left: the centroid moves both contacts away
-    contacts = [(np.array([20.0, 30.0]), np.array([0.0, -1.0]), 1.0),
-                (np.array([10.0, 20.0]), np.array([1.0, 0.0]), 1.0)]
+    # pressed from above and from the left (measured gaps): the centroid moves each
+    # contact 10 units per unit of shrink, the far corner 20: half the shrink there
+    contacts = [(np.array([20.0, 30.0]), np.array([0.0, -1.0]), 1.0, True),
+                (np.array([10.0, 20.0]), np.array([1.0, 0.0]), 1.0, True)]
     centre, pred = _shrink_centre(g, c, contacts)
+    assert np.allclose(centre, [30.0, 10.0]) and pred == pytest.approx(0.05)
+    # pressed equally from all four sides: only the centroid moves every contact away
+    four = contacts + [(np.array([20.0, 10.0]), np.array([0.0, 1.0]), 1.0, True),
+                       (np.array([30.0, 20.0]), np.array([-1.0, 0.0]), 1.0, True)]
+    centre, pred = _shrink_centre(g, c, four)
+    assert pred is None and np.array_equal(centre, c)
+    # overlaps (point and direction estimated): a centroid on the element that moves
+    # every contact away is kept
+    overlaps = [(p, u, t, False) for p, u, t, _ in contacts]
+    centre, pred = _shrink_centre(g, c, overlaps)
     assert pred is None and np.array_equal(centre, c)
     # a contact the centroid would move the wrong way: a point beyond it is chosen
     bent = shapely.Polygon(_arch(0, 0, 50, 40, 12).paths[0].subpaths[0])

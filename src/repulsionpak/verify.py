@@ -172,7 +172,9 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     pocket fillers give way, never the elements they fill around. ``contacts`` (a dict,
     filled when given): for each element that is to shrink, the contacts that set its
     ``rel`` as (point, unit direction away from what it is too close to, distance to
-    gain), from which :func:`_shrink_centre` predicts the shrink about other points."""
+    gain, measured: True for a shortest line between art a gap apart or art and edge,
+    False for an overlap or art outside, whose point and direction are estimates), from
+    which :func:`_shrink_centre` predicts the shrink about other points."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
@@ -230,7 +232,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 rho = float(np.hypot(*(pi - centre(i))))
                 rel[i] = max(rel[i], total / rho if rho > 0 else 0.05)
                 if contacts is not None and nu > 0:
-                    contacts.setdefault(i, []).append((pi, u / nu, total))
+                    contacts.setdefault(i, []).append((pi, u / nu, total, dd > 0.0))
                 continue
             if nu > 0:
                 push[i] += 0.5 * total * u / nu
@@ -249,7 +251,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             rho = float(np.hypot(*(pk - centre(k))))
             rel[k] = max(rel[k], total / rho if rho > 0 else 0.05)
             if contacts is not None and nu > 0:
-                contacts.setdefault(k, []).append((pk, (u if k == i else -u) / nu, total))
+                contacts.setdefault(k, []).append((pk, (u if k == i else -u) / nu, total, dd > 0.0))
     if exact_edges or inner is None:
         near = idx
     else:
@@ -282,7 +284,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         rho = float(np.hypot(*(pt - c)))
         rel[i] = max(rel[i], deficit / rho if rho > 0 else 0.05)
         if contacts is not None and nu > 0:
-            contacts.setdefault(i, []).append((pt, u / nu, deficit))
+            contacts.setdefault(i, []).append((pt, u / nu, deficit, e >= 0))
     return (need, rel, push, counts, (None if not np.isfinite(dmin) else dmin),
             (None if not np.isfinite(emin) else emin))
 
@@ -309,10 +311,13 @@ def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float
     for the latter: its centroid, as before. Shrinking about the centroid moves a contact
     away only if the centroid lies beyond it, seen from what it is too close to: not so
     for a curled or bent element whose centroid lies in its hollow or off its body (the
-    centroid then pulls the body towards its neighbour). Candidates: the centroid, the
-    vertices of ``g`` (at most ``max_points``) and the pole of inaccessibility of its
-    largest part; the centroid is kept when it lies on the element and moves every
-    contact away, or when its prediction is within ``prefer`` of the best."""
+    centroid then pulls the body towards its neighbour), and it gains little for a thin
+    part pressed sideways (the contact's direction nearly perpendicular to the radius).
+    Candidates: the centroid, the vertices of ``g`` (at most ``max_points``) and the pole
+    of inaccessibility of its largest part; the centroid is kept when its prediction is
+    within ``prefer`` of the best, and also, when a contact is an overlap or lies
+    outside (point and direction estimated, not measured), whenever it lies on the
+    element and moves every contact away."""
     if not contacts or g.is_empty:
         return centroid, None
     xy = np.asarray(shapely.get_coordinates(g), dtype=float)
@@ -325,8 +330,9 @@ def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float
     cands = np.concatenate(cands)
     pred = _predicted_shrink(cands, contacts)
     best = int(np.argmin(pred))
+    measured = all(len(q) < 4 or q[3] for q in contacts)
     if np.isfinite(pred[0]) and (pred[0] <= prefer * pred[best]
-                                 or shapely.covers(g, shapely.points(cands[0]))):
+                                 or (not measured and shapely.covers(g, shapely.points(cands[0])))):
         return centroid, None
     if not np.isfinite(pred[best]):
         return centroid, None
