@@ -11,10 +11,11 @@ exact art polygons of every element:
 An element that breaks one of them is first *moved* away from what it is too close to
 (local separation, a few rounds: a moved element may make room for, or crowd, its
 neighbours), then *shrunk* by just enough (both are similarities: its shape is untouched)
-about its own centroid, or, when that would pull it towards what it is too close to (a
-bent or curled element whose centroid lies off its body), about the point of it that
-moves its contacts away with the least shrink; an element that would have to shrink below ``min_scale`` (half
-that for secondary elements, which are small by nature) is dropped, with a warning naming it. What remains is verified once more and reported; the CLI exits
+about its own centroid, or about the point of it that moves its contacts away with
+clearly less shrink (a thin part pressed sideways, a bent or curled element whose centroid
+lies off its body: :func:`_shrink_centre`); an element that would have to shrink below
+``min_scale`` (half that for secondary elements, which are small by nature) is dropped,
+with a warning naming it. What remains is verified once more and reported; the CLI exits
 non-zero if anything is still violated (on valid input it never is).
 """
 
@@ -300,7 +301,7 @@ def _predicted_shrink(cands: np.ndarray, contacts: list) -> np.ndarray:
     proj = ((cands[:, None, :] - p[None, :, :]) * u[None, :, :]).sum(axis=2)
     r = np.full(proj.shape, np.inf)
     ok = proj > 0
-    r[ok] = (t[None, :] * np.ones_like(proj))[ok] / proj[ok]
+    r[ok] = np.broadcast_to(t, proj.shape)[ok] / proj[ok]
     return r.max(axis=1)
 
 
