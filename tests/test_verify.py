@@ -148,5 +148,5 @@ def test_shrink_centre_of_a_pressed_square():
     # a contact the centroid would move the wrong way: a point beyond it is chosen
     bent = shapely.Polygon(_arch(0, 0, 50, 40, 12).paths[0].subpaths[0])
     cb = np.asarray(bent.centroid.coords[0])
-    centre, pred = _shrink_centre(bent, cb, [(np.array([12.0, 6.0]), np.array([-1.0, 0.0]), 1.0)])
+    centre, pred = _shrink_centre(bent, cb, [(np.array([12.0, 6.0]), np.array([-1.0, 0.0]), 1.0, True)])
     assert centre[0] == pytest.approx(0.0) and pred == pytest.approx(1.0 / 12.0)

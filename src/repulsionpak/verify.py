@@ -292,7 +292,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
 
 def _predicted_shrink(cands: np.ndarray, contacts: list) -> np.ndarray:
     """For each candidate centre c (rows of ``cands``), the relative shrink about c that
-    takes every contact (p, û, total) its ``total`` away along û: shrinking by f about c
+    takes every contact (p, û, total, measured) its ``total`` away along û: shrinking by f about c
     moves p by (1 − f)(c − p), so it is the largest total / ((c − p)·û); infinite where
     a contact would not move away at all."""
     p = np.array([q[0] for q in contacts], dtype=float)
@@ -331,7 +331,7 @@ def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float
     cands = np.concatenate(cands)
     pred = _predicted_shrink(cands, contacts)
     best = int(np.argmin(pred))
-    measured = all(len(q) < 4 or q[3] for q in contacts)
+    measured = all(q[3] for q in contacts)
     if np.isfinite(pred[0]) and (pred[0] <= prefer * pred[best]
                                  or (not measured and shapely.covers(g, shapely.points(cands[0])))):
         return centroid, None
