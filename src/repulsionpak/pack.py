@@ -105,6 +105,18 @@ def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float
     return float(2 * np.sqrt(np.mean([templates[i].skin_area for i in assignment]) / np.pi))
 
 
+def neighbour_cell(templates: Sequence[Template], assignment: np.ndarray, gap: float,
+                   params: Params) -> float:
+    """The neighbour grid's cell width (container units) for a phase moving the elements
+    ``assignment``: ``sim.cell_size`` × their typical size, and at least three mesh
+    spacings. A vertex is repelled by every skin in the 3×3 cells around it, so the
+    cell is the reach of the repulsion: scaled to the elements that move, small
+    secondaries feel their own neighbourhood (and a query scans a few times fewer
+    skin chunks) rather than a primary-sized one."""
+    return max(params.sim.cell_size * typical_size(templates, assignment),
+               3.0 * params.preprocess.mesh_spacing * gap)
+
+
 def primary_model(region, templates: Sequence[Template], placement: Placement, gap: float,
                   params: Params, frozen: np.ndarray | None = None) -> tuple[Model, State, SimFrame]:
     """The simulation model of the primary phase (sim units): grid cell from the typical
@@ -112,8 +124,7 @@ def primary_model(region, templates: Sequence[Template], placement: Placement, g
     element's bend limit."""
     frame = SimFrame.for_region(region)
     region_sim = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
-    size = typical_size(templates, placement.template_index) / frame.unit
-    cell = max(params.sim.cell_size * size, 3.0 * params.preprocess.mesh_spacing * gap / frame.unit)
+    cell = neighbour_cell(templates, placement.template_index, gap, params) / frame.unit
     model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
                                gap=gap / frame.unit, frozen=frozen)
     # skins rest inside the container by boundary_inset; where the margin asks for more

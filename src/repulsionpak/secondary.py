@@ -212,16 +212,18 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     all_templates = list(packing.templates) + templates
     region_sim = shapely.affinity.scale(packing.container.region, 1 / packing.frame.unit,
                                         1 / packing.frame.unit, origin=(0, 0))
+    from .pack import bend_limits, neighbour_cell  # noqa: PLC0415  (pack imports this module lazily too)
+
     m0 = packing.model
     model, state = build_model(all_templates, placement, packing.frame, region_sim,
-                               cell_size=m0.cell_size, gap=m0.gap,
+                               cell_size=neighbour_cell(all_templates, placement.template_index,
+                                                        gap, p) / packing.frame.unit,
+                               gap=m0.gap,
                                kinds=["secondary"] * len(seeds),
                                frozen=np.ones(m0.n_elements, bool), base=(m0, packing.state))
     # a secondary's nominal size is the largest that fits its pocket (it starts at
     # initial_fraction of it): big pockets get big secondaries
     model.max_growth[m0.n_elements:] = 1.0 / sp.initial_fraction
-    from .pack import bend_limits  # noqa: PLC0415  (pack imports this module lazily too)
-
     model.bend_limit[m0.n_elements:] = bend_limits(all_templates, placement.template_index, p.sim)
     if controlled:
         setup_model(model, [ctrls[int(i)] for i in assign], angles, base=m0)
