@@ -281,6 +281,23 @@ def test_gap_statistics():
     assert ev.gap_statistics([box(0, 0, 1, 1)])["median"] is None
 
 
+def test_gap_statistics_matches_all_pairs_on_crowded_irregular_shapes():
+    """Nearest distances found by growing search radii equal the minimum over all pairs:
+    irregular stars whose bounding boxes overlap, of mixed sizes, one far from the rest."""
+    rng = np.random.default_rng(5)
+    shapes = []
+    for k in range(40):
+        n = int(rng.integers(5, 9))
+        t = np.linspace(0, 2 * np.pi, 2 * n, endpoint=False)
+        r = np.where(np.arange(2 * n) % 2 == 0, 1.0, 0.4) * rng.uniform(0.5, 3.0)
+        c = rng.uniform(0, 20, 2)
+        shapes.append(Polygon(np.column_stack([c[0] + r * np.cos(t), c[1] + r * np.sin(t)])))
+    shapes.append(box(500, 500, 501, 501))  # alone: its nearest is hundreds of sizes away
+    brute = [min(a.distance(b) for j, b in enumerate(shapes) if j != i) for i, a in enumerate(shapes)]
+    assert ev.gap_statistics(shapes)["values"] == pytest.approx(brute, abs=1e-12)
+    assert brute[-1] > 400 and min(brute) == 0.0  # some stars touch or overlap
+
+
 def test_outside():
     c = box(0, 0, 10, 10)
     arts = [box(1, 1, 2, 2), box(9, 9, 10.5, 10.5), box(0, 0, 10, 10), box(9.5, 5, 10.05, 6)]

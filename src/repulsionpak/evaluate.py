@@ -175,6 +175,35 @@ def _stats(values: Sequence[float]) -> dict:
     }
 
 
+def _nearest_distances(geoms: np.ndarray) -> np.ndarray:
+    """Distance from each of ``geoms`` (non-empty) to the nearest other one (0 when they
+    touch or overlap; exact duplicates count as touching).
+
+    Exact, by rounds of growing radius R: the pairs within R (an STRtree ``dwithin``
+    query) settle every geometry that has one, since its nearest is then among them;
+    the others go on with 2R. ``STRtree.query_nearest`` gives the same values but,
+    among packed shapes whose bounding boxes all overlap their neighbours', measures
+    many more pairs (the heart's 176 copies: 1.1 s against 0.15 s)."""
+    n = len(geoms)
+    dist = np.full(n, np.inf)
+    tree = shapely.STRtree(geoms)
+    size = np.sqrt(np.median(shapely.area(shapely.envelope(geoms))))
+    radius = max(size / 16.0, 1e-12)
+    left = np.arange(n)
+    while len(left):
+        q, t = tree.query(geoms[left], predicate="dwithin", distance=radius)
+        keep = left[q] != t
+        q, t = q[keep], t[keep]
+        if len(q):
+            d = shapely.distance(geoms[left[q]], geoms[t])
+            np.minimum.at(dist, left[q], d)
+        left = left[~np.isfinite(dist[left])]
+        if radius > 1e300:
+            break
+        radius *= 2.0
+    return dist
+
+
 def gap_statistics(art_geoms) -> dict:
     """Distance from each element's art to its nearest neighbour's art, and its statistics.
 
@@ -188,21 +217,7 @@ def gap_statistics(art_geoms) -> dict:
     values: list[float | None] = [None] * n
     ok = [i for i, g in enumerate(geoms) if not g.is_empty]
     if len(ok) >= 2:
-        sub = [geoms[i] for i in ok]
-        tree = shapely.STRtree(sub)
-        dist = np.full(len(sub), np.nan)
-        # touching/overlapping pairs first: ``exclusive`` nearest queries skip any
-        # geometry *equal* to the query, which would hide exact duplicates.
-        a, b = tree.query(sub, predicate="intersects")
-        touching = np.zeros(len(sub), dtype=bool)
-        touching[a[a != b]] = True
-        dist[touching] = 0.0
-        rest = np.flatnonzero(~touching)
-        if len(rest):
-            (qi, ti), d = tree.query_nearest(
-                [sub[k] for k in rest], return_distance=True, exclusive=True, all_matches=False
-            )
-            dist[rest[qi]] = d
+        dist = _nearest_distances(np.array([geoms[i] for i in ok], dtype=object))
         for k, i in enumerate(ok):
             if np.isfinite(dist[k]):
                 values[i] = float(dist[k])
