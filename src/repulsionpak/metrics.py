@@ -138,9 +138,10 @@ def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
     the value is the centroid-aligned, area-matched fit (an upper bound).
     ``angle`` (radians): the copy's rotation relative to the source when it is known
     approximately (a packing knows each copy's frame: the least-squares similarity of its
-    mesh): the search then starts there, refining within half a grid step of it, instead
-    of trying all ``coarse`` angles (a third fewer overlays on the heart's copies; the fit
-    found is the same unless the copy is bent so far that its best angle lies elsewhere).
+    mesh): the Nelder–Mead search then starts there, without the angle grids (0.6 of
+    the overlays on the heart's copies, values within 6·10⁻⁴ of the full search's; the
+    fit found is the same unless the copy is bent so far that its best angle lies
+    elsewhere).
     ``return_fit``: also return ``(angle_degrees, scale, dx, dy)`` of T in the copy's
     units (``source`` rotated about its centroid, scaled, centroid moved onto the
     copy's centroid plus (dx, dy)).
@@ -163,7 +164,15 @@ def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
     if a_s.is_empty or not a_s.is_valid or b_s.is_empty or not b_s.is_valid:
         a_s, b_s = an, bn
     step = 2 * math.pi / coarse
-    if angle is not None and math.isfinite(angle):
+    best_p, best_v = None, np.inf
+    known = angle is not None and math.isfinite(angle)
+    if known and fit_translation:
+        # a known rotation: the simplex search alone, from there (it moves the angle by
+        # degrees where it must, and costs ~60 overlays against ~100 with an angle grid first)
+        best_p = np.array([float(angle), 0.0, 0.0, 0.0])
+        best_v = float(_sym_areas(a_s, b_s, best_p[None, :])[0])
+        starts, first = [], step
+    elif known:
         starts, first = [float(angle)], 0.5 * step
     else:
         grid = np.zeros((coarse, 4))
@@ -177,7 +186,6 @@ def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
                 if vals[i] <= 1.25 * vals[order[0]] + 1e-3:
                     starts.append(grid[i, 0])
                 break
-    best_p, best_v = None, np.inf
     offsets = np.linspace(-1.0, 1.0, 7)
     stop = math.radians(0.01)
     for t0 in starts:
