@@ -165,7 +165,7 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
     circle of a hole's free part that gets a copy (container units). Copies keep
     1.005 × the gap from their hosts: the writer rounds their curves by at most a fifth
     of their tolerance, itself at most 0.02 gap."""
-    geoms = [art_area(p.paths, p.stroke_scale) for p in placed]
+    geoms = [p.art for p in placed]
     tree = shapely.STRtree(geoms)
     keep = 1.005 * gap
     out: list[PlacedArt] = []
@@ -215,8 +215,11 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     Returns the new copies only."""
     keep = 1.005 * gap
     eps = 0.01 * gap
-    geoms = [shapely.simplify(art_area(p.paths, p.stroke_scale), eps) for p in placed]
-    taken = shapely.union_all([g.buffer(keep + eps, quad_segs=4) for g in geoms if not g.is_empty])
+    # a buffer with 4 segments per quarter circle is inscribed in the true one (its chords
+    # come within cos(π/16) ≈ 0.98 of the radius at corners): widen it to cover it
+    reach = (keep + eps) / math.cos(math.pi / 16)
+    geoms = [shapely.simplify(p.art, eps) for p in placed]
+    taken = shapely.union_all([g.buffer(reach, quad_segs=4) for g in geoms if not g.is_empty])
     free = shapely.buffer(region, -(1.005 * margin)).difference(taken)
     if free.is_empty:
         return []
@@ -231,7 +234,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
                 break
             copy, g = got
             out.append(copy)
-            part = part.difference(g.buffer(keep + eps, quad_segs=4))
+            part = part.difference(g.buffer(reach, quad_segs=4))
             if isinstance(part, shapely.MultiPolygon):
                 part = max(part.geoms, key=lambda q: q.area)
             if part.is_empty or not isinstance(part, shapely.Polygon) or part.area < math.pi * min_radius ** 2:
