@@ -56,7 +56,7 @@ from shapely.geometry import Polygon, box
 from . import metrics as _metrics
 from .errors import ParameterError
 from .geometry.edt import distance_transform
-from .geometry.outline import _polygonal, art_area
+from .geometry.outline import _polygonal
 from .types import Container, PlacedArt
 
 __all__ = [
@@ -92,7 +92,7 @@ _SVG_MITER_LIMIT = 4.0  # SVG's default stroke-miterlimit (Style does not carry 
 def art_geometry(placed: PlacedArt) -> shapely.Geometry:
     """The area covered by the art of one placed element (see
     :func:`repulsionpak.geometry.outline.art_area`; strokes scaled by ``stroke_scale``)."""
-    return art_area(placed.paths, placed.stroke_scale)
+    return placed.art
 
 
 def _as_geoms(art_geoms: Iterable) -> list:

@@ -7,6 +7,7 @@ in the user units of the file they came from.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -223,3 +224,13 @@ class PlacedArt:
     tolerance: float | None = None
     #: a pinned copy (element controls): written with ``data-pinned="true"``
     pinned: bool = False
+
+    @functools.cached_property
+    def art(self) -> shapely.Geometry:
+        """The area its art covers (:func:`repulsionpak.geometry.outline.art_area` of
+        ``paths`` with ``stroke_scale``), computed once: the hole fill, the verification
+        and the metrics all measure it (a copy is never changed in place; a changed copy
+        is a new object)."""
+        from .geometry.outline import art_area  # noqa: PLC0415  (outline imports this module)
+
+        return art_area(self.paths, self.stroke_scale)

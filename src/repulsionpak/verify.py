@@ -29,7 +29,7 @@ import numpy as np
 import shapely
 from shapely.ops import polylabel
 
-from .geometry.outline import art_area, _polygonal
+from .geometry.outline import _polygonal
 from .types import PlacedArt
 
 
@@ -119,9 +119,8 @@ def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarra
     it is returned, indices replaced)."""
     out, dist, replaced = [], np.zeros(len(placed)), []
     for i, (p, r) in enumerate(zip(placed, rest)):
-        g = art_area(p.paths, p.stroke_scale)
         copy = similar_copy(r, p)
-        d = distortion(g, art_area(copy.paths, copy.stroke_scale))
+        d = distortion(p.art, copy.art)
         if d > limits[i]:
             out.append(copy)
             replaced.append(i)
@@ -397,7 +396,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     shapely.prepare(region)
     tol = 1e-9 * max(1.0, float(np.ptp(np.asarray(region.bounds))))
     n = len(placed)
-    exact = [art_area(p.paths, p.stroke_scale) for p in placed]
+    exact = [p.art for p in placed]
     centre = [np.asarray(g.centroid.coords[0]) if not g.is_empty else np.zeros(2) for g in exact]
     # the rounds work on outlines simplified by eps and ask eps more of every distance
     # (exact checks are the slow part with detailed art); the final check is exact

@@ -6,7 +6,6 @@ from collections.abc import Sequence
 
 import shapely
 
-from ..geometry.outline import art_area
 from ..types import PlacedArt
 
 __all__ = ["written_geometry"]
@@ -20,4 +19,4 @@ def written_geometry(placed: Sequence[PlacedArt]) -> list[shapely.Geometry]:
     the curve tolerance, so this is the written drawing up to that flattening; art without
     curves is taken as its polylines, which is also what is written for it.
     """
-    return [art_area(pa.paths, pa.stroke_scale) for pa in placed]
+    return [pa.art for pa in placed]
