@@ -138,45 +138,49 @@ def path_data(curves: Sequence[CurveSubpath], decimals: int = 4, relative: bool 
     parts: list[str] = []
     cur = np.zeros(2)
     last_cmd = ""
+    num = _num
     for sub in curves:
         ctrl = np.round(sub.ctrl, decimals)
-        order = sub.order
+        order = np.asarray(sub.order)
         start = ctrl[0, 0]
         rel = relative and bool(parts)
         p = start - cur if rel else start
-        parts.append(("m" if rel else "M") + _join([_num(p[0], decimals), _num(p[1], decimals)]))
+        parts.append(("m" if rel else "M") + _join([num(p[0], decimals), num(p[1], decimals)]))
         last_cmd = "l" if rel else "L"  # implicit command after a move
         cur = start
         n = len(order)
         if sub.closed and n > 1 and order[-1] == 1 and np.abs(ctrl[-1, 1] - start).max() == 0:
             n -= 1
-        for k in range(n):
-            o = int(order[k])
-            c = ctrl[k]
-            base = cur if relative else np.zeros(2)
-            pts = c[1 : o + 1] - base
-            if o == 1:
-                d = c[1] - cur
-                if d[1] == 0 and d[0] != 0:
-                    cmd, nums = "h", [_num(pts[0, 0], decimals)]
-                elif d[0] == 0 and d[1] != 0:
-                    cmd, nums = "v", [_num(pts[0, 1], decimals)]
-                elif d[0] == 0 and d[1] == 0:
-                    continue
+        if n > 0:
+            # all segments at once: each starts where the one before ends
+            ends = ctrl[np.arange(n), order[:n]]
+            starts = np.concatenate([start[None, :], ends[:-1]])
+            step = (ctrl[:n, 1] - starts).tolist()  # a line's move (h / v / l / skip)
+            pts = (ctrl[:n, 1:] - (starts[:, None, :] if relative else 0.0)).tolist()
+            for k, o in enumerate(order[:n].tolist()):
+                c = pts[k]
+                if o == 1:
+                    dx, dy = step[k]
+                    if dy == 0 and dx != 0:
+                        cmd, nums = "h", [num(c[0][0], decimals)]
+                    elif dx == 0 and dy != 0:
+                        cmd, nums = "v", [num(c[0][1], decimals)]
+                    elif dx == 0 and dy == 0:
+                        continue
+                    else:
+                        cmd, nums = "l", [num(c[0][0], decimals), num(c[0][1], decimals)]
                 else:
-                    cmd, nums = "l", [_num(v, decimals) for v in pts.ravel()]
-            else:
-                cmd = "q" if o == 2 else "c"
-                nums = [_num(v, decimals) for v in pts.ravel()]
-            if not relative:
-                cmd = cmd.upper()
-            body = _join(nums)
-            if cmd == last_cmd:
-                parts.append(("" if body.startswith("-") else " ") + body)
-            else:
-                parts.append(cmd + body)
-            last_cmd = cmd
-            cur = c[o]
+                    cmd = "q" if o == 2 else "c"
+                    nums = [num(v, decimals) for xy in c[:o] for v in xy]
+                if not relative:
+                    cmd = cmd.upper()
+                body = _join(nums)
+                if cmd == last_cmd:
+                    parts.append(("" if body.startswith("-") else " ") + body)
+                else:
+                    parts.append(cmd + body)
+                last_cmd = cmd
+            cur = ends[n - 1]
         if sub.closed:
             parts.append("z")
             last_cmd = ""
