@@ -157,6 +157,16 @@ def _centre(g) -> np.ndarray:
     return np.asarray(shapely.get_coordinates(shapely.centroid(g)))[0]
 
 
+def _near_pairs(arr: np.ndarray, which: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (k, j): ``arr[which[k]]``'s bounding box, widened by ``reach``, meets
+    ``arr[j]``'s — every pair closer than ``reach``, and some farther ones. Callers measure
+    the distance of each pair anyway; an STRtree ``dwithin`` query would measure it
+    twice (its exact test costs as much as the distance itself)."""
+    lo = shapely.bounds(arr[which])
+    boxes = shapely.box(lo[:, 0] - reach, lo[:, 1] - reach, lo[:, 2] + reach, lo[:, 3] + reach)
+    return shapely.STRtree(arr).query(boxes)
+
+
 def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
            fixed=None, rank=None, contacts=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
@@ -191,11 +201,12 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         return centres[i]
 
     if len(idx) >= 2:
-        tree = shapely.STRtree(arr)
-        a, b = tree.query(arr, predicate="dwithin", distance=min_gap)
+        a, b = _near_pairs(arr, np.arange(len(arr)), min_gap)
         keep = a < b
         a, b = a[keep], b[keep]
         d = shapely.distance(arr[a], arr[b]) if len(a) else np.zeros(0)
+        near = d <= min_gap  # what a dwithin query would have found
+        a, b, d = a[near], b[near], d[near]
         if len(d):
             dmin = float(d.min())
         for p, q, dd in zip(a, b, d):
@@ -354,23 +365,32 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
     radius = {i: float(np.sqrt(((shapely.get_coordinates(geoms[i]) - (centre[i] + shift[i])) ** 2)
                                .sum(axis=1).max())) for i in idx}
     for _ in range(rounds):
+        # only the elements that may still grow need their slack
+        can = np.array([not (fixed is not None and fixed[i]) and scale[i] < max_scale
+                        and radius[i] > 0 for i in idx])
+        if not can.any():
+            break
         arr = np.array([geoms[i] for i in idx], dtype=object)
-        edge = shapely.distance(boundary, arr)  # inside: the rounds before made sure
+        q = np.flatnonzero(can)
+        edge = shapely.distance(boundary, arr[q])  # inside: the rounds before made sure
         # a round grows an element by at most 1.5 targets: neighbours farther than 4
         # targets cannot limit it
-        slack = np.minimum(edge - margin, 1.5 * target)
-        a, b = shapely.STRtree(arr).query(arr, predicate="dwithin", distance=4.0 * target)
+        slack = np.full(len(idx), np.inf)
+        slack[q] = np.minimum(edge - margin, 1.5 * target)
+        a, b = _near_pairs(arr, q, 4.0 * target)
+        a = q[a]
         keep = a != b
-        a, b = a[keep], b[keep]
-        if len(a):
-            d = 0.5 * (shapely.distance(arr[a], arr[b]) - target)
-            np.minimum.at(slack, a, d)
+        pairs = np.unique(np.sort(np.stack([a[keep], b[keep]], axis=1), axis=1), axis=0)
+        if len(pairs):  # each pair measured once, for whichever of the two may grow
+            d = 0.5 * (shapely.distance(arr[pairs[:, 0]], arr[pairs[:, 1]]) - target)
+            np.minimum.at(slack, pairs[:, 0], d)
+            np.minimum.at(slack, pairs[:, 1], d)
         grow = {}
         for p, i in enumerate(idx):
             sl = slack[p] - tol
-            if fixed is not None and fixed[i]:
+            if not can[p]:
                 continue
-            if scale[i] < max_scale and sl > 1e-3 * target and radius[i] > 0:
+            if sl > 1e-3 * target:
                 grow[i] = min(1.0 + sl / radius[i], max_scale / scale[i])
         if not grow:
             break
