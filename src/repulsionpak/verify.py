@@ -168,7 +168,7 @@ def _near_pairs(arr: np.ndarray, which: np.ndarray, reach: float) -> tuple[np.nd
 
 
 def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
-           fixed=None, rank=None, contacts=None):
+           fixed=None, rank=None, contacts=None, weak=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
@@ -179,7 +179,9 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     ``exact_edges``). ``fixed[i]`` (pinned copies): element i never moves nor shrinks;
     its neighbours take the whole of a pair's deficit. ``rank[i]``: of a pair too close,
     the element of lower rank (a secondary next to a primary) takes the whole deficit:
-    pocket fillers give way, never the elements they fill around. ``contacts`` (a dict,
+    pocket fillers give way, never the elements they fill around. ``weak[i]``: element i
+    has shrunk half-way to being dropped; of a pair of equal rank, the other one shrinks
+    instead of it (the smaller of two would otherwise shrink every time, to nothing). ``contacts`` (a dict,
     filled when given): for each element that is to shrink, the contacts that set its
     ``rel`` as (point, unit direction away from what it is too close to, distance to
     gain, measured: True for a shortest line between art a gap apart or art and edge,
@@ -259,6 +261,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 k, pk = (i, pi) if in_i else (j, pj)
             else:
                 k, pk = (i, pi) if gi.area <= gj.area else (j, pj)
+            if weak is not None and weak[k] and not weak[i + j - k]:
+                k, pk = (j, pj) if k == i else (i, pi)
             rho = float(np.hypot(*(pk - centre(k))))
             rel[k] = max(rel[k], total / rho if rho > 0 else 0.05)
             if contacts is not None and nu > 0:
@@ -445,8 +449,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     rank = np.array([0 if getattr(p, "kind", "primary") == "secondary" else 1 for p in placed])
 
     def check(exact_edges=False, contacts=None):
+        weak = scale < 0.5 * (1.0 + np.where(rank > 0, min_scale, 0.5 * min_scale))
         return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank,
-                      contacts)
+                      contacts, weak)
 
     def move(i, ln):
         """The step that takes element i its need (plus the slack) along its push (length ln)."""
