@@ -150,3 +150,22 @@ def test_shrink_centre_of_a_pressed_square():
     cb = np.asarray(bent.centroid.coords[0])
     centre, pred = _shrink_centre(bent, cb, [(np.array([12.0, 6.0]), np.array([-1.0, 0.0]), 1.0, True)])
     assert centre[0] == pytest.approx(0.0) and pred == pytest.approx(1.0 / 12.0)
+
+
+def rect(x0, y0, x1, y1, source="rect.svg"):
+    pts = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=float)
+    return PlacedArt(source, "primary", (ArtPath((pts,), (True,), Style()),))
+
+
+def test_a_small_primary_pinched_by_a_big_one_is_not_shrunk_to_nothing():
+    """A 4-unit square 1 unit from a long bar, both held by the container's edge: the gap
+    asks 4 more units that neither can move. Shrinking the smaller one every time takes
+    it below half its size (dropped); once it is half-way there, the big one shrinks."""
+    region = shapely.box(0, 0, 100, 20)
+    placed = [rect(1.5, 8, 5.5, 12, "small.svg"), rect(6.5, 1.5, 98.5, 18.5, "big.svg")]
+    out, v = verify_and_repair(placed, region, gap=5, margin=1, min_gap=4.5)
+    assert v.ok and not v.dropped and len(out) == 2
+    small, big = (art_area(p.paths, p.stroke_scale) for p in out)
+    assert small.distance(big) >= 4.5 - 1e-6
+    assert small.area >= 0.5 ** 2 * 16  # at least half its size
+    assert big.area < 92 * 17  # the big one gave way
