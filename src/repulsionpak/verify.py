@@ -13,9 +13,10 @@ An element that breaks one of them is first *moved* away from what it is too clo
 neighbours), then *shrunk* by just enough (both are similarities: its shape is untouched)
 about its own centroid, or about the point of it that moves its contacts away with
 clearly less shrink (a thin part pressed sideways, a bent or curled element whose centroid
-lies off its body: :func:`_shrink_centre`); an element that would have to shrink below
-``min_scale`` (half that for secondary elements, which are small by nature) is dropped,
-with a warning naming it. What remains is verified once more and reported; the CLI exits
+lies off its body: :func:`_shrink_centre`). Of two primaries too close, the smaller one
+shrinks, until it has shrunk half-way to ``min_scale``: then the other one does. An
+element that would have to shrink below ``min_scale`` (half that for secondary elements,
+which are small by nature) is dropped, with a warning naming it. What remains is verified once more and reported; the CLI exits
 non-zero if anything is still violated (on valid input it never is).
 """
 
@@ -181,12 +182,13 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     the element of lower rank (a secondary next to a primary) takes the whole deficit:
     pocket fillers give way, never the elements they fill around. ``weak[i]``: element i
     has shrunk half-way to being dropped; of a pair of equal rank, the other one shrinks
-    instead of it (the smaller of two would otherwise shrink every time, to nothing). ``contacts`` (a dict,
-    filled when given): for each element that is to shrink, the contacts that set its
-    ``rel`` as (point, unit direction away from what it is too close to, distance to
-    gain, measured: True for a shortest line between art a gap apart or art and edge,
-    False for an overlap or art outside, whose point and direction are estimates), from
-    which :func:`_shrink_centre` predicts the shrink about other points."""
+    instead of it (the smaller of two would otherwise shrink every time, to nothing).
+    ``contacts`` (a dict, filled when given): for each element that is to shrink, the
+    contacts that set its ``rel`` as (point, unit direction away from what it is too
+    close to, distance to gain, measured: True for a shortest line between art a gap
+    apart or art and edge, False for an overlap or art outside, whose point and direction
+    are estimates), from which :func:`_shrink_centre` predicts the shrink about other
+    points."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
