@@ -209,8 +209,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         keep = a < b
         a, b = a[keep], b[keep]
         d = shapely.distance(arr[a], arr[b]) if len(a) else np.zeros(0)
-        near = d <= min_gap  # what a dwithin query would have found
-        a, b, d = a[near], b[near], d[near]
+        close = d <= min_gap  # what a dwithin query would have found
+        a, b, d = a[close], b[close], d[close]
         if len(d):
             dmin = float(d.min())
         for p, q, dd in zip(a, b, d):
@@ -449,11 +449,13 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
 
     # a secondary element too close to a primary gives way alone (moves, shrinks, or is dropped)
     rank = np.array([0 if getattr(p, "kind", "primary") == "secondary" else 1 for p in placed])
+    # below ``lowest`` an element is dropped (half min_scale for secondaries, small by nature)
+    lowest = np.where(rank > 0, min_scale, 0.5 * min_scale)
+    halfway = 0.5 * (1.0 + lowest)  # shrunk half-way to being dropped
 
     def check(exact_edges=False, contacts=None):
-        weak = scale < 0.5 * (1.0 + np.where(rank > 0, min_scale, 0.5 * min_scale))
         return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank,
-                      contacts, weak)
+                      contacts, scale < halfway)
 
     def move(i, ln):
         """The step that takes element i its need (plus the slack) along its push (length ln)."""
@@ -493,11 +495,10 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 scale[i] *= f
                 if r_c is not None:
                     shift[i] = f * (centre[i] + shift[i] - c) + c - centre[i]
-                lowest = min_scale if placed[i].kind == "primary" else 0.5 * min_scale
-                if scale[i] < lowest:
+                if scale[i] < lowest[i]:
                     alive[i] = False
                     continue
-                if scale[i] < 0.5 * (1.0 + lowest):  # half-way to being dropped
+                if scale[i] < halfway[i]:
                     shrunk.append(i)
             place(i)
         if moved:  # keep only the moves that helped the element that made them
