@@ -9,6 +9,8 @@
     python benchmarks/contract.py --suite holdout --jobs 2       # the held-out scenes, stdout only
     python benchmarks/contract.py --suite holdout --out-dir /tmp/h   # ... files (and pictures of every
                                                   #   scene) in /tmp/h; never docs/
+    python benchmarks/contract.py --reseed 1000 --jobs 2   # the same scenes, every seed + 1000
+                                                  #   (robustness; never docs/)
 
 Every scene of :func:`repulsionpak.scenes.suite` is written to a scratch directory,
 packed through ``repulsionpak pack``'s own code path (:func:`repulsionpak.cli.run_pack`),
@@ -109,12 +111,17 @@ def _summary(scene, run: dict | None, error: str | None, seconds: float) -> dict
     return out
 
 
-def run_one(name: str, workdir: str, picture_dir: str | None) -> dict:
-    """Pack and measure one scene (in a worker process); never raises."""
+def run_one(name: str, workdir: str, picture_dir: str | None, reseed: int = 0) -> dict:
+    """Pack and measure one scene (in a worker process); never raises. ``reseed`` is
+    added to the scene's seed (the same problem, another packing)."""
+    import dataclasses
+
     from repulsionpak import scenes
     from repulsionpak.io import read_packing_svg, render_png
 
     scene = {s.name: s for s in scenes.suite() + scenes.fast_suite() + scenes.holdout_suite()}[name]
+    if reseed:
+        scene = dataclasses.replace(scene, seed=scene.seed + reseed)
     t0 = time.perf_counter()
     try:
         run = scenes.run_scene(scene, workdir)
@@ -290,6 +297,9 @@ def main(argv=None) -> int:
                     help="where quality.md / quality.json / images go (default: docs/ for a full run; "
                          "none for --only / --fast)")
     ap.add_argument("--workdir", type=Path, default=None, help="keep the scenes and packings here")
+    ap.add_argument("--reseed", type=int, default=0,
+                    help="add this to every scene's seed: the same problems, other packings (a robustness "
+                         "check; never writes docs/)")
     args = ap.parse_args(argv)
 
     from repulsionpak import scenes
@@ -309,10 +319,11 @@ def main(argv=None) -> int:
         chosen = scenes.suite()
     if args.jobs < 1:
         ap.error("--jobs must be >= 1")
-    partial = bool(args.only or args.fast or args.suite != "main")
+    partial = bool(args.only or args.fast or args.suite != "main" or args.reseed)
     out_dir = args.out_dir if args.out_dir is not None else (None if partial else ROOT / "docs")
-    if args.suite == "holdout" and out_dir is not None and out_dir.resolve() == (ROOT / "docs").resolve():
-        ap.error("--suite holdout never writes docs/ (the published numbers are the main suite's); "
+    if (args.suite == "holdout" or args.reseed) and out_dir is not None \
+            and out_dir.resolve() == (ROOT / "docs").resolve():
+        ap.error("--suite holdout / --reseed never write docs/ (the published numbers are the main suite's); "
                  "give another --out-dir")
     pic_dir = None
     if out_dir is not None:
@@ -331,7 +342,7 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     results: dict[str, dict] = {}
     jobs = [(s.name, str(workdir), str(pic_dir) if (pic_dir and s.name in PICTURES) or (pic_dir and partial)
-             else None) for s in chosen]
+             else None, args.reseed) for s in chosen]
 
     def done(r: dict) -> None:
         results[r["name"]] = r
@@ -356,7 +367,8 @@ def main(argv=None) -> int:
     meta = {"revision": revision, "date": time.strftime("%Y-%m-%d"), "machine": machine(),
             "command": "python benchmarks/contract.py" + (f" --jobs {args.jobs}" if args.jobs > 1 else "")
             + (f" --suite {args.suite}" if args.suite != "main" else "")
-            + "".join(f" --only {n}" for n in args.only) + (" --fast" if args.fast else ""),
+            + "".join(f" --only {n}" for n in args.only) + (" --fast" if args.fast else "")
+            + (f" --reseed {args.reseed}" if args.reseed else ""),
             "jobs": args.jobs, "wall_seconds": wall}
     print(totals(ordered))
     print()
