@@ -31,6 +31,7 @@ import shapely
 from shapely.ops import polylabel
 
 from .geometry.outline import _polygonal
+from .render.placed import similarity_matrix
 from .types import PlacedArt
 
 
@@ -75,34 +76,23 @@ def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
     return dataclasses.replace(placed, paths=paths, stroke_scale=placed.stroke_scale * scale, frame=frame)
 
 
-def _similarity(src: np.ndarray, cur: np.ndarray) -> tuple[complex, np.ndarray, np.ndarray]:
-    """Least-squares similarity z ↦ c·(z − a) + b mapping points ``src`` onto ``cur``."""
-    a, b = src.mean(axis=0), cur.mean(axis=0)
-    za = (src - a) @ np.array([1.0, 1j])
-    zb = (cur - b) @ np.array([1.0, 1j])
-    den = float(np.vdot(za, za).real)
-    c = complex(np.vdot(za, zb) / den) if den > 0 else 1.0 + 0j
-    return c, a, b
-
-
 def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
     """The undeformed art ``rest`` moved, turned and scaled onto ``placed`` (least squares
     over their corresponding vertices, or the meshes' similarity ``frame`` when both carry
     one — rendered curves have no vertex correspondence): what the element would look like
     unbent."""
+    extra = {}
     if placed.frame is not None and rest.frame is not None:
         m = np.asarray(placed.frame, dtype=float) @ np.linalg.inv(np.asarray(rest.frame, dtype=float))
-        rot, b = m[:2, :2], m[:2, 2]
-        paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
-        k = float(np.sqrt(abs(np.linalg.det(rot))))
-        return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k,
-                                   deformation=0.0, frame=m @ np.asarray(rest.frame, dtype=float))
-    src = np.concatenate([p for a in rest.paths for p in a.subpaths])
-    cur = np.concatenate([p for a in placed.paths for p in a.subpaths])
-    c, a, b = _similarity(src, cur)
-    rot = np.array([[c.real, -c.imag], [c.imag, c.real]])
-    paths = tuple(p.transformed(lambda pts: (np.asarray(pts) - a) @ rot.T + b) for p in rest.paths)
-    return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * abs(c), deformation=0.0)
+        extra["frame"] = m @ np.asarray(rest.frame, dtype=float)
+    else:
+        src = np.concatenate([p for a in rest.paths for p in a.subpaths])
+        cur = np.concatenate([p for a in placed.paths for p in a.subpaths])
+        m = similarity_matrix(src, cur)
+    rot, b = m[:2, :2], m[:2, 2]
+    paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
+    k = float(np.sqrt(abs(np.linalg.det(rot))))
+    return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k, deformation=0.0, **extra)
 
 
 def distortion(art, copy) -> float:
