@@ -340,3 +340,29 @@ def test_plan_is_cached_per_template(tmp_path):
     t = _template(_element(tmp_path, DISC), 1.0)
     assert map_plan(t) is map_plan(t)
     assert map_plan(t, smooth=False) is not map_plan(t)
+
+
+def test_the_curve_fitter_compiles_each_helper_once():
+    """numba compiles a jitted helper once per argument-type tuple: a literal constant
+    (``Literal[int](3)`` next to ``int64``) or an omitted default argument makes a second
+    (and third) copy of it, which cost the first run 6 of the fitter's 19 CPU seconds of
+    compilation. A fresh, uncached build of the fitter's entry point types every call
+    inside it; each helper must then hold a single signature."""
+    import numba
+
+    from repulsionpak.render import fit
+
+    entry = numba.njit(fit._fit_chain.py_func)
+    ang = np.linspace(0.0, 2.0 * np.pi, 41)[:-1]
+    q = np.c_[np.cos(ang), np.sin(ang)]
+    g = np.c_[-np.sin(ang), np.cos(ang)]
+    order = np.array([3, 3, 1, 3], np.int64)
+    seg_start = np.array([0, 10, 20, 30, 40], np.int64)
+    t = np.tile(np.linspace(0.0, 1.0, 10), 4)
+    orders, ctrl = entry(order, seg_start, True, q, g, t, 1e-3, math.cos(math.radians(1.0)), fit.SNAP_ANGLE)
+    assert len(orders) >= 4 and np.isfinite(ctrl).all()
+    helpers = {name: obj for name, obj in vars(fit).items()
+               if isinstance(obj, numba.core.registry.CPUDispatcher) and name != "_fit_chain"}
+    assert len(helpers) >= 10
+    for name, d in helpers.items():
+        assert len(d.signatures) <= 1, f"{name} compiled for {len(d.signatures)} signatures: {d.signatures}"

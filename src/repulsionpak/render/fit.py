@@ -67,7 +67,7 @@ def _eval(c, u):
 
 
 @njit(cache=True)
-def _max_error(c, u, q, lo, hi, stop=1e300):
+def _max_error(c, u, q, lo, hi, stop):
     """Largest distance of samples q[lo:hi] from cubic c (refines u in place); returns
     early, with a value above ``stop``, once one sample is further than that."""
     worst = 0.0
@@ -226,7 +226,7 @@ def _angle_score(c, u, g, lo, hi, ang_tol):
 
 
 @njit(cache=True)
-def _score(c, u, q, g, lo, hi, tol, ang_tol, stop=1e300):
+def _score(c, u, q, g, lo, hi, tol, ang_tol, stop):
     """max(distance / tol, direction error / angle tolerance, ARM_MIN × chord / shorter
     tangent arm) of cubic c: <= 1 fits.
     Above ``stop``, only a lower bound of the score (the search then rejects c anyway)."""
@@ -257,7 +257,7 @@ def _search(c, u, q, g, lo, hi, tol, ang_tol, max_evals):
         return 1e300
     t0x, t0y, t3x, t3y = t0x / n0, t0y / n0, t3x / n3, t3y / n3
     la, lb = math.log(n0), math.log(n3)
-    f0 = _score(c, u, q, g, lo, hi, tol, ang_tol)
+    f0 = _score(c, u, q, g, lo, hi, tol, ang_tol, 1e300)
     evals = 0
     trial = np.empty((4, 2))
     _copy4(trial, c)
@@ -346,7 +346,7 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
             c[1, 0], c[1, 1] = p0x + 2.0 / 3.0 * (cx - p0x), p0y + 2.0 / 3.0 * (cy - p0y)
             c[2, 0], c[2, 1] = p3x + 2.0 / 3.0 * (cx - p3x), p3y + 2.0 / 3.0 * (cy - p3y)
             c[3, 0], c[3, 1] = p3x, p3y
-            err = _max_error(c, u, q, a, b)
+            err = _max_error(c, u, q, a, b, 1e300)
             if not _forward(c, u, g, a, b, cos_tol):
                 err = 1e300
             if err <= tol:
@@ -411,7 +411,9 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
 
     The count lives in a one-element array, not an int argument: the caller's first call
     would pass the literal 0 and numba would compile this function twice (``Literal[int]``
-    and ``int64``), a second of the first run's compilation."""
+    and ``int64``), a second of the first run's compilation. For the same reason the
+    constant arguments below are typed ``np.int64``."""
+    cubic, off = np.int64(3), np.int64(0)
     n_out = count[0]
     ang_tol = math.acos(min(1.0, max(-1.0, cos_tol)))
     c = np.empty((4, 2))
@@ -421,7 +423,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
     a = lo
     while a < hi - 1:
         us = use_ts if a == lo else 0
-        kind = _try_span(order if a == lo else 3, q, g, t, a, hi, tol, cos_tol, ang_tol, tsx, tsy, us, tex,
+        kind = _try_span(order if a == lo else cubic, q, g, t, a, hi, tol, cos_tol, ang_tol, tsx, tsy, us, tex,
                          tey, use_te, c, u, best)
         if kind != 0:
             if kind > 0:
@@ -435,7 +437,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
         have = False
         while bad - good > 1:
             mid = (good + bad) // 2
-            k = _try_span(3, q, g, t, a, mid + 1, tol, cos_tol, ang_tol, tsx, tsy, us, 0.0, 0.0, 0,
+            k = _try_span(cubic, q, g, t, a, mid + 1, tol, cos_tol, ang_tol, tsx, tsy, us, 0.0, 0.0, off,
                           c, u, best)
             if k != 0:
                 good = mid
@@ -445,7 +447,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
             else:
                 bad = mid
         if not have:  # two neighbouring samples: the cubic with their exact tangents
-            k = _try_span(3, q, g, t, a, good + 1, tol, cos_tol, ang_tol, tsx, tsy, us, 0.0, 0.0, 0,
+            k = _try_span(cubic, q, g, t, a, good + 1, tol, cos_tol, ang_tol, tsx, tsy, us, 0.0, 0.0, off,
                           c, u, best)
             kg = k
             _copy4(keep, c if k != 0 else best)
@@ -537,7 +539,7 @@ def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
                     count[0] += 1
             if kind == 0:
                 count[0] = n0
-                _fit_piece(3, q, g, tc, seg_start[k], seg_start[j + 1], tol, cos_tol,
+                _fit_piece(np.int64(3), q, g, tc, seg_start[k], seg_start[j + 1], tol, cos_tol,
                            ts[k, 0], ts[k, 1], use_ts[k], te[j, 0], te[j, 1], use_te[j], out_o, out_c, count)
         k = j + 1
     n_out = count[0]
