@@ -201,7 +201,8 @@ def bench_mesh() -> None:
 
 
 #: loaded into the demo's processes by bench_firstrun (a sitecustomize on PYTHONPATH, so the
-#: warm-up process has it too): logs every top-level numba compilation with its CPU time
+#: warm-up process has it too): logs every numba compilation (nested ones with their depth)
+#: with its CPU time and argument types
 _COMPILE_LOGGER = """
 import os, sys, time
 if os.environ.get("BENCH_COMPILE_LOG"):
@@ -215,11 +216,11 @@ if os.environ.get("BENCH_COMPILE_LOG"):
 
         def on_end(self, ev):
             c0 = self.stack.pop()
-            if not self.stack:
-                f = ev.data["dispatcher"].py_func
-                role = "warm-up" if sys.argv[0].endswith("warmup.py") else "packing"
-                with open(os.environ["BENCH_COMPILE_LOG"], "a") as fh:
-                    fh.write(f"{role}\\t{f.__module__}.{f.__qualname__}\\t{time.process_time() - c0:.3f}\\n")
+            f = ev.data["dispatcher"].py_func
+            role = "warm-up" if sys.argv[0].endswith("warmup.py") else "packing"
+            with open(os.environ["BENCH_COMPILE_LOG"], "a") as fh:
+                fh.write(f"{role}\\t{f.__module__}.{f.__qualname__}\\t{time.process_time() - c0:.3f}"
+                         f"\\t{len(self.stack)}\\t{ev.data['args']}\\n")
 
     event.register("numba:compile", _Log())
 """
@@ -234,12 +235,18 @@ def _compile_summary(log: str) -> str:
     cpu: dict = collections.defaultdict(float)
     count: dict = collections.Counter()
     per_kernel: dict = collections.Counter()
+    sigs: dict = collections.defaultdict(set)
     for line in open(log):
-        role, name, sec = line.rstrip("\n").split("\t")
+        role, name, sec, depth, args = line.rstrip("\n").split("\t")
+        if "<locals>" not in name:  # numba's own overloads (np.empty ...) are per caller
+            sigs[name].add(args)
+        if depth != "0":  # nested: counted in its outermost compilation's time
+            continue
         cpu[role] += float(sec)
         count[role] += 1
         per_kernel[name] += 1
-    twice = [n.rsplit(".", 1)[1] for n, c in per_kernel.items() if c > 1]
+    # the same kernel in both processes, or one helper for two argument-type tuples
+    twice = [n.rsplit(".", 1)[1] for n in sigs if per_kernel[n] > 1 or len(sigs[n]) > 1]
     parts = [f"{role} {cpu[role]:.1f} CPU s ({count[role]} kernels)" for role in ("packing", "warm-up") if count[role]]
     return "compilation: " + ", ".join(parts) + f"; compiled twice: {', '.join(twice) or 'none'}"
 
