@@ -323,8 +323,8 @@ def main(argv=None) -> int:
     out_dir = args.out_dir if args.out_dir is not None else (None if partial else ROOT / "docs")
     if (args.suite == "holdout" or args.reseed) and out_dir is not None \
             and out_dir.resolve() == (ROOT / "docs").resolve():
-        ap.error("--suite holdout / --reseed never write docs/ (the published numbers are the main suite's); "
-                 "give another --out-dir")
+        ap.error("--suite holdout never writes docs/, nor does --reseed (the published numbers are the "
+                 "main suite's at its own seeds); give another --out-dir")
     pic_dir = None
     if out_dir is not None:
         pic_dir = out_dir / "images"

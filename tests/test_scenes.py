@@ -227,5 +227,8 @@ def test_contract_holdout_never_writes_docs(capsys):
     with pytest.raises(SystemExit):  # refused before anything is packed
         contract.main(["--suite", "holdout", "--out-dir", str(root / "docs"), "--only", "ho-mixed-ellipse-5"])
     assert "never writes docs" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # nor do other seeds
+        contract.main(["--reseed", "1000", "--out-dir", str(root / "docs"), "--only", "fast-convex"])
+    assert "nor does --reseed" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         contract.main(["--suite", "holdout", "--only", "no-such-scene"])
