@@ -10,8 +10,10 @@ Two choices of weights ``w_j``:
 * ``smooth`` (default): thin-plate-spline interpolation of the mesh vertices (the
   polyharmonic spline φ(r) = r² log r plus an affine part, rest vertices as centres).
   The weights sum to one, reproduce every affine map exactly (so a copy that is only
-  moved, turned and scaled is exact), interpolate every vertex (skin and interior), and
-  are C∞ away from the vertices and C¹ at them: a bent element looks bent, not faceted.
+  moved, turned and scaled is exact), follow every vertex (skin and interior) — exactly
+  with ``smoothing`` 0, within a fraction of a mesh spacing as the smoothing spline that
+  ``RenderParams.smoothing`` makes the default — and are C∞ away from the vertices and C¹
+  at them: a bent element looks bent, not faceted.
 * ``linear``: the paper's barycentric coordinates in the enclosing rest triangle
   (piecewise affine: kinks wherever an outline crosses a triangle edge).
 
