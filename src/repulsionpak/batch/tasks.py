@@ -211,9 +211,14 @@ def dask_client(workers: int | None = None, scheduler: str | None = None,
     n = (os.cpu_count() or 1) if workers is None else workers
     if n < 1:
         raise ParameterError(f"--workers must be >= 1, got {n}")
+    # the workers' own log lines stay quiet below CRITICAL: every job's outcome reaches the
+    # user through its result (progress line, the CSV's error column, a task lost with its
+    # worker), and what distributed logs at ERROR are shutdown races — on Ctrl-C under load
+    # a worker's heartbeat to the closing scheduler fails and logger.exception printed its
+    # traceback on the user's terminal
     with _sigint_ignored():
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=None, silence_logs=logging.CRITICAL)
     try:
         client = Client(cluster)
         try:
