@@ -113,7 +113,7 @@ class SimParams:
         1.3, "× nominal size", "Elements stop growing at this multiple of the size their skin was "
         "built for (beyond the paper: keeps relative sizes and the gap).")
     requery_every: int = _doc(
-        16, "iterations", "Full neighbour query every this many iterations; in between the closest "
+        32, "iterations", "Full neighbour query every this many iterations; in between the closest "
         "points follow the neighbours' skins locally (1 = the paper's full query every step). "
         "The query window reaches at least one cell (~8 gaps) while vertices move at most "
         "velocity_cap·Δt² per step, so no neighbour that matters can appear in between.")
