@@ -194,8 +194,8 @@ class RenderParams:
         "the simulation leaves in pressed skins, which an exact map writes into the art as "
         "waves (10:1 bars: absolute turning of a primary's outline, 1 for a rectangle, median "
         "1.16 → 1.06, 90th percentile 1.58 → 1.18). It moves the art off the mesh (≤ 0.2 gap); "
-        "the final verification measures the art itself, so the promises hold "
-        "(docs/quality.md: mean area 0.557 both, largest Q_s(gap/2)/Q_s(0) 0.386 → 0.388).")
+        "the final verification measures the art itself, so the promises hold (the "
+        "before/after numbers: docs/algorithm.md, \"Ripples\").")
     samples: float = _doc(
         8.0, "per mesh spacing", "Samples of each source segment per mesh edge length when "
         "mapping it (curves get 8 to 128 samples, lines 3 to 128).")
