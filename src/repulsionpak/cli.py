@@ -443,7 +443,7 @@ def _movie_path(value: Optional[Path]) -> Optional[Path]:
 MovieOpt = Annotated[Optional[Path], typer.Option(
     "--movie", callback=_movie_path,
     help="Also write the simulation as an animation: OUT.gif (Pillow) or OUT.mp4 (needs "
-         "pip install 'repulsionpak[mp4]'); about 12 s, then the result held for 2 s.")]
+         "pip install 'repulsionpak\\[mp4]'); about 12 s, then the result held for 2 s.")]
 MovieEveryOpt = Annotated[Optional[int], typer.Option(
     "--movie-every", min=1, help="Iterations between movie frames (default: chosen from the run's length).")]
 MovieSizeOpt = Annotated[int, typer.Option(
