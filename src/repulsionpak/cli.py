@@ -298,6 +298,11 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
         if cache_is_cold():
             typer.echo("compiling the simulation kernels, first run only…", err=True)
+        elif report is not None:
+            from .geometry.overlap import is_cold as fit_is_cold
+
+            if fit_is_cold():
+                typer.echo("compiling the report's distortion kernels, first run only…", err=True)
     from . import warmup
 
     viewer = None
@@ -539,6 +544,10 @@ def evaluate(
             from .metrics import source_geometries
 
             sources = source_geometries(load_elements(elements))
+            from .geometry.overlap import is_cold as fit_is_cold
+
+            if fit_is_cold():
+                typer.echo("compiling the distortion kernels, first run only…", err=True)
         results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources, workers=_fit_workers()))
                    for p in packings]
         if json_out:

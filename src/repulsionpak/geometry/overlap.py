@@ -29,7 +29,8 @@ import numpy as np
 import shapely
 from numba import njit
 
-__all__ = ["Rings", "rings_of", "OverlapGrid", "intersection_areas", "nelder_mead_sym"]
+__all__ = ["Rings", "rings_of", "OverlapGrid", "intersection_areas", "nelder_mead_sym",
+           "is_cold"]
 
 _NUDGE = 1e-9  #: relative shift of the moving polygon (see :func:`intersection_areas`)
 
@@ -464,3 +465,12 @@ def intersection_areas(a: Rings, b: OverlapGrid, params: np.ndarray) -> np.ndarr
     br = b.rings
     return _many_areas(a.xy, a.nxt, a.starts, p, br.xy, br.nxt, br.starts,
                        b.x0, b.y0, b.inv, b.gx, b.gy, b.cell_start, b.cell_edges)
+
+
+def is_cold() -> bool:
+    """True when numba's disk cache lacks the fit's kernels (the first distortion fit
+    compiles them, several seconds); False when that cannot be told."""
+    try:
+        return not all(bool(d._cache._cache_file._load_index()) for d in (_nelder_mead, _many_areas))
+    except Exception:  # noqa: BLE001  (private numba API)
+        return False
