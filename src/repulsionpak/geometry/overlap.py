@@ -137,25 +137,22 @@ def _inside(px, py, xy, nxt):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _sort_pairs(key, val, n):
-    """Insertion sort of key[:n] (and val alongside); n is small."""
+def _sort(key, n):
+    """Insertion sort of key[:n] in place (n is small: an edge's crossings)."""
     for i in range(1, n):
         k = key[i]
-        v = val[i]
         j = i - 1
         while j >= 0 and key[j] > k:
             key[j + 1] = key[j]
-            val[j + 1] = val[j]
             j -= 1
         key[j + 1] = k
-        val[j + 1] = v
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _inside_pieces(px, py, qx, qy, tbuf, ibuf, nt, state):
+def _inside_pieces(px, py, qx, qy, tbuf, nt, state):
     """The edge p → q cut at the parameters tbuf[:nt] (sorted here), starting inside
     when ``state``: ∑ of x dy − y dx over its pieces inside, and the state at q."""
-    _sort_pairs(tbuf, ibuf, nt)
+    _sort(tbuf, nt)
     dx, dy = qx - px, qy - py
     sx, sy = px, py
     total = 0.0
@@ -173,8 +170,11 @@ def _inside_pieces(px, py, qx, qy, tbuf, ibuf, nt, state):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _one_area(axy, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstart, cedges,
-              stamp, cr_a, cr_b, cr_t, cr_u, tbuf, ibuf):
-    """area(A ∩ B) for oriented rings A (moved) and B (binned in the grid)."""
+              stamp, cr_a, cr_b, cr_u, tbuf):
+    """area(A ∩ B) for oriented rings A (moved) and B (binned in the grid). Scratch:
+    ``stamp`` (max(n, m)), the crossings' A edge, B edge and parameter along B (``cr_a``,
+    ``cr_b``, ``cr_u``), one edge's crossing parameters (``tbuf``). NaN when the scratch
+    is too small (many more crossings than vertices)."""
     n = axy.shape[0]
     m = bxy.shape[0]
     if n == 0 or m == 0:
@@ -227,16 +227,14 @@ def _one_area(axy, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstar
                                 return np.nan  # more crossings than room: let GEOS measure it
                             cr_a[ncr] = e
                             cr_b[ncr] = f
-                            cr_t[ncr] = t
                             cr_u[ncr] = u
                             ncr += 1
                             if nt < tbuf.shape[0]:
                                 tbuf[nt] = t
-                                ibuf[nt] = 0
                             nt += 1
             if nt > tbuf.shape[0]:
                 return np.nan
-            part, state = _inside_pieces(px, py, qx, qy, tbuf, ibuf, nt, state)
+            part, state = _inside_pieces(px, py, qx, qy, tbuf, nt, state)
             total += part
             e = q
             if e == s0:
@@ -252,8 +250,7 @@ def _one_area(axy, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstar
         c = stamp[f]
         stamp[f] = acc
         acc += c
-    # order the crossings by B edge (a counting sort into cr_a's tail is not needed:
-    # write the u values into tbuf-sized slices of a scratch built from cr_t)
+    # a counting sort of the crossings by B's edge
     for k in range(ncr):
         f = cr_b[k]
         cr_a[stamp[f]] = k  # reuse cr_a as the permutation (the A edges are no longer needed)
@@ -272,8 +269,7 @@ def _one_area(axy, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstar
                 return np.nan
             for k in range(nt):
                 tbuf[k] = cr_u[cr_a[beg + k]]
-                ibuf[k] = 0
-            part, state = _inside_pieces(bxy[f, 0], bxy[f, 1], bxy[g, 0], bxy[g, 1], tbuf, ibuf, nt, state)
+            part, state = _inside_pieces(bxy[f, 0], bxy[f, 1], bxy[g, 0], bxy[g, 1], tbuf, nt, state)
             total += part
             f = g
             if f == s0:
@@ -283,7 +279,7 @@ def _one_area(axy, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstar
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _area_at(q, axy0, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstart, cedges,
-             axy, stamp, cr_a, cr_b, cr_t, cr_u, tbuf, ibuf):
+             axy, stamp, cr_a, cr_b, cr_u, tbuf):
     """area(T(A) ∩ B) for T = q = (angle, log scale, dx, dy) about the origin."""
     sc = np.exp(q[1])
     c = np.cos(q[0]) * sc
@@ -294,24 +290,26 @@ def _area_at(q, axy0, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cs
         axy[i, 0] = c * x - s * y + q[2]
         axy[i, 1] = s * x + c * y + q[3]
     return _one_area(axy, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstart, cedges,
-                     stamp, cr_a, cr_b, cr_t, cr_u, tbuf, ibuf)
+                     stamp, cr_a, cr_b, cr_u, tbuf)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _buffers(n, m):
+    """Scratch of :func:`_area_at` for n moving and m fixed vertices: the moved vertices,
+    the stamps, room for 8 (n + m) + 64 crossings, 256 crossings on one edge."""
     cap = 8 * (n + m) + 64
     return (np.empty((n, 2)), np.empty(max(n, m), np.int64), np.empty(cap, np.int64),
-            np.empty(cap, np.int64), np.empty(cap), np.empty(cap), np.empty(256), np.empty(256, np.int64))
+            np.empty(cap, np.int64), np.empty(cap), np.empty(256))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _many_areas(axy0, anxt, astarts, params, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstart, cedges):
     """area(T_k(A) ∩ B) for T_k = params[k] = (angle, log scale, dx, dy) about the origin."""
-    axy, stamp, cr_a, cr_b, cr_t, cr_u, tbuf, ibuf = _buffers(axy0.shape[0], bxy.shape[0])
+    axy, stamp, cr_a, cr_b, cr_u, tbuf = _buffers(axy0.shape[0], bxy.shape[0])
     out = np.empty(params.shape[0])
     for k in range(params.shape[0]):
         out[k] = _area_at(params[k], axy0, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy,
-                          cstart, cedges, axy, stamp, cr_a, cr_b, cr_t, cr_u, tbuf, ibuf)
+                          cstart, cedges, axy, stamp, cr_a, cr_b, cr_u, tbuf)
     return out
 
 
@@ -322,7 +320,7 @@ def _nelder_mead(p, v, area_a, area_b, nudge, size, tol, max_evals,
     without leaving compiled code (scalar loops: numba compiles every array expression
     into a kernel of its own, which took seconds). Returns (parameters, value, ok); ok
     is False when the kernel could not decide an area."""
-    axy, stamp, cr_a, cr_b, cr_t, cr_u, tbuf, ibuf = _buffers(axy0.shape[0], bxy.shape[0])
+    axy, stamp, cr_a, cr_b, cr_u, tbuf = _buffers(axy0.shape[0], bxy.shape[0])
     pts = np.empty((5, 4))
     vals = np.empty(5)
     tmp = np.empty((5, 4))
@@ -353,7 +351,7 @@ def _nelder_mead(p, v, area_a, area_b, nudge, size, tol, max_evals,
             for j in range(4):
                 q[j] = work[w, j] + nudge[j]
             a = _area_at(q, axy0, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstart, cedges,
-                         axy, stamp, cr_a, cr_b, cr_t, cr_u, tbuf, ibuf)
+                         axy, stamp, cr_a, cr_b, cr_u, tbuf)
             if not np.isfinite(a):
                 ok = False
             out[w] = max(area_a * np.exp(2.0 * work[w, 1]) + area_b - 2.0 * a, 0.0)
