@@ -208,8 +208,8 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     """Undeformed copies in what is left of the negative space after the verification:
     the container shrunk by the edge margin, minus every element's art dilated by the
     gap, split into its connected pockets; each pocket whose largest inscribed circle is
-    at least ``min_radius`` gets a copy (:func:`_fit_copy`), then what is left of it is
-    tried again, up to ``per_pocket`` copies. These pockets are the room an element left
+    at least ``min_radius`` gets a copy (:func:`_fit_copy`), then every piece of what is
+    left of it (largest first; a copy can split a pocket), up to ``per_pocket`` copies. These pockets are the room an element left
     when the verification had to drop it, or that the simulated pocket fill did not
     reach; every copy is a gap from all art and the margin from the edge by construction.
     Returns the new copies only."""
@@ -227,16 +227,19 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     parts = [q for q in parts if q.area >= math.pi * min_radius ** 2]
     parts.sort(key=lambda q: -q.area)
     out: list[PlacedArt] = []
-    for part in parts:
-        for _ in range(per_pocket):
+    for pocket in parts:
+        todo = [pocket]  # the pocket, then every piece a copy leaves of it, largest first
+        placed_here = 0
+        while todo and placed_here < per_pocket:
+            part = todo.pop(0)
             got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
             if got is None:
-                break
+                continue
             copy, g = got
             out.append(copy)
-            part = part.difference(g.buffer(reach, quad_segs=4))
-            if isinstance(part, shapely.MultiPolygon):
-                part = max(part.geoms, key=lambda q: q.area)
-            if part.is_empty or not isinstance(part, shapely.Polygon) or part.area < math.pi * min_radius ** 2:
-                break
+            placed_here += 1
+            rest = part.difference(g.buffer(reach, quad_segs=4))
+            todo += [q for q in getattr(rest, "geoms", [rest])
+                     if isinstance(q, shapely.Polygon) and not q.is_empty and q.area >= math.pi * min_radius ** 2]
+            todo.sort(key=lambda q: -q.area)
     return out

@@ -166,8 +166,9 @@ class SecondaryParams:
         "verification dropped, or that the simulated fill did not reach) gets undeformed "
         "secondary copies, like a hole; part of the pocket fill (off with it).")
     hole_min_radius: float = _doc(
-        1.0, "× gap", "Smallest inscribed circle of a hole's free part (the hole shrunk by the gap) "
-        "that gets a copy.")
+        0.5, "× gap", "Smallest inscribed circle of a hole's free part (the hole shrunk by the gap) "
+        "that gets a copy (1.0 until November 26: 5-pointed stars at a 0.5% gap kept "
+        "Q_s(gap/2)/Q_s(0) at 0.46-0.48; see docs/algorithm.md).")
     hole_depth: int = _doc(2, "-", "Holes of hole copies are filled too, this many levels deep.")
 
 
