@@ -156,3 +156,26 @@ def test_leftover_pockets_get_copies_a_gap_from_everything(ring_scene):
     assert all(e.kind == "secondary" and e.deformation == 0.0 for e in extra)
     # the negative space gets more even
     assert _ratio(cont, placed + extra) < _ratio(cont, placed) - 0.02
+
+
+def test_every_piece_of_a_split_pocket_gets_copies(tmp_path):
+    """A long pocket with a bulge in the middle: the first copy goes in the bulge and
+    splits the pocket in two; both pieces are filled (only the larger one was, and the
+    other stayed empty)."""
+    (tmp_path / "disc.svg").write_text(scenes.element_svg("disc"))
+    (tmp_path / "strip.svg").write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="640" height="200"><path d="M0 40H640V160H0Z"/>'
+        '<circle cx="320" cy="100" r="95"/></svg>')
+    cont = load_container(tmp_path / "strip.svg")
+    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
+    gap, margin = 10.0, 5.0
+    extra = fill_pockets([], lib, cont.region, gap, margin, np.random.default_rng(0), min_radius=0.5 * gap)
+    geoms = [art_area(e.paths, e.stroke_scale) for e in extra]
+    xs = sorted(g.centroid.x for g in geoms)
+    assert len(geoms) >= 5  # ~100-unit discs along a 640-unit strip
+    assert xs[0] < 160 and xs[-1] > 480  # both ends reached
+    # measured on the art flattened finer than the fill's own outlines: the promise's
+    # tolerance on the edge margin (metrics.ContractLimits.edge_margin)
+    for k, g in enumerate(geoms):
+        assert g.distance(cont.region.boundary) >= 0.98 * margin
+        assert all(g.distance(h) >= 0.98 * gap for h in geoms[k + 1:])
