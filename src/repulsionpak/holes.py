@@ -209,10 +209,10 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     the container shrunk by the edge margin, minus every element's art dilated by the
     gap, split into its connected pockets; each pocket whose largest inscribed circle is
     at least ``min_radius`` gets a copy (:func:`_fit_copy`), then every piece of what is
-    left of it (largest first; a copy can split a pocket), up to ``per_pocket`` copies. These pockets are the room an element left
-    when the verification had to drop it, or that the simulated pocket fill did not
-    reach; every copy is a gap from all art and the margin from the edge by construction.
-    Returns the new copies only."""
+    left of it (largest first; a copy can split a pocket), up to ``per_pocket`` copies.
+    These pockets are the room an element left when the verification had to drop it, or
+    that the simulated pocket fill did not reach; every copy is a gap from all art and
+    the margin from the edge by construction. Returns the new copies only."""
     keep = 1.005 * gap
     eps = 0.01 * gap
     # a buffer with 4 segments per quarter circle is inscribed in the true one (its chords
