@@ -27,7 +27,7 @@ import numpy as np
 import shapely
 
 from .controls import ElementControls
-from .geometry.outline import art_area
+from .geometry.outline import _polygonal, art_area
 from .params import RenderParams
 from .render.curves import decimals_for, flatten_subpath, round_curves
 from .render.placed import FLATTEN_SHARE, curve_tolerance
@@ -154,7 +154,10 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
     paths = tuple(_written(a, m, tol) for a in e.paths)
     copy = PlacedArt(e.source, "secondary", paths, stroke_scale=s, deformation=0.0,
                      paint_servers=dict(e.paint_servers), frame=m, tolerance=tol)
-    return copy, _place(library.geoms[k], s, angle, at)
+    g = _place(library.geoms[k], s, angle, at)
+    if not g.is_valid:  # a tiny copy's tiniest rings can collapse to repeated points
+        g = _polygonal(shapely.make_valid(g))
+    return copy, g
 
 
 def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: np.random.Generator,
