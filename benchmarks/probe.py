@@ -4,9 +4,8 @@ Each scene combines the suites' own element kinds (plus glyphs, most of which ne
 suite uses) with one of their containers, a gap of 0.5–3 % of the container, 5–100
 primaries and a drawing scale of 0.01×–100×, all drawn from ``--seed``; each is packed
 and measured exactly as ``benchmarks/contract.py`` does (``scenes.run_scene``, then the
-seven promises). This is how
-5-pointed stars at a 0.5 % gap (Q_s(gap/2)/Q_s(0) 0.46–0.48, fixed by the smaller
-pockets' fill, docs/algorithm.md) were found.
+seven promises). This is how 5-pointed stars at a 0.5 % gap (Q_s(gap/2)/Q_s(0)
+0.46–0.48, fixed by the smaller pockets' fill, docs/algorithm.md) were found.
 
     python benchmarks/probe.py --count 12 --seed 7 --jobs 2 [--json out.json]
 
