@@ -336,7 +336,8 @@ def _nelder_mead(p, v, area_a, area_b, nudge, size, tol, max_evals,
             pts[i, i - 1] += size
     vals[0] = v
     evals = 0
-    # every area is computed at this one place: pending[] lists the rows of work[] to do
+    # every area is computed at one place, the loop below: work[:nwork] holds the
+    # points to evaluate at each stage
     work = np.empty((4, 4))
     out = np.empty(4)
     ok = True
@@ -468,7 +469,9 @@ def intersection_areas(a: Rings, b: OverlapGrid, params: np.ndarray) -> np.ndarr
 def is_cold() -> bool:
     """True when numba's disk cache lacks the fit's kernels (the first distortion fit
     compiles them, several seconds); False when that cannot be told."""
+    from ..warmup import _cached  # noqa: PLC0415  (the warm-up's test of numba's disk cache)
+
     try:
-        return not all(bool(d._cache._cache_file._load_index()) for d in (_nelder_mead, _many_areas))
+        return not all(_cached(d) for d in (_nelder_mead, _many_areas))
     except Exception:  # noqa: BLE001  (private numba API)
         return False
