@@ -29,8 +29,7 @@ import shapely
 from .controls import ElementControls
 from .geometry.outline import _polygonal, art_area
 from .params import RenderParams
-from .render.curves import decimals_for, flatten_subpath, round_curves
-from .render.placed import FLATTEN_SHARE, curve_tolerance
+from .render.placed import curve_tolerance, refined
 from .types import ArtPath, Element, PlacedArt
 
 __all__ = ["fill_holes", "fill_pockets", "HoleLibrary"]
@@ -95,16 +94,8 @@ def _place(geom0, scale: float, angle: float, at: np.ndarray):
 
 
 def _written(art: ArtPath, m: np.ndarray, tol: float) -> ArtPath:
-    """``art`` under the similarity ``m``, its curves rounded as the writer will write
-    them and flattened finely (like the renderer's copies: metrics see what is written)."""
-    moved = art.transformed(lambda p: np.asarray(p) @ m[:2, :2].T + m[:2, 2])
-    src = moved.source
-    if src is None or not src.curves:
-        return moved
-    curves = round_curves(src.curves, decimals_for(tol))
-    flat = tuple(flatten_subpath(c, FLATTEN_SHARE * tol) for c in curves)
-    return ArtPath(flat, tuple(c.closed for c in curves), moved.style,
-                   source=dataclasses.replace(src, curves=tuple(curves)))
+    """``art`` under the similarity ``m``, as the writer will write it (:func:`refined`)."""
+    return refined(art.transformed(lambda p: np.asarray(p) @ m[:2, :2].T + m[:2, 2]), tol)
 
 
 def _holes(geom) -> list:

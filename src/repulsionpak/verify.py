@@ -31,7 +31,7 @@ import shapely
 from shapely.ops import polylabel
 
 from .geometry.outline import _polygonal
-from .render.placed import similarity_matrix
+from .render.placed import refined, similarity_matrix
 from .types import PlacedArt
 
 
@@ -107,13 +107,14 @@ def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarra
     """Keep shapes: an element whose distortion (symmetric difference with its unbent,
     similar copy, over its area) exceeds ``limits[i]`` is replaced by that copy (the
     repair that follows makes room for it). Returns (art, distortion of each element as
-    it is returned, indices replaced)."""
+    it is returned, indices replaced). A copy's curves are flattened as the placed art's
+    were (:func:`refined` at its tolerance), so that the repair measures what is written."""
     out, dist, replaced = [], np.zeros(len(placed)), []
     for i, (p, r) in enumerate(zip(placed, rest)):
         copy = similar_copy(r, p)
         d = distortion(p.art, copy.art)
         if d > limits[i]:
-            out.append(copy)
+            out.append(dataclasses.replace(copy, paths=tuple(refined(a, p.tolerance) for a in copy.paths)))
             replaced.append(i)
             d = 0.0
         else:

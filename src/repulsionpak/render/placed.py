@@ -10,6 +10,7 @@ exactly what is written.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 
 import numpy as np
@@ -92,6 +93,24 @@ def curve_tolerance(size: float, gap: float | None, params: RenderParams) -> flo
     if gap is not None and gap > 0:
         tol = min(tol, params.max_gap_share * gap)
     return tol
+
+
+def refined(art: ArtPath, tol: float | None) -> ArtPath:
+    """``art`` as a copy at curve tolerance ``tol`` is written: its exact curves rounded as
+    the writer rounds them and flattened at ``FLATTEN_SHARE`` × ``tol``, so that checks and
+    metrics see what is written (a source element's own flattening is relative to the
+    element's size, up to a few hundredths of a gap off on copies ~50 gaps across). Art
+    without curves, or ``tol`` None, is returned as it is."""
+    src = art.source
+    if tol is None or not tol > 0 or src is None or not src.curves:
+        return art
+    curves = round_curves(src.curves, decimals_for(tol))
+    flat = tuple(flatten_subpath(c, FLATTEN_SHARE * tol) for c in curves)
+    keep = [i for i, f in enumerate(flat) if len(f) >= 2]
+    if not keep:
+        return art
+    return ArtPath(tuple(flat[i] for i in keep), tuple(curves[i].closed for i in keep), art.style,
+                   source=dataclasses.replace(src, curves=tuple(curves[i] for i in keep)))
 
 
 def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
