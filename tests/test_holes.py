@@ -174,8 +174,8 @@ def test_every_piece_of_a_split_pocket_gets_copies(tmp_path):
     xs = sorted(g.centroid.x for g in geoms)
     assert len(geoms) >= 5  # ~100-unit discs along a 640-unit strip
     assert xs[0] < 160 and xs[-1] > 480  # both ends reached
-    # measured on the art flattened finer than the fill's own outlines: the promise's
-    # tolerance on the edge margin (metrics.ContractLimits.edge_margin)
+    # measured on the written curves' flattening: the fill fits those, not the source's
+    # coarser polylines (on which a disc came within 0.989 of the margin)
     for k, g in enumerate(geoms):
-        assert g.distance(cont.region.boundary) >= 0.98 * margin
-        assert all(g.distance(h) >= 0.98 * gap for h in geoms[k + 1:])
+        assert g.distance(cont.region.boundary) >= margin
+        assert all(g.distance(h) >= gap for h in geoms[k + 1:])

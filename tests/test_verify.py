@@ -169,3 +169,39 @@ def test_a_small_primary_pinched_by_a_big_one_is_not_shrunk_to_nothing():
     assert small.distance(big) >= 4.5 - 1e-6
     assert small.area >= 0.5 ** 2 * 16  # at least half its size
     assert big.area < 92 * 17  # the big one gave way
+
+
+def test_a_straightened_copy_is_flattened_as_its_written_curves(tmp_path):
+    """A copy replaced by its unbent self is checked on its exact curves, flattened at the
+    placed copy's own tolerance, not on the source's flattening (relative to the source's
+    size: on a copy ~50 gaps across its chords lay up to ~0.03 gap inside the written
+    circle, and a straightened disc was written within 0.947 of the edge margin)."""
+    from repulsionpak.io.svg_read import load_element
+    from repulsionpak.render.placed import FLATTEN_SHARE
+    from repulsionpak.verify import straighten
+
+    f = tmp_path / "disc.svg"
+    f.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                 '<circle cx="50" cy="50" r="50"/></svg>')
+    el = load_element(f)
+    rest = PlacedArt(str(f), "primary", tuple(a.transformed(lambda p: np.asarray(p) - 50.0) for a in el.paths),
+                     frame=np.eye(3))
+    k, at = 2.0, np.array([300.0, 200.0])  # placed: twice the size, moved; a 1e-3 curve tolerance
+    frame = np.array([[k, 0.0, at[0]], [0.0, k, at[1]], [0.0, 0.0, 1.0]])
+    placed = PlacedArt(str(f), "primary", tuple(a.transformed(lambda p: np.asarray(p) * k + at) for a in rest.paths),
+                       frame=frame, tolerance=1e-3)
+
+    def off_curves(art):  # how far the checked outline (vertices, chord midpoints) is from the exact curves
+        from repulsionpak.render.curves import flatten_subpath
+
+        exact = shapely.LinearRing(flatten_subpath(art.paths[0].source.curves[0], 1e-6))
+        p = art.paths[0].subpaths[0]
+        pts = np.vstack([p, 0.5 * (p + np.roll(p, -1, axis=0))])
+        return shapely.distance(exact, shapely.points(pts)).max()
+
+    assert off_curves(placed) > 0.05  # the source's flattening: 1e-3 of its diagonal, doubled
+    (copy,), _, replaced = straighten([placed], [rest], np.array([-1.0]))
+    assert replaced == [0]
+    assert off_curves(copy) <= FLATTEN_SHARE * 1e-3 * 1.01  # the copy's: at its own tolerance
+    written = copy.paths[0].source.curves[0].ctrl  # rounded as written (to a fifth of the tolerance)
+    assert np.allclose(written, np.round(written, 4), rtol=0, atol=1e-12)

@@ -106,6 +106,12 @@ def _holes(geom) -> list:
     return out
 
 
+#: a copy fitted on its source's polylines whose written curves reach out of the free
+#: part is scaled by FIT_SHRINK, at most FIT_STEPS times (a source is flattened at 1e-3
+#: of its size: the curves bulge up to that much beyond its chords)
+FIT_SHRINK, FIT_STEPS = 0.998, 6
+
+
 def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, min_radius: float,
               render: RenderParams, trials: int):
     """One undeformed copy inside the polygon ``part`` (a free region: everything in it is
@@ -140,15 +146,16 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
         return None
     _, s, k, angle = best
     e = library.elements[k]
-    m = _matrix(s, angle, library.centres[k], at)
-    tol = curve_tolerance(2.0 * s * library.radii[k], gap, render)
-    paths = tuple(_written(a, m, tol) for a in e.paths)
-    copy = PlacedArt(e.source, "secondary", paths, stroke_scale=s, deformation=0.0,
-                     paint_servers=dict(e.paint_servers), frame=m, tolerance=tol)
-    g = _place(library.geoms[k], s, angle, at)
-    if not g.is_valid:  # a tiny copy's tiniest rings can collapse to repeated points
-        g = _polygonal(shapely.make_valid(g))
-    return copy, g
+    for _ in range(FIT_STEPS):  # what is written must fit, not only the source's polylines
+        m = _matrix(s, angle, library.centres[k], at)
+        tol = curve_tolerance(2.0 * s * library.radii[k], gap, render)
+        paths = tuple(_written(a, m, tol) for a in e.paths)
+        copy = PlacedArt(e.source, "secondary", paths, stroke_scale=s, deformation=0.0,
+                         paint_servers=dict(e.paint_servers), frame=m, tolerance=tol)
+        if part.contains(copy.art):
+            return copy, copy.art
+        s *= FIT_SHRINK
+    return None
 
 
 def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: np.random.Generator,
