@@ -8,6 +8,7 @@ seven promises). This is how 5-pointed stars at a 0.5 % gap (Q_s(gap/2)/Q_s(0)
 0.46–0.48, fixed by the smaller pockets' fill, docs/algorithm.md) were found.
 
     python benchmarks/probe.py --count 12 --seed 7 --jobs 2 [--json out.json]
+    python benchmarks/probe.py --seed 5 --gaps 0.005 --counts 5,10   # one corner
 
 Prints one line per scene (promises broken, if any) and exits 1 when any scene broke one.
 """
@@ -31,8 +32,10 @@ import contract  # noqa: E402  (benchmarks/contract.py: the suite's own measurin
 EXTRA_GLYPHS = "AbEFhkPtwZ?#5"
 
 
-def random_scenes(count: int, seed: int):
-    """``count`` random scenes (names ``rp<seed>-<i>``, packing seeds 1000 + i)."""
+def random_scenes(count: int, seed: int, gaps=None, counts=None):
+    """``count`` random scenes (names ``rp<seed>-<i>``, packing seeds 1000 + i); ``gaps``
+    and ``counts``, when given, replace the lists the gap and the number of primaries are
+    drawn from (to search one corner, e.g. few primaries at a fine gap)."""
     from repulsionpak.scenes import CONTAINER_KINDS, ELEMENT_KINDS, Scene
 
     rnd = random.Random(seed)
@@ -41,8 +44,11 @@ def random_scenes(count: int, seed: int):
     for i in range(count):
         els = tuple(rnd.sample(kinds, rnd.choice([1, 1, 2, 3, 5])))
         container = rnd.choice(CONTAINER_KINDS)
-        gap = rnd.choice([0.005, 0.008, 0.01, 0.015, 0.02, 0.03])
-        n = rnd.choice([5, 10, 25, 40, 60, 100]) if gap < 0.02 else rnd.choice([5, 10, 20, 30])
+        gap = rnd.choice(gaps or [0.005, 0.008, 0.01, 0.015, 0.02, 0.03])
+        if counts:
+            n = rnd.choice(counts)
+        else:
+            n = rnd.choice([5, 10, 25, 40, 60, 100]) if gap < 0.02 else rnd.choice([5, 10, 20, 30])
         scale = rnd.choice([0.01, 0.1, 1, 1, 1, 10, 100])
         out.append(Scene(f"rp{seed}-{i}", container, els, gap=gap, count=n, seed=1000 + i, scale=scale))
     return out
@@ -68,6 +74,8 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1, help="scenes packed at the same time (processes)")
     ap.add_argument("--workdir", type=Path, default=None, help="keep the scenes and packings here")
     ap.add_argument("--json", type=Path, default=None, help="write every scene's numbers here")
+    ap.add_argument("--gaps", default=None, help="comma-separated gaps (fractions of the container) to draw from")
+    ap.add_argument("--counts", default=None, help="comma-separated numbers of primaries to draw from")
     args = ap.parse_args(argv)
     if args.count < 1 or args.jobs < 1:
         ap.error("--count and --jobs must be at least 1")
@@ -80,7 +88,12 @@ def main(argv=None) -> int:
     else:
         args.workdir.mkdir(parents=True, exist_ok=True)
         workdir = str(args.workdir)
-    chosen = random_scenes(args.count, args.seed)
+    try:
+        gaps = [float(g) for g in args.gaps.split(",")] if args.gaps else None
+        counts = [int(c) for c in args.counts.split(",")] if args.counts else None
+    except ValueError:
+        ap.error("--gaps takes numbers and --counts whole numbers, separated by commas")
+    chosen = random_scenes(args.count, args.seed, gaps, counts)
     results, broken = [], 0
     ctx = multiprocessing.get_context("spawn")
     with cf.ProcessPoolExecutor(args.jobs, mp_context=ctx, initializer=contract._init_worker) as pool:
