@@ -179,3 +179,24 @@ def test_every_piece_of_a_split_pocket_gets_copies(tmp_path):
     for k, g in enumerate(geoms):
         assert g.distance(cont.region.boundary) >= margin
         assert all(g.distance(h) >= gap for h in geoms[k + 1:])
+
+
+def test_a_long_pocket_gets_as_many_copies_as_it_holds(tmp_path):
+    """A pocket that holds many copies gets them all, not a fixed handful: a 2,000-unit
+    strip takes ~18 discs of ~100 units (up to 8 per pocket until November 26 left most of
+    it empty; eight large L-shapes at a 0.5 % gap had Q_s(gap/2)/Q_s(0) 0.476)."""
+    (tmp_path / "disc.svg").write_text(scenes.element_svg("disc"))
+    (tmp_path / "strip.svg").write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" width="2000" height="200"><path d="M0 40H2000V160H0Z"/></svg>')
+    cont = load_container(tmp_path / "strip.svg")
+    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
+    gap, margin = 10.0, 5.0
+    extra = fill_pockets([], lib, cont.region, gap, margin, np.random.default_rng(0), min_radius=0.5 * gap)
+    geoms = [art_area(e.paths, e.stroke_scale) for e in extra]
+    big = [g for g in geoms if g.area > 0.5 * math.pi * 50 ** 2]  # the ~100-unit discs
+    assert len(big) >= 15
+    xs = sorted(g.centroid.x for g in big)
+    assert xs[0] < 120 and xs[-1] > 1880 and max(np.diff(xs)) < 150  # the whole strip, no hole
+    for k, g in enumerate(geoms):
+        assert g.distance(cont.region.boundary) >= margin
+        assert all(g.distance(h) >= gap for h in geoms[k + 1:])
