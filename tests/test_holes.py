@@ -158,45 +158,45 @@ def test_leftover_pockets_get_copies_a_gap_from_everything(ring_scene):
     assert _ratio(cont, placed + extra) < _ratio(cont, placed) - 0.02
 
 
+def _fill_strip(tmp_path, width: int, extra: str = ""):
+    """Leftover fill of discs in a strip ``width`` × 120 units (y 40–160), plus the
+    ``extra`` markup; returns (container, the copies' art), gap 10, margin 5."""
+    (tmp_path / "disc.svg").write_text(scenes.element_svg("disc"))
+    (tmp_path / "strip.svg").write_text(
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="200">'
+        f'<path d="M0 40H{width}V160H0Z"/>{extra}</svg>')
+    cont = load_container(tmp_path / "strip.svg")
+    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
+    extra_copies = fill_pockets([], lib, cont.region, 10.0, 5.0, np.random.default_rng(0), min_radius=5.0)
+    return cont, [art_area(e.paths, e.stroke_scale) for e in extra_copies]
+
+
+def _assert_gap_and_margin(cont, geoms, gap=10.0, margin=5.0):
+    """Measured on the written curves' flattening: the fill fits those, not the source's
+    coarser polylines (on which a disc came within 0.989 of the margin)."""
+    for k, g in enumerate(geoms):
+        assert g.distance(cont.region.boundary) >= margin
+        assert all(g.distance(h) >= gap for h in geoms[k + 1:])
+
+
 def test_every_piece_of_a_split_pocket_gets_copies(tmp_path):
     """A long pocket with a bulge in the middle: the first copy goes in the bulge and
     splits the pocket in two; both pieces are filled (only the larger one was, and the
     other stayed empty)."""
-    (tmp_path / "disc.svg").write_text(scenes.element_svg("disc"))
-    (tmp_path / "strip.svg").write_text(
-        '<svg xmlns="http://www.w3.org/2000/svg" width="640" height="200"><path d="M0 40H640V160H0Z"/>'
-        '<circle cx="320" cy="100" r="95"/></svg>')
-    cont = load_container(tmp_path / "strip.svg")
-    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
-    gap, margin = 10.0, 5.0
-    extra = fill_pockets([], lib, cont.region, gap, margin, np.random.default_rng(0), min_radius=0.5 * gap)
-    geoms = [art_area(e.paths, e.stroke_scale) for e in extra]
+    cont, geoms = _fill_strip(tmp_path, 640, '<circle cx="320" cy="100" r="95"/>')
     xs = sorted(g.centroid.x for g in geoms)
     assert len(geoms) >= 5  # ~100-unit discs along a 640-unit strip
     assert xs[0] < 160 and xs[-1] > 480  # both ends reached
-    # measured on the written curves' flattening: the fill fits those, not the source's
-    # coarser polylines (on which a disc came within 0.989 of the margin)
-    for k, g in enumerate(geoms):
-        assert g.distance(cont.region.boundary) >= margin
-        assert all(g.distance(h) >= gap for h in geoms[k + 1:])
+    _assert_gap_and_margin(cont, geoms)
 
 
 def test_a_long_pocket_gets_as_many_copies_as_it_holds(tmp_path):
     """A pocket that holds many copies gets them all, not a fixed handful: a 2,000-unit
     strip takes ~18 discs of ~100 units (up to 8 per pocket until November 26 left most of
     it empty; eight large L-shapes at a 0.5 % gap had Q_s(gap/2)/Q_s(0) 0.476)."""
-    (tmp_path / "disc.svg").write_text(scenes.element_svg("disc"))
-    (tmp_path / "strip.svg").write_text(
-        '<svg xmlns="http://www.w3.org/2000/svg" width="2000" height="200"><path d="M0 40H2000V160H0Z"/></svg>')
-    cont = load_container(tmp_path / "strip.svg")
-    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
-    gap, margin = 10.0, 5.0
-    extra = fill_pockets([], lib, cont.region, gap, margin, np.random.default_rng(0), min_radius=0.5 * gap)
-    geoms = [art_area(e.paths, e.stroke_scale) for e in extra]
+    cont, geoms = _fill_strip(tmp_path, 2000)
     big = [g for g in geoms if g.area > 0.5 * math.pi * 50 ** 2]  # the ~100-unit discs
     assert len(big) >= 15
     xs = sorted(g.centroid.x for g in big)
     assert xs[0] < 120 and xs[-1] > 1880 and max(np.diff(xs)) < 150  # the whole strip, no hole
-    for k, g in enumerate(geoms):
-        assert g.distance(cont.region.boundary) >= margin
-        assert all(g.distance(h) >= gap for h in geoms[k + 1:])
+    _assert_gap_and_margin(cont, geoms)

@@ -18,7 +18,6 @@ again on the written curves.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -27,7 +26,7 @@ import numpy as np
 import shapely
 
 from .controls import ElementControls
-from .geometry.outline import _polygonal, art_area
+from .geometry.outline import art_area
 from .params import RenderParams
 from .render.placed import curve_tolerance, refined
 from .types import ArtPath, Element, PlacedArt

@@ -121,7 +121,6 @@ def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
     q, g = plan.apply(verts)
     size = float(np.hypot(*np.ptp(q, axis=0))) if len(q) else 0.0
     tol = curve_tolerance(size, gap, params)
-    decimals = decimals_for(tol)
     to_copy = affine_fit(t.verts, verts) @ _rest_matrix(t)
     paths = []
     for art, subs, starts in zip(t.element.paths, plan.curves, plan.seg_start):
@@ -133,14 +132,9 @@ def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
                 curves.append(c)
         if not curves:
             continue
-        curves = round_curves(curves, decimals)
-        flat = [flatten_subpath(c, FLATTEN_SHARE * tol) for c in curves]
-        keep = [i for i, f in enumerate(flat) if len(f) >= 2]
-        if not keep:
-            continue
         src = art.source
         written = ShapeSource(
-            curves=tuple(curves[i] for i in keep),
+            curves=tuple(curves),
             tag="path",
             matrix=to_copy @ (src.matrix if src is not None else np.eye(3)),
             fill_paint=src.fill_paint if src is not None else None,
@@ -148,8 +142,9 @@ def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
             local_bbox=src.local_bbox if src is not None else None,
             id=src.id if src is not None else None,
         )
-        paths.append(ArtPath(tuple(flat[i] for i in keep), tuple(curves[i].closed for i in keep),
-                             art.style, source=written))
+        path = refined(ArtPath((), (), art.style, source=written), tol)
+        if path.subpaths:
+            paths.append(path)
     return paths, tol
 
 
