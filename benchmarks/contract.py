@@ -112,16 +112,24 @@ def _summary(scene, run: dict | None, error: str | None, seconds: float) -> dict
 
 
 def run_one(name: str, workdir: str, picture_dir: str | None, reseed: int = 0) -> dict:
-    """Pack and measure one scene (in a worker process); never raises. ``reseed`` is
-    added to the scene's seed (the same problem, another packing)."""
+    """Pack and measure one scene of the suites by name (in a worker process); never
+    raises. ``reseed`` is added to the scene's seed (the same problem, another packing)."""
     import dataclasses
 
     from repulsionpak import scenes
-    from repulsionpak.io import read_packing_svg, render_png
 
     scene = {s.name: s for s in scenes.suite() + scenes.fast_suite() + scenes.holdout_suite()}[name]
     if reseed:
         scene = dataclasses.replace(scene, seed=scene.seed + reseed)
+    return measure_scene(scene, workdir, picture_dir)
+
+
+def measure_scene(scene, workdir: str, picture_dir: str | None = None) -> dict:
+    """Pack and measure ``scene`` (a :class:`repulsionpak.scenes.Scene`); never raises: a
+    failure is recorded in the summary's ``error``."""
+    from repulsionpak import scenes
+    from repulsionpak.io import read_packing_svg, render_png
+
     t0 = time.perf_counter()
     try:
         run = scenes.run_scene(scene, workdir)
@@ -129,11 +137,10 @@ def run_one(name: str, workdir: str, picture_dir: str | None, reseed: int = 0) -
         msg = f"{type(exc).__name__}: {exc}"
         tb = traceback.format_exc(limit=4)
         return _summary(scene, None, msg + "\n" + tb, time.perf_counter() - t0)
-    seconds = run["seconds"]
-    res = _summary(scene, run, None, seconds)
+    res = _summary(scene, run, None, run["seconds"])
     if picture_dir is not None:
         container, placed, _ = read_packing_svg(run["svg"])
-        out = Path(picture_dir) / f"quality-{name}.png"
+        out = Path(picture_dir) / f"quality-{scene.name}.png"
         render_png(out, container, placed, size_px=700)
         res["picture"] = out.name
     return res

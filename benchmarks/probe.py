@@ -21,8 +21,6 @@ import json
 import multiprocessing
 import random
 import sys
-import time
-import traceback
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -55,16 +53,8 @@ def random_scenes(count: int, seed: int, gaps=None, counts=None):
 
 
 def run_one(scene, workdir: str) -> dict:
-    """Pack and measure one scene (in a worker process); never raises."""
-    from repulsionpak import scenes
-
-    t0 = time.perf_counter()
-    try:
-        run = scenes.run_scene(scene, workdir)
-    except Exception as exc:  # noqa: BLE001 - a probe records every failure
-        msg = f"{type(exc).__name__}: {exc}\n" + traceback.format_exc(limit=4)
-        return contract._summary(scene, None, msg, time.perf_counter() - t0)
-    return contract._summary(scene, run, None, run["seconds"])
+    """Pack and measure one scene (in a worker process) as the suites do; never raises."""
+    return contract.measure_scene(scene, workdir)
 
 
 def main(argv=None) -> int:
