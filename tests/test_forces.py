@@ -499,7 +499,7 @@ def test_euler_step_caps_velocity():
     v = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 0.0]])
     F = np.array([[1000.0, 0.0], [0.3, -0.4], [0.0, 0.0], [1e6, 1e6]])
     dt, vmax = 0.1, 0.5
-    euler_step(x, v, F, np.array([0, 1, 2], np.int64), dt, vmax)
+    euler_step(x, v, F, np.array([0, 1, 2], np.int64), dt, np.array([vmax]), np.zeros(4, np.int32))
     # huge force: speed capped at vmax along F
     np.testing.assert_allclose(v[0], [vmax, 0.0], rtol=1e-12)
     # small force: v = F·dt, uncapped
@@ -511,6 +511,26 @@ def test_euler_step_caps_velocity():
     # inactive vertex untouched
     np.testing.assert_array_equal(v[3], 0.0)
     np.testing.assert_array_equal(x[3], 0.0)
+
+
+def test_euler_step_caps_each_element_at_its_own_speed():
+    """Element 1's vertex gets its own, higher cap; element 0's keeps the paper's."""
+    x, v = np.zeros((2, 2)), np.zeros((2, 2))
+    F = np.array([[1000.0, 0.0], [0.0, 1000.0]])
+    euler_step(x, v, F, np.array([0, 1], np.int64), 0.1, np.array([0.5, 2.0]), np.array([0, 1], np.int32))
+    np.testing.assert_allclose(v, [[0.5, 0.0], [0.0, 2.0]], rtol=1e-12)
+
+
+def test_growth_speed_caps_follow_the_farthest_vertex():
+    """A mesh of radius r gets max(velocity_cap·Δt, headroom·k_g·r): a 10-unit square
+    keeps the paper's 0.5, a 200-unit one gets 2·0.01·100·√2."""
+    from repulsionpak.sim.integrate import growth_speed_caps
+    sq = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    x_rest = np.concatenate([5.0 * sq, 100.0 * sq + 500.0])
+    caps = growth_speed_caps(x_rest, np.array([0, 4, 8]), np.array([4, 4]), 5.0, 0.1, 0.01, 2.0)
+    np.testing.assert_allclose(caps, [0.5, 2.0 * 0.01 * 100.0 * np.sqrt(2.0)], rtol=1e-12)
+    off = growth_speed_caps(x_rest, np.array([0, 4, 8]), np.array([4, 4]), 5.0, 0.1, 0.01, 0.0)
+    np.testing.assert_allclose(off, [0.5, 0.5])
 
 
 def test_grow_increments_only_unblocked_moving_elements():

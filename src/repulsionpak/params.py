@@ -94,6 +94,12 @@ class SimParams:
     dt: float = _doc(0.1, "-", "Δt, explicit Euler time step (paper: 0.1).")
     velocity_cap: float = _doc(5.0, "× Δt", "Velocities are capped at velocity_cap·Δt (paper: 5).")
     k_growth: float = _doc(0.01, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6).")
+    growth_headroom: float = _doc(
+        2.0, "-", "An element's velocity cap is at least this many times the speed its farthest "
+        "vertex needs to follow its growth (k_g × its placed radius), so large elements are not "
+        "held back by velocity_cap: beyond the paper, whose cap let meshes wider than ~100 units "
+        "of the 1000-unit frame lag behind their rest lengths, ripple and cross (0 = the paper's "
+        "cap alone).")
     cell_size: float = _doc(
         0.65, "× element size", "Neighbour-grid cell width relative to the typical final element "
         "diameter (paper: 6–10% of a container holding ~25 elements).")
@@ -279,6 +285,7 @@ class Params:
              "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),
             (s.dt > 0 and s.dt <= 0.5, "sim.dt must be in (0, 0.5]"),
             (s.velocity_cap > 0, "sim.velocity_cap must be > 0"),
+            (s.growth_headroom >= 0, "sim.growth_headroom must be >= 0"),
             (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary, s.k_shape) >= 0,
              "force constants must be >= 0"),
             (s.k_growth >= 0, "sim.k_growth must be >= 0"),

@@ -9,21 +9,43 @@ from .kernels import parallel_kernel
 
 
 @parallel_kernel
-def euler_step(x, v, F, active_all, dt, vmax):
-    """v += F·Δt; |v| capped at vmax; x += v·Δt — for the vertices in ``active_all``.
-    Returns nothing; NaN shows up in the area fraction."""
+def euler_step(x, v, F, active_all, dt, vmax, vert_elem):
+    """v += F·Δt; |v| capped at ``vmax`` of the vertex's element (``vert_elem``);
+    x += v·Δt — for the vertices in ``active_all``. Returns nothing; NaN shows up in the
+    area fraction."""
     for k in prange(active_all.shape[0]):
         i = active_all[k]
+        cap = vmax[vert_elem[i]]
         vx = v[i, 0] + F[i, 0] * dt
         vy = v[i, 1] + F[i, 1] * dt
         s = np.sqrt(vx * vx + vy * vy)
-        if s > vmax:
-            vx *= vmax / s
-            vy *= vmax / s
+        if s > cap:
+            vx *= cap / s
+            vy *= cap / s
         v[i, 0] = vx
         v[i, 1] = vy
         x[i, 0] += vx * dt
         x[i, 1] += vy * dt
+
+
+def growth_speed_caps(x_rest, elem_vstart, elem_nskin, velocity_cap, dt, k_growth, headroom):
+    """Velocity cap of each element (M,): the paper's ``velocity_cap·Δt``, raised for a
+    large element to ``headroom`` times the speed its farthest skin vertex needs to follow
+    its growth. Rest lengths grow by k_g·Δt of their placed length per step, so a vertex
+    r from the centre of the placed mesh must move k_g·r per unit time; with the paper's
+    cap alone, meshes wider than 2·velocity_cap·Δt/k_g (100 units of the 1000-unit frame at
+    the defaults: few elements, or a fine gap) lag behind their growing rest lengths,
+    ripple under the compression and end up bent and crossed."""
+    M = len(elem_nskin)
+    out = np.full(M, velocity_cap * dt)
+    for e in range(M):
+        s, n = int(elem_vstart[e]), int(elem_nskin[e])
+        if n == 0:
+            continue
+        p = x_rest[s:s + n]
+        r = float(np.sqrt(((p - p.mean(axis=0)) ** 2).sum(axis=1).max()))
+        out[e] = max(out[e], headroom * k_growth * r)
+    return out
 
 
 @njit(cache=True)

@@ -21,7 +21,7 @@ from .forces import (boundary_force, contact_query, contact_update, corner_candi
                      edge_force,
                      inversion_force, overlap_force, project_inside, repulsion_force, shape_force)
 from .grid import Grid
-from .integrate import count_inside, euler_step, grow, skin_areas, window_change
+from .integrate import count_inside, euler_step, grow, growth_speed_caps, skin_areas, window_change
 from .kernels import set_threads
 from .model import Model, State, element_ranges
 from .controls import apply_controls, edge_force_stiff
@@ -117,7 +117,10 @@ class Simulator:
         self.max_growth = m.max_growth * params.max_size
         self.far2 = (params.far_update * m.gap) ** 2
         # a vertex this close to a neighbouring skin gets a point-in-mesh test every step
-        self.near2 = (4.0 * params.velocity_cap * params.dt * params.dt * max(1, params.requery_every)) ** 2
+        self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
+                                      params.dt, params.k_growth, params.growth_headroom)
+        self.near2 = (4.0 * float(self.vmax.max(initial=0.0)) * params.dt
+                      * max(1, params.requery_every)) ** 2
         self.allow_growth = True
         self.settle_left: int | None = None  # iterations left in the settle phase
         self.stopped_by = "max_iterations"
@@ -169,7 +172,7 @@ class Simulator:
         if len(m.corners):
             corner_force(x, m.corners, self.corner_ptr, self.corner_tris, m.tris, m.tri_elem,
                          self.moving, p.k_corner, F)
-        euler_step(x, st.v, F, self.active_all, self.dt, p.velocity_cap * self.dt)
+        euler_step(x, st.v, F, self.active_all, self.dt, self.vmax * (self.dt / p.dt), m.vert_elem)
         if p.hard_boundary and not self.allow_growth:  # while settling
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
