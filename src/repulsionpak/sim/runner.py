@@ -119,7 +119,8 @@ class Simulator:
         # a vertex this close to a neighbouring skin gets a point-in-mesh test every step
         self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
                                       params.dt, params.k_growth, params.growth_headroom)
-        self.near2 = (4.0 * float(self.vmax.max(initial=0.0)) * params.dt
+        # (frozen elements do not move: only the moving ones' caps bound an approach)
+        self.near2 = (4.0 * float(self.vmax[moving].max(initial=0.0)) * params.dt
                       * max(1, params.requery_every)) ** 2
         self.allow_growth = True
         self.settle_left: int | None = None  # iterations left in the settle phase
