@@ -370,7 +370,9 @@ def _drive(browser, live: Live, tmp_path: Path) -> None:
             break
         page.wait_for_timeout(50)
     assert after[0] - before[0] == pytest.approx(60 / scale, abs=1)  # 60 px, within 1.5 px
-    assert after[1] == pytest.approx(before[1], abs=0.5) and after[2] == pytest.approx(before[2], abs=1e-3)
+    # the width unchanged: the page writes coordinates to 0.01 (toFixed(2)), so a moved
+    # outline's two extreme coordinates may round apart by one last digit
+    assert after[1] == pytest.approx(before[1], abs=0.5) and after[2] == pytest.approx(before[2], abs=0.011)
     assert page.inner_text("#iteration") == "26"  # the drag did not advance the run
 
     # pin the dragged (selected) element; remove element 1
