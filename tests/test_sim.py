@@ -18,6 +18,7 @@ from shapely.geometry import box
 
 from repulsionpak.errors import ConfigError, ParameterError
 from repulsionpak.pack import pack
+from repulsionpak.sim.integrate import skin_areas
 from repulsionpak.params import (
     Params,
     PlacementParams,
@@ -308,18 +309,14 @@ def _mesh_lag(headroom: float, at: int = 400) -> list[float]:
     asks for (placed skin area × growth factor²); 1 = the mesh keeps up with its growth."""
     p = scene_params(count=2, max_iterations=at, settle=0)
     p = replace(p, sim=replace(p.sim, growth_headroom=headroom))
-
-    def area(q):
-        return 0.5 * abs(np.dot(q[:, 0], np.roll(q[:, 1], -1)) - np.dot(q[:, 1], np.roll(q[:, 0], -1)))
-
     got: list[float] = []
 
     def snap(s):
         if s.phase == "primary" and s.iteration == at and not got:
-            m = s.model
-            for e in range(m.n_elements):
-                a, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
-                got.append(area(s.state.x[a:a + n]) / (area(m.x_rest[a:a + n]) * s.sim.growth[e] ** 2))
+            m, sim = s.model, s.sim
+            placed = np.zeros(m.n_elements)
+            skin_areas(m.x_rest, m.elem_vstart, m.elem_nskin, sim.moving, placed)
+            got.extend(sim.areas / (placed * sim.growth ** 2))  # sim.areas: this step's skins
 
     pack(CONTAINER, library()[2:], p, on_snapshot=snap)
     return got

@@ -204,16 +204,16 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
 
 def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,
                  rng: np.random.Generator, min_radius: float, render: RenderParams = RenderParams(),
-                 trials: int = 6, per_pocket: int | None = None) -> list[PlacedArt]:
+                 trials: int = 6) -> list[PlacedArt]:
     """Undeformed copies in what is left of the negative space after the verification:
     the container shrunk by the edge margin, minus every element's art dilated by the
     gap, split into its connected pockets; each pocket whose largest inscribed circle is
     at least ``min_radius`` gets a copy (:func:`_fit_copy`), then every piece of what is
     left of it (largest first; a copy can split a pocket), until no piece holds that
     circle. The fill ends by itself: every copy takes at least a circle of ``min_radius``
-    plus the gap out of its pocket. ``per_pocket`` caps the copies per pocket (none by
-    default; 8, then 64 until November 26: the negative space between ten '5' glyphs
-    40 gaps tall is one connected pocket, and 64 copies left Q_s(gap/2)/Q_s(0) at 0.604).
+    plus the gap out of its pocket. (Until November 26 a pocket took at most 8, then 64
+    copies: the negative space between ten '5' glyphs 40 gaps tall is one connected
+    pocket, and 64 copies left Q_s(gap/2)/Q_s(0) at 0.604.)
     These pockets are the room an element left when the verification had to drop it, or
     that the simulated pocket fill did not reach; every copy is a gap from all art and
     the margin from the edge by construction. Returns the new copies only."""
@@ -233,15 +233,13 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     out: list[PlacedArt] = []
     for pocket in parts:
         todo = [pocket]  # the pocket, then every piece a copy leaves of it, largest first
-        placed_here = 0
-        while todo and (per_pocket is None or placed_here < per_pocket):
+        while todo:
             part = todo.pop(0)
             got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
             if got is None:
                 continue
             copy, g = got
             out.append(copy)
-            placed_here += 1
             rest = part.difference(g.buffer(reach, quad_segs=4))
             todo += [q for q in getattr(rest, "geoms", [rest])
                      if isinstance(q, shapely.Polygon) and not q.is_empty and q.area >= math.pi * min_radius ** 2]

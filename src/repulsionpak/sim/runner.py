@@ -113,12 +113,13 @@ class Simulator:
         self.sp_ptr = element_ranges(m.spring_elem, M)
         self.tri_ptr = element_ranges(m.tri_elem, M)
         self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
+        # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
+        self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
+                                      params.dt, params.k_growth, params.growth_headroom)
         self.dt = params.dt
         self.max_growth = m.max_growth * params.max_size
         self.far2 = (params.far_update * m.gap) ** 2
         # a vertex this close to a neighbouring skin gets a point-in-mesh test every step
-        self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
-                                      params.dt, params.k_growth, params.growth_headroom)
         # (frozen elements do not move: only the moving ones' caps bound an approach)
         self.near2 = (4.0 * float(self.vmax[moving].max(initial=0.0)) * params.dt
                       * max(1, params.requery_every)) ** 2
@@ -127,6 +128,16 @@ class Simulator:
         self.stopped_by = "max_iterations"
         self._good: State | None = None
         self._recoveries = 0
+
+    @property
+    def dt(self) -> float:
+        """The time step (halved by a divergence recovery); the velocity caps follow it."""
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: float) -> None:
+        self._dt = float(value)
+        self._vmax_dt = self.vmax * (self._dt / self.params.dt)
 
     # -- one iteration -------------------------------------------------------------
     def step(self) -> float:
@@ -173,7 +184,7 @@ class Simulator:
         if len(m.corners):
             corner_force(x, m.corners, self.corner_ptr, self.corner_tris, m.tris, m.tri_elem,
                          self.moving, p.k_corner, F)
-        euler_step(x, st.v, F, self.active_all, self.dt, self.vmax * (self.dt / p.dt), m.vert_elem)
+        euler_step(x, st.v, F, self.active_all, self.dt, self._vmax_dt, m.vert_elem)
         if p.hard_boundary and not self.allow_growth:  # while settling
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
