@@ -25,6 +25,7 @@ from repulsionpak.sim.forces import (
     outside_distance,
     overlap_force,
     repulsion_force,
+    _walk_skin,
 )
 from repulsionpak.sim.grid import Grid
 from repulsionpak.sim.integrate import euler_step, grow, skin_areas
@@ -797,3 +798,49 @@ def test_shape_force_is_zero_for_a_similarity_and_undoes_a_shear():
     F[:] = 0
     shape_force(sheared, rest, start, ~moving, stiff, 5.0, F)  # frozen: no force
     assert not F.any()
+
+
+def _walk_both_sides(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
+    """The walk as first written: every hop tries the next segment, then the previous."""
+    def d2(k):
+        a, b = x[seg_a[k]], x[seg_b[k]]
+        ab = b - a
+        l2 = ab @ ab
+        t = 0.0 if l2 == 0 else min(1.0, max(0.0, ((px - a[0]) * ab[0] + (py - a[1]) * ab[1]) / l2))
+        q = a + t * ab
+        return (px - q[0]) ** 2 + (py - q[1]) ** 2
+
+    best = d2(s)
+    for _ in range(max_hops):
+        n = seg_next[s]
+        d = d2(n)
+        if d >= best:
+            n = seg_prev[s]
+            d = d2(n)
+            if d >= best:
+                break
+        best, s = d, n
+    return s
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 40])
+def test_skin_walk_ends_where_a_walk_trying_both_sides_every_hop_ends(n):
+    """The walk only looks ahead after its first hop (the segment behind is the one it
+    came from): the same segment, distance and closest point as trying both sides."""
+    rng = np.random.default_rng(n)
+    t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    r = rng.uniform(0.5, 1.5, n)  # a wobbly ring: many local minima of the distance
+    x = np.stack([r * np.cos(t), r * np.sin(t)], axis=1)
+    seg_a = np.arange(n, dtype=np.int64)
+    seg_b = (seg_a + 1) % n
+    seg_next = seg_b.copy()
+    seg_prev = (seg_a - 1) % n
+    for _ in range(300):
+        px, py = rng.uniform(-2, 2, 2)
+        s = int(rng.integers(n))
+        hops = int(rng.choice([1, 2, 16, 64]))
+        best, qx, qy, end = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, hops)
+        assert end == _walk_both_sides(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, hops)
+        d = shapely.LineString([x[seg_a[end]], x[seg_b[end]]]).distance(Point(px, py))
+        assert best == pytest.approx(d * d, abs=1e-12)
+        assert (px - qx) ** 2 + (py - qy) ** 2 == pytest.approx(best, abs=1e-12)

@@ -54,17 +54,30 @@ def _closest_on_segment(x, a, b, px, py):
 @njit(cache=True, inline="always")
 def _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
     """From skin segment ``s``, step to the next or previous segment of the same ring while
-    that one is closer to (px, py). Returns (d², qx, qy, segment) of the local minimum."""
+    that one is closer to (px, py). Returns (d², qx, qy, segment) of the local minimum.
+
+    Once a hop was made, only the segments ahead are tried: the one behind is the one it
+    came from, farther than the current one by construction (``seg_prev[seg_next[s]] ==
+    s`` on a ring), so testing it again, as a walk that tries both sides every hop would,
+    cannot change the outcome."""
     best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
+    direction = 0  # +1 after a hop to the next segment, -1 after one to the previous
     for _ in range(max_hops):
-        n = seg_next[s]
+        if direction >= 0:
+            n = seg_next[s]
+            d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+            if d2 < best:
+                best, qx, qy, s = d2, ax, ay, n
+                direction = 1
+                continue
+            if direction > 0:
+                break
+        n = seg_prev[s]
         d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
         if d2 >= best:
-            n = seg_prev[s]
-            d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-            if d2 >= best:
-                break
+            break
         best, qx, qy, s = d2, ax, ay, n
+        direction = -1
     return best, qx, qy, s
 
 
