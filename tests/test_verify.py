@@ -9,7 +9,7 @@ import shapely
 
 from repulsionpak.geometry.outline import art_area
 from repulsionpak.types import ArtPath, PlacedArt, Style
-from repulsionpak.verify import verify_and_repair
+from repulsionpak.verify import _pair_distances, verify_and_repair
 
 CONTAINER = shapely.box(0, 0, 100, 100)
 
@@ -205,3 +205,19 @@ def test_a_straightened_copy_is_flattened_as_its_written_curves(tmp_path):
     assert off_curves(copy) <= FLATTEN_SHARE * 1e-3 * 1.01  # the copy's: at its own tolerance
     written = copy.paths[0].source.curves[0].ctrl  # rounded as written (to a fifth of the tolerance)
     assert np.allclose(written, np.round(written, 4), rtol=0, atol=1e-12)
+
+
+def test_pair_distances_memo_reuses_only_unchanged_pairs():
+    """The repair rounds keep pair distances between checks: the same two geometry objects
+    get the stored distance, a replaced object (a copy moved or shrunk) a new one."""
+    g = np.array([shapely.box(0, 0, 1, 1), shapely.box(3, 0, 4, 1), shapely.box(0, 5, 1, 6)], dtype=object)
+    a, b = np.array([0, 0, 1]), np.array([1, 2, 2])
+    memo: dict = {}
+    first = _pair_distances(g[a], g[b], memo)
+    assert first.tolist() == pytest.approx([2.0, 4.0, np.hypot(2.0, 4.0)])
+    assert len(memo) == 3
+    g[1] = shapely.affinity.translate(g[1], 1.0, 0.0)  # one copy moved: its two pairs change
+    again = _pair_distances(g[a], g[b], memo)
+    assert again.tolist() == pytest.approx([3.0, 4.0, np.hypot(3.0, 4.0)])
+    assert len(memo) == 5  # two new entries, the unchanged pair reused
+    assert again.tolist() == shapely.distance(g[a], g[b]).tolist()

@@ -159,8 +159,31 @@ def _near_pairs(arr: np.ndarray, which: np.ndarray, reach: float) -> tuple[np.nd
     return shapely.STRtree(arr).query(boxes)
 
 
+def _pair_distances(ga: np.ndarray, gb: np.ndarray, memo: dict | None) -> np.ndarray:
+    """``shapely.distance(ga, gb)``, reusing the distances ``memo`` holds for the same two
+    geometry objects (a repair round moves or shrinks a few copies; the pairs of the others
+    keep their distances). ``memo`` maps ``(id(a), id(b))`` to ``(a, b, distance)``: it
+    holds the geometries, so their ids are not reused while it lives."""
+    if memo is None or not len(ga):
+        return shapely.distance(ga, gb) if len(ga) else np.zeros(0)
+    d = np.empty(len(ga))
+    todo = []
+    for k, (a, b) in enumerate(zip(ga, gb)):
+        hit = memo.get((id(a), id(b)))
+        if hit is not None and hit[0] is a and hit[1] is b:
+            d[k] = hit[2]
+        else:
+            todo.append(k)
+    if todo:
+        todo = np.asarray(todo)
+        d[todo] = shapely.distance(ga[todo], gb[todo])
+        for k in todo.tolist():
+            memo[(id(ga[k]), id(gb[k]))] = (ga[k], gb[k], float(d[k]))
+    return d
+
+
 def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
-           fixed=None, rank=None, contacts=None, weak=None):
+           fixed=None, rank=None, contacts=None, weak=None, memo=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
@@ -179,7 +202,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     close to, distance to gain, measured: True for a shortest line between art a gap
     apart or art and edge, False for an overlap or art outside, whose point and direction
     are estimates), from which :func:`_shrink_centre` predicts the shrink about other
-    points."""
+    points. ``memo`` (a dict): pair distances kept between calls (:func:`_pair_distances`)."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
@@ -199,7 +222,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         a, b = _near_pairs(arr, np.arange(len(arr)), min_gap)
         keep = a < b
         a, b = a[keep], b[keep]
-        d = shapely.distance(arr[a], arr[b]) if len(a) else np.zeros(0)
+        d = _pair_distances(arr[a], arr[b], memo)
         close = d <= min_gap  # what a dwithin query would have found
         a, b, d = a[close], b[close], d[close]
         if len(d):
@@ -444,9 +467,11 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     lowest = np.where(rank > 0, min_scale, 0.5 * min_scale)
     halfway = 0.5 * (1.0 + lowest)  # shrunk half-way to being dropped
 
+    memo: dict = {}  # pair distances of the rounds' outlines: a round changes a few copies
+
     def check(exact_edges=False, contacts=None):
         return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank,
-                      contacts, scale < halfway)
+                      contacts, scale < halfway, memo)
 
     def move(i, ln):
         """The step that takes element i its need (plus the slack) along its push (length ln)."""
