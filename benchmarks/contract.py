@@ -147,7 +147,9 @@ def measure_scene(scene, workdir: str, picture_dir: str | None = None) -> dict:
 
 
 def _init_worker() -> None:
-    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    """Scenes packed side by side share the cores: one thread each (the runs' results do
+    not depend on it)."""
+    os.environ["REPULSIONPAK_THREADS"] = "1"
 
 
 # --------------------------------------------------------------------------- report

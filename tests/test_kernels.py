@@ -10,7 +10,9 @@ from pathlib import Path
 
 import numba
 import numpy as np
+import pytest
 
+from repulsionpak.errors import ParameterError
 from repulsionpak.sim import kernels
 from repulsionpak.sim.forces import edge_force
 from repulsionpak.sim.integrate import euler_step
@@ -70,6 +72,73 @@ def test_kernels_keep_the_python_function():
     assert edge_force.__doc__ == edge_force.py_func.__doc__
 
 
+def _threads(n_vertices: int, threads: int = 0, threshold: int = 1000) -> int:
+    """Simulator.threads() of a run with ``n_vertices`` vertices (no simulator needed)."""
+    from types import SimpleNamespace
+
+    from repulsionpak.sim.runner import Simulator
+
+    fake = SimpleNamespace(params=SimpleNamespace(threads=threads, parallel_threshold=threshold),
+                           model=SimpleNamespace(n_vertices=n_vertices))
+    return Simulator.threads(fake)
+
+
+def test_automatic_threads_need_the_parallel_builds_cached_and_enough_vertices(monkeypatch):
+    from repulsionpak.sim import runner
+
+    monkeypatch.delenv("REPULSIONPAK_THREADS", raising=False)
+    monkeypatch.setattr(numba.config, "NUMBA_NUM_THREADS", 4)
+    monkeypatch.setattr(runner, "parallel_ready", lambda: True)
+    assert _threads(5000) == 4
+    assert _threads(999) == 1  # below parallel_threshold: handing work over costs more
+    assert _threads(5000, threads=2) == 2 and _threads(10, threads=3) == 3  # set explicitly
+    monkeypatch.setenv("REPULSIONPAK_THREADS", "2")
+    assert _threads(5000) == 2
+    monkeypatch.setenv("REPULSIONPAK_THREADS", "1")  # packings side by side: one thread each
+    assert _threads(5000) == 1
+    monkeypatch.setenv("REPULSIONPAK_THREADS", "two")
+    with pytest.raises(ParameterError, match="REPULSIONPAK_THREADS"):
+        _threads(5000)
+    monkeypatch.delenv("REPULSIONPAK_THREADS")
+    monkeypatch.setattr(runner, "parallel_ready", lambda: False)  # not compiled yet: one thread
+    assert _threads(5000) == 1
+
+
+@pytest.mark.parametrize("env, loaded, ok, spin", [
+    ({}, False, True, kernels.GOMP_SPINCOUNT),  # ours to set: idle threads spin
+    ({}, True, False, None),  # libgomp read its environment before: it would not take effect
+    ({"OMP_WAIT_POLICY": "passive"}, False, False, None),  # the user's choice: no spinning
+    ({"OMP_WAIT_POLICY": "ACTIVE"}, False, True, None),
+    ({"GOMP_SPINCOUNT": "5000000"}, False, True, "5000000"),
+])
+def test_threading_is_prepared_for_fast_handovers_unless_the_user_chose(monkeypatch, env, loaded, ok, spin):
+    from numba.np.ufunc import parallel
+
+    for k in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT"):
+        monkeypatch.delenv(k, raising=False)
+    for k, v in env.items():
+        monkeypatch.setenv(k, v)
+    monkeypatch.setattr(kernels, "_handover_ok", None)
+    monkeypatch.setattr(parallel, "_is_initialized", False)
+    monkeypatch.setattr(kernels, "_gomp_loaded", lambda: loaded)
+    kernels._prepare_threading()
+    assert kernels._handover_ok is ok
+    assert os.environ.get("GOMP_SPINCOUNT") == spin
+
+
+def test_parallel_cached_wants_every_recorded_kernel(monkeypatch):
+    from repulsionpak import warmup
+
+    recorded = {id(d) for d, _ in warmup.load_signatures()}
+    used = [k for k in kernels._KERNELS if id(k.serial) in recorded]
+    assert used
+    monkeypatch.setattr(kernels, "_cached", lambda d: True)
+    assert kernels.parallel_cached()
+    missing = used[-1].parallel
+    monkeypatch.setattr(kernels, "_cached", lambda d: d is not missing)
+    assert kernels.parallel_cached() == bool(missing.signatures)  # compiled in this process counts
+
+
 def _pack(tmp: Path, cache: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT / "src"))
     cmd = [sys.executable, "-m", "repulsionpak.cli", "pack", str(EXAMPLES / "containers" / "circle.svg"),
@@ -90,3 +159,5 @@ def test_cli_says_once_that_it_compiles_on_a_cold_cache_only(tmp_path):
     assert second.returncode == 0, second.stderr
     assert msg not in second.stderr
     assert any(cache.rglob("*.nbi"))
+    if len(os.sched_getaffinity(0)) > 1:  # a spare core: the two-thread builds compile meanwhile
+        assert second.stderr.count("two-thread simulation kernels in the background") == 1

@@ -77,11 +77,12 @@ def test_specialisations_cover_the_simulation_kernels():
     assert type(runner.grow).__name__ == "CPUDispatcher"
 
 
-def test_start_does_nothing_when_cached():
+def test_start_does_nothing_when_cached(monkeypatch):
     from repulsionpak import warmup
 
-    warmup.warm_up()  # compiles or loads in this process: the cache now holds the kernels
+    warmup.warm_up(parallel=False)  # compiles or loads in this process: the cache now holds the kernels
     assert not warmup.is_cold()
+    monkeypatch.setattr(warmup, "parallel_missing", lambda: False)  # (their ~13 s compile: see below)
     assert warmup.start() is None
     warmup.stop(None)
     warmup.wait()  # nothing running: returns at once
@@ -178,13 +179,23 @@ def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_
     monkeypatch.setattr(warmup, "_warm_tps", lambda: calls.append("tps"))
     monkeypatch.setattr(warmup, "_warm_flatten", lambda: calls.append("flatten"))
     monkeypatch.setattr(warmup, "_claims", str(tmp_path))
+    checks = []
+
+    def cached(d):  # the warm-up finishes the render kernels after a few polls
+        checks.append(d)
+        return len(checks) > 6
+
+    monkeypatch.setattr(warmup, "_cached", cached)
     warmup.wait()  # the warm-up still compiles the curve fitter
-    assert calls == ["tps", "flatten", "waited"]  # in the order the renderer calls them
+    # in the order the renderer calls them; then until the render kernels are cached, not
+    # until the warm-up ends (it goes on with the parallel builds: it never ends here)
+    assert calls == ["tps", "flatten"]
+    assert len(checks) >= 7
     assert sorted(p.name for p in tmp_path.iterdir()) == ["_warm_flatten", "_warm_tps"]
     calls.clear()
     (tmp_path / "_warm_tps").unlink()
     warmup.wait()  # the warm-up claimed _flatten (it works from the other end): tps only
-    assert calls == ["tps", "waited"]
+    assert calls == ["tps"]
 
 
 def test_claims_split_the_kernels_between_the_two_processes(tmp_path, monkeypatch):
@@ -216,5 +227,58 @@ def test_claims_split_the_kernels_between_the_two_processes(tmp_path, monkeypatc
     assert compiled == names[:12]
     assert sorted(p.name for p in claims.iterdir()) == sorted(names)
     compiled.clear()
-    warmup.warm_up(render=False)  # everything is claimed: the warm-up compiles nothing more
+    warmup.warm_up(render=False, parallel=False)  # everything is claimed: the warm-up compiles nothing more
     assert compiled == []
+
+
+def test_warm_up_compiles_the_parallel_builds_for_the_recorded_types(tmp_path, monkeypatch):
+    """The parallel builds get the serial builds' argument types, in the order of use,
+    each claimed once (a second warm-up finds them claimed)."""
+    from repulsionpak import warmup
+    from repulsionpak.sim import kernels
+
+    builds = {id(k.serial): k for k in kernels._KERNELS}
+    calls = [(builds[id(d)], sig) for d, sig in warmup.load_signatures() if id(d) in builds]
+    assert len(calls) >= 8  # the forces, the neighbour query and update, the relaxation
+    compiled = []
+    for k, _ in calls:
+        monkeypatch.setattr(k.parallel, "compile", lambda sig, k=k: compiled.append((k, sig)))
+    monkeypatch.setattr(warmup, "_claims", str(tmp_path))
+    warmup.warm_up_parallel()
+    assert compiled == calls
+    compiled.clear()
+    warmup.warm_up_parallel()
+    assert compiled == []
+
+
+def test_a_later_run_starts_a_warm_up_for_the_missing_parallel_builds(monkeypatch):
+    from repulsionpak import warmup
+
+    started = []
+
+    class Proc:
+        def poll(self):
+            return None
+
+        def terminate(self):
+            started.append("terminated")
+
+        def wait(self, timeout=None):
+            return 0
+
+    monkeypatch.delenv("REPULSIONPAK_NO_WARMUP", raising=False)
+    monkeypatch.setattr(warmup, "_spare_cores", lambda: 1)
+    monkeypatch.setattr(warmup, "is_cold", lambda: False)
+    monkeypatch.setattr(warmup.subprocess, "Popen", lambda args, **kw: started.append(args) or Proc())
+    monkeypatch.setattr(warmup, "parallel_missing", lambda: False)
+    assert warmup.start() is None and started == []  # everything cached
+    monkeypatch.setattr(warmup, "parallel_missing", lambda: True)
+    proc = warmup.start()
+    assert started[0][-2:] == ["repulsionpak.warmup", "--parallel"]
+    assert warmup.compiles_parallel_only()
+    warmup.stop(proc)
+    assert started[-1] == "terminated" and not warmup.compiles_parallel_only()
+    monkeypatch.setattr(warmup, "is_cold", lambda: True)  # a first run: everything, parallel last
+    proc = warmup.start()
+    assert started[-1][-1] == "repulsionpak.warmup" and not warmup.compiles_parallel_only()
+    warmup.stop(proc)

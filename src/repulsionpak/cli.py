@@ -294,11 +294,16 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
             def on_checkpoint(states: dict) -> None:
                 save_checkpoint(checkpoint, {k: dict(v, seed=params.seed) for k, v in states.items()}, fp)
     if progress:
+        from . import warmup
         from .sim.kernels import cache_is_cold
 
-        if cache_is_cold():
+        cold = cache_is_cold()
+        if cold:
             typer.echo("compiling the simulation kernels, first run only…", err=True)
-        elif report is not None:
+        elif warmup.compiles_parallel_only():
+            typer.echo("compiling the two-thread simulation kernels in the background "
+                       "(later runs use both cores)…", err=True)
+        if not cold and report is not None:
             from .geometry.overlap import is_cold as fit_is_cold
 
             if fit_is_cold():

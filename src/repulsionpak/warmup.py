@@ -13,8 +13,8 @@ Each process claims a kernel before compiling it (an atomic file creation in a t
 folder the two share), so they meet in the middle without compiling any kernel twice:
 the packing waits for the one kernel the warm-up is still compiling when they meet, the
 warm-up stops at the packing's first claim. Before rendering, the packing waits for a
-warm-up that is still compiling (:func:`wait`), compiling meanwhile the small render
-kernels the warm-up has not claimed yet.
+warm-up that is still compiling the render kernels (:func:`wait`), compiling meanwhile the
+small ones the warm-up has not claimed yet.
 
 Which specialisations? The simulation's are recorded by running a few iterations of a
 tiny packing with every simulation kernel replaced by its plain Python function (the
@@ -27,6 +27,15 @@ back to the recording run when the file does not match the kernels (a kernel mis
 its parameters renamed); ``tests/test_warmup.py`` fails when the file is stale (it
 records again and compares) and checks that a packing after a warm-up compiles no
 simulation or render kernel.
+
+**The parallel builds.** Runs use both cores once the simulation kernels' parallel builds
+(:mod:`repulsionpak.sim.kernels`) are cached; they take ~13 CPU seconds to compile, more
+than a run lasts. So the warm-up compiles them last, after the render kernels, and a
+later run whose parallel builds are still missing starts it for them alone
+(``--parallel``) while the run itself goes on one thread: the spare core would idle
+anyway. A run that ends stops its warm-up; numba has cached every kernel finished by
+then, and the next run's warm-up goes on from there (on the heart scene, the second to
+fourth runs compile them; the fifth uses both cores).
 
 Later runs find everything cached and start nothing.
 """
@@ -44,7 +53,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["warm_up", "is_cold", "start", "stop", "wait", "running", "compile_forward",
+__all__ = ["warm_up", "warm_up_parallel", "parallel_missing", "is_cold", "start", "stop", "wait",
+           "running", "compiles_parallel_only", "compile_forward",
            "simulation_specialisations",
            "specialisations", "load_signatures", "write_signatures", "SIGNATURES"]
 
@@ -53,6 +63,8 @@ SIGNATURES = Path(__file__).with_name("warmup_signatures.json")
 
 #: the warm-up process of this run, if one was started (see :func:`wait`)
 _current: subprocess.Popen | None = None
+#: whether that process compiles only the parallel builds (a later run's warm-up)
+_parallel_only = False
 
 
 def _render_dispatchers() -> list:
@@ -329,9 +341,24 @@ def _warm_render() -> None:
             globals()[name]()
 
 
-def warm_up(simulation: bool = True, render: bool = True) -> None:
+def warm_up_parallel() -> None:
+    """Compile (or load) the parallel builds of the simulation kernels
+    (:mod:`repulsionpak.sim.kernels`), in the order a run first calls them, for the same
+    argument types as the serial ones. Runs use them, on every core, once all are cached."""
+    from .sim import kernels
+
+    builds = {id(k.serial): k for k in kernels._KERNELS}
+    for dispatcher, sig in specialisations():
+        k = builds.get(id(dispatcher))
+        if k is not None and _claim(_name(dispatcher) + "__parallel"):
+            k.parallel.compile(sig)
+
+
+def warm_up(simulation: bool = True, render: bool = True, parallel: bool = True) -> None:
     """Compile (or load from the cache) the kernels a packing uses: the simulation's in
-    reverse order of first use, then the renderer's."""
+    reverse order of first use, then the renderer's, then the simulation's parallel builds
+    (:func:`warm_up_parallel`; a run that ends first stops this process, and the next run's
+    warm-up goes on where it stopped: numba caches each kernel as it is compiled)."""
     if simulation:
         for dispatcher, sig in reversed(specialisations()):
             if not _claim(_name(dispatcher)):
@@ -339,6 +366,16 @@ def warm_up(simulation: bool = True, render: bool = True) -> None:
             dispatcher.compile(sig)  # loads it instead when the cache has it
     if render:
         _warm_render()
+    if parallel:
+        warm_up_parallel()
+
+
+def parallel_missing() -> bool:
+    """True when the simulation's parallel builds are not all cached (and this machine has
+    a core to spare for them): a warm-up process can compile them while a run goes on."""
+    from .sim.kernels import parallel_cached
+
+    return _spare_cores() >= 1 and not parallel_cached()
 
 
 def _spare_cores() -> int:
@@ -350,10 +387,18 @@ def _spare_cores() -> int:
 
 def start() -> subprocess.Popen | None:
     """Start :func:`warm_up` in a background process when kernels are not cached yet and
-    the machine has a spare core; returns the process (or None). The environment variable
-    ``REPULSIONPAK_NO_WARMUP=1`` turns it off."""
-    global _current, _claims
-    if os.environ.get("REPULSIONPAK_NO_WARMUP") or _spare_cores() < 1 or not is_cold():
+    the machine has a spare core; returns the process (or None). On the first run it
+    compiles everything (``python -m repulsionpak.warmup``); on a later run whose parallel
+    builds are still missing only those (``--parallel``), while the run itself goes on one
+    thread. The environment variable ``REPULSIONPAK_NO_WARMUP=1`` turns it off."""
+    global _current, _claims, _parallel_only
+    if os.environ.get("REPULSIONPAK_NO_WARMUP") or _spare_cores() < 1:
+        return None
+    if is_cold():
+        mode = []
+    elif parallel_missing():
+        mode = ["--parallel"]
+    else:
         return None
     import shutil
     import tempfile
@@ -361,7 +406,7 @@ def start() -> subprocess.Popen | None:
     claims = None
     try:
         claims = tempfile.mkdtemp(prefix="repulsionpak-warmup-")  # see compile_forward
-        _current = subprocess.Popen([sys.executable, "-m", "repulsionpak.warmup"],
+        _current = subprocess.Popen([sys.executable, "-m", "repulsionpak.warmup", *mode],
                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                     stderr=subprocess.DEVNULL, env={**os.environ, _CLAIMS_ENV: claims})
     except OSError:
@@ -369,7 +414,13 @@ def start() -> subprocess.Popen | None:
             shutil.rmtree(claims, ignore_errors=True)
         return None
     _claims = claims
+    _parallel_only = bool(mode)
     return _current
+
+
+def compiles_parallel_only() -> bool:
+    """True while this run's warm-up process compiles only the parallel builds."""
+    return _current is not None and _parallel_only
 
 
 def running() -> subprocess.Popen | None:
@@ -378,22 +429,29 @@ def running() -> subprocess.Popen | None:
 
 
 def wait(timeout: float = 60.0) -> None:
-    """Let a running warm-up finish (the renderer calls this before its first kernel: the
-    warm-up compiles the render kernels last and is further along than a fresh start).
-    While it still compiles the curve fitter, this process compiles (or loads) the two small
-    render kernels itself, in the order the renderer calls them, those the warm-up has not
-    claimed: it compiles them after the fitter in the opposite order, so the two meet in the
-    middle again."""
+    """Let a running warm-up finish the render kernels (the renderer calls this before its
+    first kernel: the warm-up compiles them after the simulation's and is further along
+    than a fresh start). While it still compiles the curve fitter, this process compiles
+    (or loads) the two small render kernels itself, in the order the renderer calls them,
+    those the warm-up has not claimed: it compiles them after the fitter in the opposite
+    order, so the two meet in the middle again. Returns once the render kernels are
+    cached, not when the warm-up ends (it goes on with the parallel builds)."""
+    import time
+
     proc = _current
     if proc is None or proc.poll() is not None:
         return
     for name in ("_warm_tps", "_warm_flatten"):
         if _claim(name):
             globals()[name]()
+    end = time.monotonic() + timeout
     try:
-        proc.wait(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        pass
+        while proc.poll() is None and time.monotonic() < end:
+            if all(_cached(d) for d in _render_dispatchers()):
+                return
+            time.sleep(0.01)
+    except Exception:  # noqa: BLE001  (private numba API: the renderer compiles what it needs)
+        return
 
 
 def stop(proc: subprocess.Popen | None) -> None:
@@ -422,5 +480,7 @@ def stop(proc: subprocess.Popen | None) -> None:
 if __name__ == "__main__":
     if sys.argv[1:] == ["--write-signatures"]:
         print(f"{len(write_signatures())} specialisations written to {SIGNATURES}")
+    elif sys.argv[1:] == ["--parallel"]:
+        warm_up_parallel()
     else:
         warm_up()

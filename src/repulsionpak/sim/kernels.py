@@ -12,11 +12,23 @@ decorated with :func:`parallel_kernel` has two builds of the same Python functio
 
 Both builds run the same code in the same order per element or vertex, so a packing does
 not depend on which one ran.
+
+**Two threads, when they pay.** A run with ``sim.threads = 0`` (the default) uses the
+parallel builds on every core once :func:`parallel_ready`: they are in numba's disk cache
+(the warm-up process compiles them in the background, :mod:`repulsionpak.warmup`: ~13 CPU
+seconds once, against ~6 for the serial builds), and the threading layer hands work
+between threads without putting them to sleep. GNU OpenMP's idle threads by default spin
+so briefly that on a VM they sleep between two kernels of one iteration, and two threads
+ran the heart scene twice as *slowly* as one; :func:`set_threads` therefore sets
+``GOMP_SPINCOUNT`` (:data:`GOMP_SPINCOUNT`) before numba starts its threading layer, unless
+the user chose ``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` themselves. With it, two threads
+run an iteration 1.4× faster at 1,500 vertices and 1.7× at 3,000 (docs/benchmarks.md).
 """
 
 from __future__ import annotations
 
 import functools
+import os
 import types
 from collections.abc import Callable
 
@@ -65,10 +77,100 @@ def parallel_kernel(func: Callable) -> Kernel:
     return Kernel(func)
 
 
+#: GNU OpenMP's spin count for idle threads (its default lets them sleep between kernels;
+#: about a millisecond of spinning keeps them awake through an iteration and lets them
+#: sleep soon after the simulation ends)
+GOMP_SPINCOUNT = "1000000"
+#: whether idle threads spin between kernels (None: the threading layer not prepared yet)
+_handover_ok: bool | None = None
+
+
+def _gomp_loaded() -> bool:
+    """Whether GNU OpenMP is loaded in this process already (it reads its environment once,
+    when it is loaded). False where that cannot be told (not Linux)."""
+    try:
+        with open("/proc/self/maps", encoding="utf-8", errors="replace") as fh:
+            return "libgomp" in fh.read()
+    except OSError:
+        return False
+
+
+def _prepare_threading() -> None:
+    """Before numba starts its threading layer: let GNU OpenMP's idle threads spin between
+    kernels (``GOMP_SPINCOUNT``) unless the user set a wait policy, and note whether idle
+    threads will spin (not with ``OMP_WAIT_POLICY=PASSIVE``, nor when libgomp was loaded
+    before this could be set)."""
+    global _handover_ok
+    if _handover_ok is not None:
+        return
+    from numba.np.ufunc import parallel
+
+    policy = os.environ.get("OMP_WAIT_POLICY")
+    if policy is not None or "GOMP_SPINCOUNT" in os.environ:  # the user's choice
+        _handover_ok = policy is None or policy.strip().upper() != "PASSIVE"
+    elif parallel._is_initialized or _gomp_loaded():
+        _handover_ok = False  # too late: libgomp has read its environment already
+    else:
+        os.environ["GOMP_SPINCOUNT"] = GOMP_SPINCOUNT
+        _handover_ok = True
+
+
+def threading_ok() -> bool:
+    """Whether several threads hand work over fast enough for an automatic run to use them:
+    OpenMP (with spinning idle threads where it is GNU's, see :func:`_prepare_threading`) or
+    TBB; not numba's fallback workqueue layer (1.3 ms an iteration on the heart scene
+    against 0.5 ms on one thread)."""
+    _prepare_threading()
+    numba.get_num_threads()  # starts the threading layer
+    try:
+        layer = numba.threading_layer()
+    except ValueError:
+        return False
+    if layer == "omp":
+        try:
+            from numba.np.ufunc import omppool
+
+            vendor = omppool.openmp_vendor
+        except (ImportError, AttributeError):
+            vendor = "GNU"
+        return vendor != "GNU" or bool(_handover_ok)
+    return layer == "tbb"
+
+
+def _cached(dispatcher) -> bool:
+    return bool(dispatcher._cache._cache_file._load_index())
+
+
+def parallel_cached() -> bool:
+    """True when every kernel a default run calls (those recorded in the warm-up's
+    signature file, :mod:`repulsionpak.warmup`) has its parallel build cached or compiled in
+    this process. Kernels only some runs call (designer controls, the shape force) compile
+    their parallel build when first used. Reads only the small cache index files; False
+    when that cannot be told."""
+    from ..warmup import load_signatures
+
+    try:
+        calls = load_signatures()
+        if calls is None:
+            return False
+        serial = {id(d) for d, _ in calls}
+        used = [k for k in _KERNELS if id(k.serial) in serial]
+        return bool(used) and all(k.parallel.signatures or _cached(k.parallel) for k in used)
+    except Exception:  # noqa: BLE001  (private numba API: stay with one thread)
+        return False
+
+
+def parallel_ready() -> bool:
+    """Whether an automatic run (``sim.threads = 0``) may use the parallel builds: they are
+    cached (:func:`parallel_cached`) and the threading layer suits them (:func:`threading_ok`)."""
+    return parallel_cached() and threading_ok()
+
+
 def set_threads(n: int) -> int:
     """``numba.set_num_threads(n)`` and select the parallel builds when ``n > 1``, the
     serial ones otherwise. Returns the previous thread count."""
     global _parallel
+    _prepare_threading()
     old = numba.get_num_threads()
     numba.set_num_threads(n)
     if (n > 1) != _parallel:
@@ -91,9 +193,10 @@ def cache_is_cold() -> bool:
     from . import runner  # noqa: F401  (imports, and so registers, every kernel a run calls)
 
     try:
-        return not any(k.serial._cache._cache_file._load_index() for k in _KERNELS)
+        return not any(_cached(k.serial) for k in _KERNELS)
     except Exception:  # noqa: BLE001  (private numba API: stay silent rather than fail)
         return False
 
 
-__all__ = ["Kernel", "parallel_kernel", "set_threads", "uses_parallel_builds", "cache_is_cold"]
+__all__ = ["Kernel", "parallel_kernel", "set_threads", "uses_parallel_builds", "cache_is_cold",
+           "parallel_cached", "parallel_ready", "threading_ok", "GOMP_SPINCOUNT"]

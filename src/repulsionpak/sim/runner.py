@@ -9,20 +9,21 @@ writers and checkpoints are such consumers.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from ..errors import DivergedError
+from ..errors import DivergedError, ParameterError
 from ..params import SimParams
 from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
                      edge_force,
                      inversion_force, overlap_force, project_inside, repulsion_force, shape_force)
 from .grid import Grid
 from .integrate import count_inside, euler_step, grow, growth_speed_caps, skin_areas, window_change
-from .kernels import set_threads
+from .kernels import parallel_ready, set_threads
 from .model import Model, State, element_ranges
 from .controls import apply_controls, edge_force_stiff
 from .selfintersect import relax_self_intersections
@@ -75,6 +76,26 @@ def skin_topology(m: Model) -> tuple[np.ndarray, ...]:
     return (seg[:, 0].copy(), seg[:, 1].copy(), seg[:, 2].astype(np.int32), seg[:, 3].copy(),
             seg[:, 4].copy(), chunk[:, 0].copy(), chunk[:, 1].copy(), chunk[:, 2].astype(np.int32),
             chunk[:, 3].copy(), chunk[:, 4].copy())
+
+
+#: environment variable: the most threads a run with ``sim.threads = 0`` uses (e.g. 1 when
+#: several packings run side by side on the same cores)
+THREADS_ENV = "REPULSIONPAK_THREADS"
+
+
+def auto_threads() -> int:
+    """The most threads an automatic run may use: ``$REPULSIONPAK_THREADS`` if set, else
+    numba's thread count (the cores this process may use)."""
+    text = os.environ.get(THREADS_ENV, "").strip()
+    if not text:
+        return numba.config.NUMBA_NUM_THREADS
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise ParameterError(f"{THREADS_ENV} must be a positive whole number of threads, got {text!r}")
+    return min(n, numba.config.NUMBA_NUM_THREADS)
 
 
 class Simulator:
@@ -229,14 +250,17 @@ class Simulator:
         self.allow_growth = False
 
     def threads(self) -> int:
-        """numba threads for this run: ``params.threads`` if set, else one thread below
-        ``parallel_threshold`` vertices (on small scenes thread start-up costs more than
-        it saves), all otherwise."""
+        """numba threads for this run: ``params.threads`` if set; else one thread below
+        ``parallel_threshold`` vertices (on small scenes handing work between threads costs
+        more than it saves) or while the parallel builds are not cached yet
+        (:func:`repulsionpak.sim.kernels.parallel_ready`: compiling them takes longer than
+        most runs), all cores allowed otherwise (:func:`auto_threads`)."""
         if self.params.threads > 0:
             return min(self.params.threads, numba.config.NUMBA_NUM_THREADS)
-        if self.model.n_vertices < self.params.parallel_threshold:
+        limit = auto_threads()
+        if limit < 2 or self.model.n_vertices < self.params.parallel_threshold or not parallel_ready():
             return 1
-        return numba.config.NUMBA_NUM_THREADS
+        return limit
 
     @property
     def n_inside(self) -> int:
