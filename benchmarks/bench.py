@@ -44,10 +44,9 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100,
-                    plot: str | None = None) -> None:
-    """ms per simulation iteration on square containers filled with the example library,
-    measured after ``warmup`` iterations (elements grown, neighbours in contact)."""
+def _square_scene(count: int):
+    """A Simulator of ``count`` example-library elements in a square (about 91 vertices per
+    element at gap 5 with the default element size)."""
     import dataclasses
 
     from repulsionpak import examples
@@ -59,28 +58,32 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
     from repulsionpak.types import Container
 
     elements = load_elements(examples.element_files())
+    side = 60.0 * np.sqrt(count)
+    region = shapely.box(0, 0, side, side)
+    params = Params(gap=5.0, seed=1)
+    params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
+    rng = np.random.default_rng(1)
+    templates, placement, gap = prepare(Container("bench", region), elements, params, rng)
+    frame = SimFrame.for_region(region)
+    rs = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    size = typical_size(templates, placement.template_index) / frame.unit
+    model, state = build_model(templates, placement, frame, rs,
+                               cell_size=max(params.sim.cell_size * size, 3 * gap / frame.unit),
+                               gap=gap / frame.unit)
+    return Simulator(model, state, params.sim), model, state, params
+
+
+def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100,
+                    plot: str | None = None) -> None:
+    """ms per simulation iteration on square containers filled with the example library,
+    measured after ``warmup`` iterations (elements grown, neighbours in contact)."""
+    from repulsionpak.sim.kernels import set_threads
+
     print("| vertices | elements | threads | ms/iteration | peak RSS so far (MB) |")
     print("| ---: | ---: | ---: | ---: | ---: |")
     rows = []
     for target in targets:
-        # about 91 vertices per element at gap 5 with the default element size
-        count = max(4, int(target / 91))
-        side = 60.0 * np.sqrt(count)
-        region = shapely.box(0, 0, side, side)
-        cont = Container("bench", region)
-        params = Params(gap=5.0, seed=1)
-        params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
-        rng = np.random.default_rng(1)
-        templates, placement, gap = prepare(cont, elements, params, rng)
-        frame = SimFrame.for_region(region)
-        rs = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
-        size = typical_size(templates, placement.template_index) / frame.unit
-        model, state = build_model(templates, placement, frame, rs,
-                                   cell_size=max(params.sim.cell_size * size, 3 * gap / frame.unit),
-                                   gap=gap / frame.unit)
-        sim = Simulator(model, state, params.sim)
-        from repulsionpak.sim.kernels import set_threads
-
+        sim, model, _, _ = _square_scene(max(4, int(target / 91)))
         set_threads(sim.threads())
         for _ in range(warmup):  # grow them a while so neighbours interact, then time
             sim.step()
@@ -107,6 +110,37 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
         ax.legend()
         fig.tight_layout()
         fig.savefig(plot, dpi=120)
+
+
+def bench_threads(counts=(4, 8, 16, 33, 130), warmup=600, steps=300) -> None:
+    """ms per iteration on one thread and on every core (the parallel builds; compiled
+    here if not cached), alternately, best of two, after ``warmup`` iterations: where
+    ``sim.parallel_threshold`` should lie."""
+    import numba
+
+    from repulsionpak.sim.kernels import set_threads
+
+    n = numba.config.NUMBA_NUM_THREADS
+    print(f"| vertices | elements | 1 thread, ms | {n} threads, ms | speed-up |")
+    print("| ---: | ---: | ---: | ---: | ---: |")
+    for count in counts:
+        _, model, state, params = _square_scene(count)
+        best = {}
+        for th in (1, n, 1, n):
+            from repulsionpak.sim.runner import Simulator
+
+            sim = Simulator(model, state.copy(), params.sim)
+            set_threads(th)
+            for _ in range(warmup):
+                sim.step()
+            t0 = time.perf_counter()
+            for _ in range(steps):
+                sim.step()
+            ms = (time.perf_counter() - t0) / steps * 1e3
+            best[th] = min(best.get(th, np.inf), ms)
+        print(f"| {model.n_vertices} | {model.n_elements} | {best[1]:.3f} | {best[n]:.3f} | "
+              f"{best[1] / best[n]:.2f} |", flush=True)
+    set_threads(1)
 
 
 def bench_preprocess() -> None:
@@ -338,8 +372,8 @@ def bench_controls(seeds=(1, 2, 3)) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["iteration", "preprocess", "heart", "pockets", "secondary", "mesh",
-                                     "firstrun", "controls", "all"])
+    ap.add_argument("what", choices=["iteration", "threads", "preprocess", "heart", "pockets", "secondary",
+                                     "mesh", "firstrun", "controls", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
@@ -360,6 +394,8 @@ def main() -> None:
         bench_controls()
     if a.what in ("iteration", "all"):
         bench_iteration(plot=a.plot)
+    if a.what in ("threads", "all"):
+        bench_threads()
 
 
 if __name__ == "__main__":
