@@ -706,7 +706,7 @@ def demo(
     quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Pack the example library shipped with repulsionpak (SVG + PNG; 10–20 s on two cores, the first run longer: it also compiles the simulation kernels)."""
+    """Pack the example library shipped with repulsionpak (SVG + PNG; 5–8 s on two cores, the first run about 12 s: it also compiles the simulation kernels)."""
     global _DEBUG
     _DEBUG = debug
     from . import examples
