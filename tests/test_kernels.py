@@ -115,7 +115,8 @@ def test_threading_is_prepared_for_fast_handovers_unless_the_user_chose(monkeypa
     from numba.np.ufunc import parallel
 
     for k in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT"):
-        monkeypatch.delenv(k, raising=False)
+        monkeypatch.setenv(k, "")  # recorded, so that what the test sets is undone after it
+        monkeypatch.delenv(k)
     for k, v in env.items():
         monkeypatch.setenv(k, v)
     monkeypatch.setattr(kernels, "_handover_ok", None)
