@@ -108,8 +108,6 @@ def test_a_bent_element_shrinks_away_from_a_neighbour_in_its_hollow():
     towards the disc. It shrinks about a point of its outer left side instead: the leg
     moves left, the outer side stays put, and it keeps 0.86 of its size (about its
     centroid: 0.59, after a shrink that cleared the edge and a move)."""
-    import dataclasses
-
     t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
     ring = np.c_[22.56 + 5 * np.cos(t), 36 + 5 * np.sin(t)]  # 3 units inside the leg (x = 14.56)
     disc = PlacedArt("disc.svg", "primary", (ArtPath((ring,), (True,), Style()),), pinned=True)

@@ -239,7 +239,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     serves the run in the browser and writes the outputs only at Ctrl-C (see
     :mod:`repulsionpak.live`)."""
     from .evaluate import evaluate
-    from .io import load_container, load_elements, render_png
+    from .io import load_container, render_png
     from .io.svg_write import atomic_write_bytes
     from .pack import pack
     from .packing_output import invariants, packing_svg_text
