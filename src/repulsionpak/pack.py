@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
-from . import warmup
 from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
 from .params import Params
@@ -182,6 +181,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     inputs and parameters) continues the run and ends with the same packing as an
     uninterrupted one.
     """
+    from . import warmup  # here, not at import: `python -m repulsionpak.warmup` runs it as __main__
+
     params = params.validate()
     for e in secondary:
         if getattr(e, "controls", None) is not None and e.controls.pins:
