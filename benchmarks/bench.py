@@ -119,6 +119,7 @@ def bench_threads(counts=(4, 8, 16, 33, 130), warmup=600, steps=300) -> None:
     import numba
 
     from repulsionpak.sim.kernels import set_threads
+    from repulsionpak.sim.runner import Simulator
 
     n = numba.config.NUMBA_NUM_THREADS
     print(f"| vertices | elements | 1 thread, ms | {n} threads, ms | speed-up |")
@@ -127,8 +128,6 @@ def bench_threads(counts=(4, 8, 16, 33, 130), warmup=600, steps=300) -> None:
         _, model, state, params = _square_scene(count)
         best = {}
         for th in (1, n, 1, n):
-            from repulsionpak.sim.runner import Simulator
-
             sim = Simulator(model, state.copy(), params.sim)
             set_threads(th)
             for _ in range(warmup):

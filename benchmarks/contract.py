@@ -363,9 +363,7 @@ def main(argv=None) -> int:
     if args.jobs == 1:
         for job in jobs:
             done(run_one(*job))
-    else:
-        # one numba thread per worker: the workers already share the cores
-        os.environ["NUMBA_NUM_THREADS"] = "1"
+    else:  # one numba thread per worker (_init_worker): the workers already share the cores
         ctx = multiprocessing.get_context("spawn")
         with cf.ProcessPoolExecutor(args.jobs, mp_context=ctx, initializer=_init_worker) as pool:
             futs = [pool.submit(run_one, *job) for job in jobs]

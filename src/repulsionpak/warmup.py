@@ -53,6 +53,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .sim.kernels import _cached  # whether numba's disk cache holds a dispatcher's code
+
 __all__ = ["warm_up", "warm_up_parallel", "parallel_missing", "is_cold", "start", "stop", "wait",
            "running", "compiles_parallel_only", "compile_forward",
            "simulation_specialisations",
@@ -71,10 +73,6 @@ def _render_dispatchers() -> list:
     from .render import curves, deform, fit
 
     return [deform._solve, fit._fit_chain, curves._flatten]
-
-
-def _cached(dispatcher) -> bool:
-    return bool(dispatcher._cache._cache_file._load_index())
 
 
 def is_cold() -> bool:
