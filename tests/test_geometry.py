@@ -604,6 +604,23 @@ def test_binding_round_trip_and_affine_invariance(ring, seed, affine):
     np.testing.assert_allclose(moved, pts @ A.T + t, atol=1e-9 * max(1.0, scale) * np.abs(A).max() + 1e-9)
 
 
+@pytest.mark.parametrize("scale", [0.01, 1.0, 100.0])
+def test_bind_points_index_gives_the_same_binding_as_trying_every_triangle(scale):
+    from repulsionpak.geometry.mesh import _bind_all
+
+    rng = np.random.default_rng(3)
+    ring = resample_closed(np.array(Point(0, 0).buffer(10.0, 16).exterior.coords[:-1]) * scale, 1.5 * scale)
+    verts, tris = triangulate_polygon(ring, max_area=(2.0 * scale) ** 2)
+    a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
+    pts = np.vstack([rng.uniform(-12, 12, (400, 2)) * scale,  # inside, and beyond the border
+                     verts,  # on vertices: several triangles hold them
+                     0.5 * (a + b), (a + b + c) / 3])  # on edges, at centroids
+    tri, bary = bind_points(pts, verts, tris)
+    ref_t, ref_b = _bind_all(pts, a, b, c, 64, np.empty(len(pts), np.int32), np.empty((len(pts), 3)))
+    np.testing.assert_array_equal(tri, ref_t)
+    np.testing.assert_array_equal(bary, ref_b)
+
+
 def test_bind_points_beyond_the_border_extrapolate_from_the_nearest_triangle():
     verts, tris = triangulate_polygon(sq(0, 0, 1, 1), interior=False)
     pts = np.array([[0.5, -0.1], [1.2, 0.5]])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import shapely
 
 from .triangulate import triangulate_polygon
 
@@ -68,11 +69,49 @@ def bind_points(points: np.ndarray, verts: np.ndarray, tris: np.ndarray,
     tri_index : (P,) int32 triangle of each point.
     bary : (P, 3) coordinates; sum to 1; all >= 0 (up to rounding) for points inside
         the mesh, extrapolated for points just beyond a border edge.
+
+    A point inside the mesh is bound to the triangle with the largest smallest coordinate
+    among those containing it (up to 1e-9), the first of them on a tie; any other point to
+    its nearest triangle. The candidates of each point are the triangles whose bounding
+    box, slightly widened, holds it (a spatial index): the same choice, and the same
+    numbers, as trying every triangle, which only the points outside every triangle need.
     """
     points = np.asarray(points, dtype=float)
+    verts = np.asarray(verts, dtype=float)
+    tris = np.asarray(tris)
     a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
     out_t = np.empty(len(points), np.int32)
     out_b = np.empty((len(points), 3))
+    if len(points) == 0 or len(tris) == 0:
+        return _bind_all(points, a, b, c, chunk, out_t, out_b)
+    lo = np.minimum(np.minimum(a, b), c)
+    hi = np.maximum(np.maximum(a, b), c)
+    # a point outside a triangle by less than 1e-9 of its height still counts as inside:
+    # widen every box by far more than that (1e-8 of the mesh's extent)
+    pad = 1e-8 * float(np.max(hi.max(axis=0) - lo.min(axis=0)))
+    boxes = shapely.box(lo[:, 0] - pad, lo[:, 1] - pad, hi[:, 0] + pad, hi[:, 1] + pad)
+    pi, ti = shapely.STRtree(boxes).query(shapely.points(points))
+    bc = barycentric(points[pi], a[ti], b[ti], c[ti])
+    low = bc.min(axis=1)
+    inside = low >= -1e-9
+    pi, ti, bc, low = pi[inside], ti[inside], bc[inside], low[inside]
+    # per point: the largest smallest coordinate, then the first triangle
+    order = np.lexsort((ti, -1.0 - low, pi))
+    first = order[np.r_[True, pi[order][1:] != pi[order][:-1]]] if len(order) else order
+    out_t[pi[first]] = ti[first]
+    out_b[pi[first]] = bc[first]
+    rest = np.ones(len(points), bool)
+    rest[pi[first]] = False
+    if rest.any():  # beyond the border: the nearest of all triangles
+        t_rest, b_rest = _bind_all(points[rest], a, b, c, chunk, np.empty(int(rest.sum()), np.int32),
+                                   np.empty((int(rest.sum()), 3)))
+        out_t[rest], out_b[rest] = t_rest, b_rest
+    return out_t, out_b
+
+
+def _bind_all(points, a, b, c, chunk, out_t, out_b):
+    """:func:`bind_points` trying every triangle for every point (chunks of ``chunk``
+    points)."""
     for s in range(0, len(points), chunk):
         p = points[s:s + chunk, None, :]
         bc = barycentric(p, a[None], b[None], c[None])  # (p, T, 3)
@@ -80,7 +119,6 @@ def bind_points(points: np.ndarray, verts: np.ndarray, tris: np.ndarray,
         d2 = np.minimum(np.minimum(_point_segment_dist2(p, a[None], b[None]),
                                    _point_segment_dist2(p, b[None], c[None])),
                         _point_segment_dist2(p, c[None], a[None]))
-        d2 = np.where(inside, -1.0 + bc.min(axis=2) * 0, d2)  # inside → -1 beats any distance
         # among containing triangles prefer the one with the largest min coordinate
         score = np.where(inside, -1.0 - bc.min(axis=2), d2)
         t = np.argmin(score, axis=1)
