@@ -245,19 +245,21 @@ import os, sys, time
 if os.environ.get("BENCH_COMPILE_LOG"):
     from numba.core import event
 
+    T0 = float(os.environ.get("BENCH_T0", "0"))
+
     class _Log(event.Listener):
         stack = []
 
         def on_start(self, ev):
-            self.stack.append(time.process_time())
+            self.stack.append((time.process_time(), time.time()))
 
         def on_end(self, ev):
-            c0 = self.stack.pop()
+            c0, w0 = self.stack.pop()
             f = ev.data["dispatcher"].py_func
             role = "warm-up" if sys.argv[0].endswith("warmup.py") else "packing"
             with open(os.environ["BENCH_COMPILE_LOG"], "a") as fh:
                 fh.write(f"{role}\\t{f.__module__}.{f.__qualname__}\\t{time.process_time() - c0:.3f}"
-                         f"\\t{len(self.stack)}\\t{ev.data['args']}\\n")
+                         f"\\t{len(self.stack)}\\t{ev.data['args']}\\t{w0 - T0:.3f}\\t{time.time() - T0:.3f}\\n")
 
     event.register("numba:compile", _Log())
 """
@@ -274,7 +276,7 @@ def _compile_summary(log: str) -> str:
     per_kernel: dict = collections.Counter()
     sigs: dict = collections.defaultdict(set)
     for line in open(log):
-        role, name, sec, depth, args = line.rstrip("\n").split("\t")
+        role, name, sec, depth, args = line.rstrip("\n").split("\t")[:5]
         if "<locals>" not in name:  # numba's own overloads (np.empty ...) are per caller
             sigs[name].add(args)
         if depth != "0":  # nested: counted in its outermost compilation's time
@@ -286,6 +288,28 @@ def _compile_summary(log: str) -> str:
     twice = [n.rsplit(".", 1)[1] for n in sigs if per_kernel[n] > 1 or len(sigs[n]) > 1]
     parts = [f"{role} {cpu[role]:.1f} CPU s ({count[role]} kernels)" for role in ("packing", "warm-up") if count[role]]
     return "compilation: " + ", ".join(parts) + f"; compiled twice: {', '.join(twice) or 'none'}"
+
+
+def _compile_timeline(log: str, wall: float) -> str:
+    """Per process: when its kernels compiled (wall seconds from the command's start), in
+    order, outermost compilations only; then when the packing process ended."""
+    import os
+
+    if not os.path.exists(log):
+        return ""
+    rows = []
+    for line in open(log):
+        f = line.rstrip("\n").split("\t")
+        if len(f) >= 7 and f[3] == "0":
+            rows.append((float(f[5]), float(f[6]), f[0], f[1].rsplit(".", 1)[1]))
+    out = []
+    for role in ("packing", "warm-up"):
+        mine = sorted(r for r in rows if r[2] == role)
+        if mine:
+            spans = ", ".join(f"{name} {a:.1f}–{b:.1f}" for a, b, _, name in mine)
+            out.append(f"  {role}: {spans}")
+    out.append(f"  the command ended at {wall:.1f} s")
+    return "\n".join(out)
 
 
 def bench_firstrun() -> None:
@@ -310,7 +334,8 @@ def bench_firstrun() -> None:
         for k, (label, extra) in enumerate(runs):
             cache = os.path.join(tmp, "numba" if k < 2 else "numba-nowarm")
             log = os.path.join(tmp, f"compile{k}.tsv")
-            env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=path, BENCH_COMPILE_LOG=log, **extra)
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=path, BENCH_COMPILE_LOG=log,
+                       BENCH_T0=repr(time.time()), **extra)
             load = os.getloadavg()[0]
             t0 = time.perf_counter()
             r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -322,6 +347,8 @@ def bench_firstrun() -> None:
             ratio = f", {walls[-1] / walls[1]:.2f}× the second run" if k != 1 and len(walls) > 1 else ""
             print(f"demo, {label}: wall {walls[-1]:.1f} s, CPU {cpu:.1f} s (load before: {load:.1f})"
                   f"{ratio}; {_compile_summary(log)}", flush=True)
+            if k != 1:
+                print(_compile_timeline(log, walls[-1]), flush=True)
         print(f"first run ÷ second run: {walls[0] / walls[1]:.2f}", flush=True)
 
 
