@@ -112,6 +112,29 @@ def test_same_seed_gives_byte_identical_svg(tmp_path):
     assert (tmp_path / "a.svg").read_bytes() != (tmp_path / "c.svg").read_bytes()
 
 
+def test_a_chosen_margin_is_the_one_reported_and_evaluated(tmp_path):
+    """--margin 0 lets art reach the edge: the report and `evaluate` check that margin,
+    not half the gap (they once reported every element near the edge as below it)."""
+    out, rep = tmp_path / "m.svg", tmp_path / "m.json"
+    r = CliRunner().invoke(app, ["pack", str(examples.container_file("circle")), *map(str, examples.element_files()[:5]),
+                                 "-o", str(out), "--report", str(rep), "--gap", "8", "--count", "8", "--seed", "1",
+                                 "--margin", "0", "-q", "--max-iterations", "800"])
+    assert r.exit_code == 0, r.output
+    edge = json.loads(rep.read_text())["edge"]
+    assert edge["margin"] == 0.0 and edge["n_below_margin"] == 0
+    assert edge["min"] < 0.98 * 4.0  # some art is closer to the edge than half the gap
+    below_half_gap = sum(1 for e in edge["values"] if e is not None and e < 0.98 * 4.0)
+
+    def evaluated(*extra):
+        res = CliRunner().invoke(app, ["evaluate", str(out), "--json", *extra])
+        assert res.exit_code == 0, res.output
+        return json.loads(res.output)["edge"]
+
+    assert (evaluated()["margin"], evaluated()["n_below_margin"]) == (0.0, 0)  # the file's own margin
+    assert (evaluated("--margin", "4")["margin"], evaluated("--margin", "4")["n_below_margin"]) == (4.0, below_half_gap)
+    assert evaluated("--gap", "8")["margin"] == 4.0  # another gap: half of it
+
+
 def test_evaluate_cli_json_agrees_with_library(tmp_path):
     out = tmp_path / "p.svg"
     r = CliRunner().invoke(app, ["pack", str(examples.container_file("circle")), *map(str, examples.element_files()[:5]),

@@ -241,7 +241,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     from .evaluate import evaluate
     from .io import load_container, render_png
     from .io.svg_write import atomic_write_bytes
-    from .pack import pack
+    from .pack import margin_of, pack
     from .packing_output import invariants, packing_svg_text
 
     t_start = time.perf_counter()
@@ -339,7 +339,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         viewer.drop_removed(packing)
     t_eval = time.perf_counter()
     # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
-    metrics = evaluate(cont, packing.placed, g, with_scp=False,
+    metrics = evaluate(cont, packing.placed, g, with_scp=False, margin=margin_of(params, g),
                        sources=[*elems, *secs] if report is not None else None, workers=_fit_workers())
     checks = invariants(packing, metrics)
     text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
@@ -526,6 +526,8 @@ def evaluate(
     json_out: Annotated[bool, typer.Option("--json", help="Print JSON instead of a table.")] = False,
     plot: Annotated[Optional[Path], typer.Option(help="Plot Q_s(r) of all given packings to this PNG.")] = None,
     gap: Annotated[Optional[float], typer.Option(help="Gap to evaluate against (default: the file's data-gap).")] = None,
+    margin: Annotated[Optional[float], typer.Option(
+        help="Edge margin to check (default: the one the packing was made with, else half the gap).")] = None,
     grid: Annotated[int, typer.Option(help="Pixels along the longer side of the SCP raster.")] = 1000,
     elements: Annotated[Optional[list[Path]], typer.Option(
         "--elements", help="Source element files or directories (matched by data-source): "
@@ -541,6 +543,8 @@ def evaluate(
     with _errors():
         if gap is not None and not gap > 0:
             raise ParameterError(f"--gap must be a positive number, got {gap:g}")
+        if margin is not None and not margin >= 0:
+            raise ParameterError(f"--margin must be a number >= 0, got {margin:g}")
         if plot is not None:
             _check_outputs([plot], packings)
         sources = None
@@ -553,7 +557,7 @@ def evaluate(
 
             if fit_is_cold():
                 typer.echo("compiling the distortion kernels, first run only…", err=True)
-        results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources, workers=_fit_workers()))
+        results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources, workers=_fit_workers(), margin=margin))
                    for p in packings]
         if json_out:
             data = results[0][1] if len(results) == 1 else {str(p): r for p, r in results}

@@ -573,17 +573,32 @@ def evaluate(
     }
 
 
+def _recorded_margin(info: dict | None) -> float | None:
+    """The edge margin a packing was verified with, from its metadata (None if absent)."""
+    meta = (info or {}).get("metadata")
+    inv = meta.get("invariants") if isinstance(meta, dict) else None
+    m = inv.get("margin") if isinstance(inv, dict) else None
+    try:
+        m = float(m)
+    except (TypeError, ValueError):
+        return None
+    return m if math.isfinite(m) and m >= 0 else None
+
+
 def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int = 1000,
-                  sources=None, workers: int = 1) -> dict:
+                  sources=None, workers: int = 1, margin: float | None = None) -> dict:
     """:func:`evaluate` of a packing SVG written by repulsionpak.
 
     The gap is ``gap`` if given, else the root's ``data-gap``; :class:`ParameterError`
-    when neither is known. ``sources``: the source element art for the distortion
+    when neither is known. The edge margin is ``margin`` if given, else the one the
+    packing was made with (its metadata's verification, when the file's own gap is
+    used), else half the gap. ``sources``: the source element art for the distortion
     (see :func:`evaluate`), e.g. ``load_elements([...])``.
     """
     from .io import read_packing_svg  # local: io is written separately
 
     container, placed, meta = read_packing_svg(path)
+    own_gap = gap is None
     if gap is None:
         meta = meta or {}
         for key in ("gap", "data-gap", "data_gap"):
@@ -595,7 +610,9 @@ def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int =
                 break
     if gap is None:
         raise ParameterError(f"{path}: the file has no data-gap; give the gap explicitly (--gap)")
-    result = evaluate(container, placed, gap, grid=grid, sources=sources, workers=workers)
+    if margin is None and own_gap:
+        margin = _recorded_margin(meta)
+    result = evaluate(container, placed, gap, grid=grid, sources=sources, workers=workers, margin=margin)
     result["file"] = str(path)
     return result
 

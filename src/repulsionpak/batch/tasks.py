@@ -119,7 +119,7 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
     per worker thread.
     """
     from ..evaluate import evaluate
-    from ..pack import pack
+    from ..pack import margin_of, pack
     from ..packing_output import invariants, packing_svg_text
 
     started, t0, c0 = time.time(), time.perf_counter(), time.thread_time()
@@ -137,7 +137,8 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
         res.iterations = dict(packing.iterations)
         if packing.partial:
             raise JobFailed("cancelled before it finished", 130)
-        metrics = evaluate(inputs.container, packing.placed, packing.gap, with_scp=job.scp)
+        metrics = evaluate(inputs.container, packing.placed, packing.gap, with_scp=job.scp,
+                           margin=margin_of(params, packing.gap))
         checks = invariants(packing, metrics)
         if job.svg:
             res.svg = packing_svg_text(packing, metrics, checks, path=f"{job.name}.svg")
