@@ -111,6 +111,29 @@ def test_root_transform_and_nested_svg(tmp_path):
     )
 
 
+@pytest.mark.parametrize("use, bounds", [
+    ('x="5" y="5" width="40" height="80"', (5, 5, 45, 85)),  # the viewBox scaled ×4
+    ('x="5" y="5" width="40" height="40"', (15, 5, 35, 45)),  # meet: ×2, centred
+    ('x="5" y="5" width="40" height="40" transform="translate(50 0)"', (65, 5, 85, 45)),
+    ('', (25, 0, 75, 100)),  # width/height 100 % of the viewport: ×5, centred
+])
+def test_use_of_a_symbol_fits_its_viewbox_into_the_use_viewport(tmp_path, use, bounds):
+    """Illustrator and Inkscape write symbols this way; browsers scale the symbol's viewBox
+    into the <use>'s x, y, width, height (svgelements alone only translated it)."""
+    body = (f'<defs><symbol id="s" viewBox="0 0 10 20"><rect width="10" height="20"/></symbol></defs>'
+            f'<use href="#s" {use}/>')
+    el = load_element(_write(tmp_path, "sym.svg", _svg(body)))
+    pts = np.vstack([s for p in el.paths for s in p.subpaths])
+    np.testing.assert_allclose([*pts.min(axis=0), *pts.max(axis=0)], bounds, atol=1e-9)
+
+
+def test_use_of_a_symbol_without_viewbox_is_only_moved(tmp_path):
+    body = '<symbol id="s"><rect width="10" height="20"/></symbol><use xlink:href="#s" x="7" y="3" width="99" height="99"/>'
+    el = load_element(_write(tmp_path, "sym.svg", _svg(body)))
+    pts = np.vstack([s for p in el.paths for s in p.subpaths])
+    np.testing.assert_allclose([*pts.min(axis=0), *pts.max(axis=0)], (7, 3, 17, 23), atol=1e-9)
+
+
 def test_no_viewbox_means_px_user_units(tmp_path):
     p = _write(
         tmp_path,

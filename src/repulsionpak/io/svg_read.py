@@ -581,6 +581,7 @@ def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
         if p is not None:
             p.remove(el)
             notes.add("foreignObject")
+    _symbol_viewports(root)
     _nested_svgs_to_groups(root)
     if to_move:
         defs = ET.SubElement(root, f"{{{SVG_NS}}}defs")
@@ -605,17 +606,11 @@ def _length(value, relative: float) -> float:
     return float(v) if isinstance(v, (int, float)) else float("nan")
 
 
-def _nested_svgs_to_groups(root: ET.Element) -> None:
-    """Turn nested ``<svg>`` elements into ``<g transform=...>``.
-
-    svgelements leaks a nested svg's ``x``/``y`` attributes into its children (a rect
-    without ``x`` would be moved twice), so the viewport is resolved here instead.
-    """
-    import svgelements as se
-
+def _reference_size(root: ET.Element) -> tuple[float, float]:
+    """Width and height that percentages of the outermost viewport refer to."""
     rvb = (root.get("viewBox") or "").replace(",", " ").split()
     try:
-        ref_w, ref_h = (
+        return (
             (float(rvb[2]), float(rvb[3]))
             if len(rvb) == 4
             else (
@@ -624,7 +619,61 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
             )
         )
     except ValueError:
-        ref_w = ref_h = 100.0
+        return 100.0, 100.0
+
+
+def _symbol_viewports(root: ET.Element) -> None:
+    """Scale ``<use>`` of a ``<symbol>`` that has a viewBox into the use's viewport.
+
+    The use's ``x``, ``y``, ``width`` and ``height`` (default 100 %) are the viewport the
+    symbol's viewBox is fitted into (``preserveAspectRatio``), as browsers draw it;
+    svgelements only translates by ``x``, ``y``. Each such use is wrapped in a ``<g>``
+    carrying its transform, the translation and the viewBox scaling, and keeps only its
+    reference and styles (which the symbol's content inherits).
+    """
+    import svgelements as se
+
+    symbols = {el.get("id"): el for el in root.iter() if _local(el.tag) == "symbol" and el.get("id")}
+    if not symbols:
+        return
+    ref_w, ref_h = _reference_size(root)
+    parent = {c: p for p in root.iter() for c in p}
+    for use in [e for e in root.iter() if _local(e.tag) == "use"]:
+        ref = _href(use)
+        sym = symbols.get(ref[1:]) if ref and ref.startswith("#") else None
+        vb = (sym.get("viewBox") or "").replace(",", " ").split() if sym is not None else []
+        if len(vb) != 4 or use not in parent:
+            continue
+        try:
+            vbx, vby, vbw, vbh = (float(v) for v in vb)
+        except ValueError:
+            continue
+        x, y = _length(use.get("x", "0"), ref_w), _length(use.get("y", "0"), ref_h)
+        w, h = _length(use.get("width", "100%"), ref_w), _length(use.get("height", "100%"), ref_h)
+        if not (all(math.isfinite(v) for v in (x, y, w, h, vbx, vby, vbw, vbh))
+                and vbw > 0 and vbh > 0 and w > 0 and h > 0):
+            continue
+        tf = se.Viewbox.viewbox_transform(x, y, w, h, vbx, vby, vbw, vbh, sym.get("preserveAspectRatio"))
+        own = use.get("transform")
+        g = ET.Element(f"{{{SVG_NS}}}g" if use.tag.startswith("{") else "g")
+        g.set("transform", f"{own} {tf}" if own else tf)
+        for k in ("x", "y", "width", "height", "transform"):
+            use.attrib.pop(k, None)
+        p = parent[use]
+        p.insert(list(p).index(use), g)
+        p.remove(use)
+        g.append(use)
+
+
+def _nested_svgs_to_groups(root: ET.Element) -> None:
+    """Turn nested ``<svg>`` elements into ``<g transform=...>``.
+
+    svgelements leaks a nested svg's ``x``/``y`` attributes into its children (a rect
+    without ``x`` would be moved twice), so the viewport is resolved here instead.
+    """
+    import svgelements as se
+
+    ref_w, ref_h = _reference_size(root)
     for el in [e for e in root.iter() if e is not root and _local(e.tag) == "svg"]:
         x = _length(el.get("x", "0"), ref_w)
         y = _length(el.get("y", "0"), ref_h)
