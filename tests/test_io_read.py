@@ -580,6 +580,54 @@ def test_entity_declarations_message(tmp_path):
             load_element(cases[name])
 
 
+ILLUSTRATOR = b"""<?xml version="1.0" encoding="utf-8"?>
+<!-- Generator: Adobe Illustrator 27.0.0, SVG Export Plug-In . SVG Version: 6.00 Build 0)  -->
+<!DOCTYPE svg PUBLIC "-//W3C//DTD SVG 1.1//EN" "http://www.w3.org/Graphics/SVG/1.1/DTD/svg11.dtd" [
+\t<!ENTITY ns_extend "http://ns.adobe.com/Extensibility/1.0/">
+\t<!ENTITY ns_ai "http://ns.adobe.com/AdobeIllustrator/10.0/">
+\t<!ENTITY ns_vars "http://ns.adobe.com/Variables/1.0/">
+]>
+<svg version="1.1" xmlns:x="&ns_extend;" xmlns:i="&ns_ai;" xmlns="http://www.w3.org/2000/svg"
+\t x="0px" y="0px" viewBox="0 0 100 100" style="enable-background:new 0 0 100 100;" xml:space="preserve">
+<style type="text/css">.st0{fill:#E94E1B;} .st1{fill:#FFFFFF;stroke:#1D1D1B;stroke-width:2;}</style>
+<switch>
+\t<foreignObject requiredExtensions="&ns_ai;" x="0" y="0" width="1" height="1"><i:pgfRef xlink:href="#x"/></foreignObject>
+\t<g i:extraneous="self">
+\t\t<polygon class="st0" points="50,5 61,38 95,38 68,59 79,92 50,72 21,92 32,59 5,38 39,38 "/>
+\t\t<circle class="st1" cx="50" cy="52" r="10"/>
+\t</g>
+\t<g><rect width="100" height="100"/></g>
+</switch>
+</svg>
+"""
+
+
+def test_illustrator_export_with_entities_and_switch(tmp_path):
+    """Illustrator declares its namespaces as plain XML entities and wraps the art in a
+    <switch> after its private data: read like a browser draws it, without warnings."""
+    p = _write(tmp_path, "ai.svg", ILLUSTRATOR.replace(b"<svg version", b'<svg xmlns:xlink="http://www.w3.org/1999/xlink" version'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        el = load_element(p)
+    assert [(a.style.fill, a.style.stroke) for a in el.paths] == [("#e94e1b", None), ("#ffffff", "#1d1d1b")]
+    pts = np.vstack([s for a in el.paths for s in a.subpaths])
+    np.testing.assert_allclose([*pts.min(axis=0), *pts.max(axis=0)], (5, 5, 95, 92), atol=1e-9)  # not the rect
+
+
+@pytest.mark.parametrize("doctype", [
+    b'<!DOCTYPE svg [<!ENTITY a "x"><!ENTITY b "&a;&a;">]>',  # nested
+    b'<!DOCTYPE svg [<!ENTITY % p "x">]>',  # parameter entity
+    b'<!DOCTYPE svg [<!ENTITY a "x"><!ELEMENT svg ANY>]>',  # more than plain entities
+    b'<!DOCTYPE svg [<!ENTITY a "' + b"y" * 4000 + b'">]>',  # expands past 4x the file
+])
+def test_other_entities_stay_refused(tmp_path, doctype):
+    body = b"".join([b'<svg xmlns="http://www.w3.org/2000/svg"><rect width="1" height="1"/>',
+                     b'<desc>' + b"&a;" * 40 + b"</desc>" if b'"y' in doctype else b"", b"</svg>"])
+    p = _write(tmp_path, "e.svg", b'<?xml version="1.0"?>' + doctype + body)
+    with pytest.raises(InputError, match="e.svg.*entities"):
+        load_element(p)
+
+
 def test_point_budget(tmp_path, monkeypatch):
     pts = " ".join(f"L{i} {i % 7}" for i in range(1, 3000))
     p = _write(

@@ -405,15 +405,62 @@ def _local(tag) -> str:
     return tag.rsplit("}", 1)[-1] if tag.startswith("{") else tag
 
 
+_DOCTYPE = re.compile(rb"<!DOCTYPE\b[^\[>]*\[(?P<subset>.*?)\]\s*>", re.DOTALL)
+_ENTITY = re.compile(rb"""<!ENTITY\s+(?P<name>[A-Za-z_][\w.\-]*)\s+(?P<q>["'])(?P<value>[^"'&%<]*)(?P=q)\s*>""")
+_SUBSET_REST = re.compile(rb"\s*(<!--.*?-->\s*)*", re.DOTALL)
+#: at most this many entities, each at most this long, are expanded (see below)
+MAX_ENTITIES, MAX_ENTITY_CHARS = 256, 4096
+
+
+def _expand_plain_entities(data: bytes) -> bytes | None:
+    """``data`` with the internal DTD's plain text entities expanded and the DOCTYPE
+    removed, or None when the DTD holds anything else.
+
+    Adobe Illustrator writes ``<!DOCTYPE svg [<!ENTITY ns_ai "http://ns.adobe.com/...">
+    ...]>`` and uses the entities in namespace declarations. Such entities (a literal
+    value without references, quotes or markup) cannot nest, so they cannot explode;
+    external, parameter or nested entities stay refused, and so does a document whose
+    expansion would grow past four times its size."""
+    m = _DOCTYPE.search(data)
+    if m is None:
+        return None
+    subset = m.group("subset")
+    entities = {}
+    pos = 0
+    for e in _ENTITY.finditer(subset):
+        if _SUBSET_REST.fullmatch(subset, pos, e.start()) is None:
+            return None  # something other than plain entities and comments
+        if len(e.group("value")) > MAX_ENTITY_CHARS:
+            return None
+        entities[e.group("name")] = e.group("value")
+        pos = e.end()
+    if not entities or len(entities) > MAX_ENTITIES or _SUBSET_REST.fullmatch(subset, pos) is None:
+        return None
+    body = data[:m.start()] + data[m.end():]
+    out = re.sub(rb"&([A-Za-z_][\w.\-]*);", lambda r: entities.get(r.group(1), r.group(0)), body)
+    return out if len(out) <= 4 * len(data) + 65536 else None
+
+
 def parse_xml_hardened(path: str | Path, data: bytes) -> ET.Element:
-    """Parse ``data`` with defusedxml; any problem -> InputError naming ``path``."""
+    """Parse ``data`` with defusedxml; any problem -> InputError naming ``path``.
+
+    Entities are refused, except plain text ones in the internal DTD (as Illustrator
+    writes them), which are expanded first (:func:`_expand_plain_entities`)."""
     import defusedxml.ElementTree as DET
     from defusedxml import DTDForbidden, EntitiesForbidden, ExternalReferenceForbidden
 
     try:
-        root = DET.fromstring(
-            data, forbid_dtd=False, forbid_entities=True, forbid_external=True
-        )
+        try:
+            root = DET.fromstring(
+                data, forbid_dtd=False, forbid_entities=True, forbid_external=True
+            )
+        except EntitiesForbidden:
+            plain = _expand_plain_entities(data)
+            if plain is None:
+                raise
+            root = DET.fromstring(
+                plain, forbid_dtd=False, forbid_entities=True, forbid_external=True
+            )
     except EntitiesForbidden:
         raise InputError(
             path,
@@ -570,17 +617,28 @@ def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
             p = parent.get(p)
         return False
 
+    quiet = set()  # alternatives a <switch> does not draw: dropped without a note
     for el in root.iter():
         name = _local(el.tag)
         if name in _NON_RENDERED and not inside_defs(el):
             to_move.append(el)
         elif name == "foreignObject":
             to_drop.append(el)
+        elif name == "switch":
+            # a <switch> draws its first child whose conditions hold; we support no
+            # extension (Illustrator puts its private data first, under requiredExtensions)
+            kids = [c for c in el if isinstance(c.tag, str)]
+            first = next((c for c in kids if c.get("requiredExtensions") is None), None)
+            for c in kids:
+                if c is not first:
+                    to_drop.append(c)
+                    quiet.add(c)
     for el in to_drop:
         p = parent.get(el)
-        if p is not None:
+        if p is not None and el in list(p):
             p.remove(el)
-            notes.add("foreignObject")
+            if el not in quiet:
+                notes.add("foreignObject")
     _symbol_viewports(root)
     _nested_svgs_to_groups(root)
     if to_move:
