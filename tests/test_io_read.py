@@ -134,6 +134,13 @@ def test_use_of_a_symbol_without_viewbox_is_only_moved(tmp_path):
     np.testing.assert_allclose([*pts.min(axis=0), *pts.max(axis=0)], (7, 3, 17, 23), atol=1e-9)
 
 
+def test_use_of_another_file_is_not_drawn_and_says_so(tmp_path):
+    body = '<use xlink:href="other.svg#r"/><circle cx="5" cy="5" r="4"/>'
+    with pytest.warns(UserWarning, match=r"ext.svg: skipped unsupported content: <use> of another file"):
+        el = load_element(_write(tmp_path, "ext.svg", _svg(body)))
+    assert len(el.paths) == 1
+
+
 def test_no_viewbox_means_px_user_units(tmp_path):
     p = _write(
         tmp_path,

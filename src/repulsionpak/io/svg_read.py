@@ -624,6 +624,8 @@ def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
             to_move.append(el)
         elif name == "foreignObject":
             to_drop.append(el)
+        elif name == "use" and (_href(el) or "#").strip()[:1] != "#":
+            notes.add("<use> of another file (not drawn)")
         elif name == "switch":
             # a <switch> draws its first child whose conditions hold; we support no
             # extension (Illustrator puts its private data first, under requiredExtensions)
