@@ -165,6 +165,21 @@ def test_stroked_polyline_area_and_caps():
     assert area("square") == pytest.approx(length * w + w * w, rel=1e-3)
 
 
+def test_stroke_miter_limit_decides_a_sharp_corner():
+    """A 20° corner's miter is 1/sin(10°) = 5.8 half-widths long: cut under SVG's
+    default limit 4 (at the limit: GEOS clips where SVG bevels, a little more area, on
+    the safe side), whole under a limit of 6."""
+    a = np.radians(20.0)
+    line = np.array([[10 * np.cos(a), 10 * np.sin(a)], [0, 0], [10, 0]], float)
+
+    def area(limit):
+        return art_area([ArtPath((line,), (False,), Style(fill=None, stroke="#000", stroke_width=2.0,
+                                                           stroke_miterlimit=limit))]).area
+
+    assert area(1.0) < area(4.0) < area(6.0) - 0.3
+    assert area(100.0) == pytest.approx(area(6.0), abs=1e-9)  # the whole miter
+
+
 def test_fill_and_stroke_are_united():
     ring = sq(0, 0, 10, 10)
     path = ArtPath((ring,), (True,), Style(fill="#000", stroke="#000", stroke_width=2.0))

@@ -255,6 +255,22 @@ def test_styles_inherited_and_invisible_dropped():
     )
 
 
+@pytest.mark.parametrize("attrs, dashes, offset, limit", [
+    ('stroke-dasharray="6 3" stroke-dashoffset="2" stroke-miterlimit="9"', (12, 6), 4, 9),
+    ('stroke-dasharray="1,2,3"', (2, 4, 6, 2, 4, 6), 0, 4),  # an odd list repeats
+    ('style="stroke-dasharray:5px 1px;stroke-miterlimit:0.5"', (10, 2), 0, 4),  # limit < 1: invalid
+    ('stroke-dasharray="none" stroke-dashoffset="3"', (), 0, 4),
+    ('stroke-dasharray="10%"', (), 0, 4),  # percentages: drawn solid here
+    ('stroke-dasharray="3 -1"', (), 0, 4),  # invalid: solid, as SVG draws it
+    ('stroke-dasharray="0 0"', (), 0, 4),
+])
+def test_stroke_dashes_and_miter_limit_are_kept_and_scaled(tmp_path, attrs, dashes, offset, limit):
+    body = f'<g transform="scale(2)"><path d="M0 0 L10 0 L5 8" fill="none" stroke="red" {attrs}/></g>'
+    st = load_element(_write(tmp_path, "d.svg", _svg(body))).paths[0].style
+    assert st.stroke_dasharray == pytest.approx(dashes) and st.stroke_dashoffset == pytest.approx(offset)
+    assert st.stroke_miterlimit == limit and st.stroke_width == pytest.approx(2.0)
+
+
 def test_default_fill_black_and_colours_as_hex(tmp_path):
     body = '<rect width="1" height="1"/><rect width="1" height="1" fill="rgb(255,0,0)" stroke="currentColor" color="teal"/>'
     el = load_element(_write(tmp_path, "c.svg", _svg(body)))

@@ -52,6 +52,7 @@ def _placed() -> list[PlacedArt]:
                     fill_rule="evenodd",
                     opacity=0.8,
                     stroke_linejoin="round",
+                    stroke_miterlimit=10.0,
                 ),
             ),
             ArtPath(
@@ -63,6 +64,8 @@ def _placed() -> list[PlacedArt]:
                     stroke_width=2.0,
                     stroke_linecap="round",
                     stroke_opacity=0.5,
+                    stroke_dasharray=(4.0, 2.0),
+                    stroke_dashoffset=1.0,
                 ),
             ),
         ),
@@ -155,6 +158,8 @@ def test_output_structure(tmp_path, container):
         and p1.get("stroke-width") == "0.125"
         and p1.get("opacity") == "0.8"
     )
+    assert p1.get("stroke-miterlimit") == "10" and p1.get("stroke-dasharray") is None
+    assert (p2.get("stroke-dasharray"), p2.get("stroke-dashoffset")) == ("1 0.5", "0.25")  # × stroke_scale
     assert (
         p1.get("stroke-linejoin") == "round"
         and p1.get("d").count("M") == 2
@@ -251,6 +256,9 @@ def test_round_trip(tmp_path, container):
                 assert sb_.stroke_width == pytest.approx(
                     sa_.stroke_width * a.stroke_scale
                 )
+                assert sb_.stroke_miterlimit == sa_.stroke_miterlimit
+                assert sb_.stroke_dasharray == pytest.approx(tuple(d * a.stroke_scale for d in sa_.stroke_dasharray))
+                assert sb_.stroke_dashoffset == pytest.approx(sa_.stroke_dashoffset * a.stroke_scale)
 
 
 def test_output_reloads_as_container_in_same_coordinates(tmp_path, container):

@@ -32,6 +32,10 @@ class Style:
     fill_rule: str = "nonzero"  # "nonzero" | "evenodd"
     stroke_linecap: str = "butt"
     stroke_linejoin: str = "miter"
+    stroke_miterlimit: float = 4.0
+    #: dash and gap lengths (user units before scaling, like ``stroke_width``); () = solid
+    stroke_dasharray: tuple[float, ...] = ()
+    stroke_dashoffset: float = 0.0
 
     @property
     def visible(self) -> bool:

@@ -13,7 +13,6 @@ from ..types import ArtPath
 
 _CAP = {"butt": "flat", "round": "round", "square": "square"}
 _JOIN = {"miter": "mitre", "miter-clip": "mitre", "arcs": "round", "round": "round", "bevel": "bevel"}
-_SVG_MITER_LIMIT = 4.0  # SVG's default stroke-miterlimit (Style does not carry one)
 
 
 def _polygonal(geom) -> shapely.Geometry:
@@ -110,6 +109,7 @@ def _stroke_geometry(path: ArtPath, width: float) -> shapely.Geometry:
     half = 0.5 * width
     cap = _CAP.get(path.style.stroke_linecap, "flat")
     join = _JOIN.get(path.style.stroke_linejoin, "mitre")
+    limit = max(1.0, float(path.style.stroke_miterlimit))  # SVG's miter length / width = shapely's
     parts = []
     for pts, closed in zip(path.subpaths, path.closed):
         pts = np.asarray(pts, dtype=float)
@@ -132,11 +132,11 @@ def _stroke_geometry(path: ArtPath, width: float) -> shapely.Geometry:
             continue
         if closed and len(pts) >= 3:
             line = LinearRing(pts)
-            g = shapely.buffer(line, half, quad_segs=16, join_style=join, mitre_limit=_SVG_MITER_LIMIT)
+            g = shapely.buffer(line, half, quad_segs=16, join_style=join, mitre_limit=limit)
         else:
             line = LineString(pts)
             g = shapely.buffer(
-                line, half, quad_segs=16, cap_style=cap, join_style=join, mitre_limit=_SVG_MITER_LIMIT
+                line, half, quad_segs=16, cap_style=cap, join_style=join, mitre_limit=limit
             )
         parts.append(_polygonal(g))
     parts = [p for p in parts if not p.is_empty]
@@ -157,7 +157,8 @@ def art_area(paths: Sequence[ArtPath], stroke_scale: float = 1.0) -> shapely.Geo
       cancel out, e.g. an opposite-orientation inner ring);
     * the stroke (stroke not ``None``, width > 0): each subpath buffered by
       ``stroke_width * stroke_scale / 2`` with the style's line cap / join
-      (miter limit 4, SVG's default); closed subpaths have no caps.
+      (and miter limit); closed subpaths have no caps; dashes are ignored (the
+      stroke counts as solid: its gaps are not space for other art).
     """
     parts = []
     for path in paths:

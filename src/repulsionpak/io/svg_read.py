@@ -901,6 +901,12 @@ def _style_of(
         sw = sw / vp_scale if vp_scale > 0 else sw
     else:
         sw = sw * det_scale
+    stroke_scale = (1.0 / vp_scale if vp_scale > 0 else 1.0) if "non-scaling-stroke" in str(
+        values.get("vector-effect", "")) else det_scale
+    dashes = _dasharray(values.get("stroke-dasharray"))
+    dashes = tuple(d * stroke_scale for d in dashes)
+    offset = _float_attr(values.get("stroke-dashoffset"), 0.0) * stroke_scale if dashes else 0.0
+    limit = _float_attr(values.get("stroke-miterlimit"), 4.0)
     cap = str(values.get("stroke-linecap", "butt")).strip().lower()
     join = str(values.get("stroke-linejoin", "miter")).strip().lower()
     rule = str(values.get("fill-rule", "nonzero")).strip().lower()
@@ -921,7 +927,28 @@ def _style_of(
         fill_rule="evenodd" if rule == "evenodd" else "nonzero",
         stroke_linecap=cap if cap in ("butt", "round", "square") else "butt",
         stroke_linejoin=join if join in ("miter", "round", "bevel") else "miter",
+        stroke_miterlimit=limit if math.isfinite(limit) and limit >= 1.0 else 4.0,
+        stroke_dasharray=dashes,
+        stroke_dashoffset=offset if math.isfinite(offset) else 0.0,
     )
+
+
+def _dasharray(raw) -> tuple[float, ...]:
+    """``stroke-dasharray`` as lengths (an odd list repeated, as SVG does); () for
+    ``none``, percentages, and invalid lists (negative or non-finite values, all zero),
+    which SVG draws solid."""
+    if raw is None:
+        return ()
+    text = str(raw).strip().lower()
+    if text in ("", "none", "inherit") or "%" in text:
+        return ()
+    try:
+        vals = [float(re.sub(r"(px)$", "", v)) for v in re.split(r"[\s,]+", text) if v]
+    except ValueError:
+        return ()
+    if not vals or any(not math.isfinite(v) or v < 0 for v in vals) or sum(vals) <= 0:
+        return ()
+    return tuple(vals * 2 if len(vals) % 2 else vals)
 
 
 def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:

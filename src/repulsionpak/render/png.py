@@ -108,8 +108,18 @@ def _draw_art(ax, art: ArtPath, stroke_scale: float, pt_per_unit: float) -> None
                     linewidth=width,
                     capstyle=_CAPS.get(st.stroke_linecap, "butt"),
                     joinstyle=_JOINS.get(st.stroke_linejoin, "miter"),
+                    linestyle=_dashes(st, stroke_scale * pt_per_unit, width),
                 )
             )
+
+
+def _dashes(st, pt_per_unit: float, width: float):
+    """matplotlib's line style for the stroke's dashes: lengths in points, divided by
+    the line width, which matplotlib multiplies them by."""
+    if not st.stroke_dasharray or width <= 0:
+        return "solid"
+    k = pt_per_unit / width
+    return (st.stroke_dashoffset * k, [d * k for d in st.stroke_dasharray])
 
 
 def render_png(

@@ -107,6 +107,13 @@ def _style_attrs(style: Style, stroke_scale: float = 1.0, fill_url: str | None =
         out.append(("stroke-linecap", style.stroke_linecap))
     if style.stroke is not None and style.stroke_linejoin != "miter":
         out.append(("stroke-linejoin", style.stroke_linejoin))
+    if style.stroke is not None and style.stroke_miterlimit != 4.0:
+        out.append(("stroke-miterlimit", _fmt_g(style.stroke_miterlimit)))
+    if style.stroke is not None and style.stroke_dasharray:
+        k = float(stroke_scale)
+        out.append(("stroke-dasharray", " ".join(_fmt_g(d * k) for d in style.stroke_dasharray)))
+        if style.stroke_dashoffset != 0.0:
+            out.append(("stroke-dashoffset", _fmt_g(style.stroke_dashoffset * k)))
     return out
 
 
