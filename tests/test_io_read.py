@@ -651,6 +651,53 @@ def test_other_entities_stay_refused(tmp_path, doctype):
         load_element(p)
 
 
+FIGMA = """<svg width="120" height="120" viewBox="0 0 120 120" fill="none" xmlns="http://www.w3.org/2000/svg">
+<g clip-path="url(#clip0_1_2)">
+<path d="M60 10C87.6 10 110 32.4 110 60C110 87.6 87.6 110 60 110C32.4 110 10 87.6 10 60C10 32.4 32.4 10 60 10Z" fill="#F24E1E"/>
+<path fill-rule="evenodd" clip-rule="evenodd" d="M40 40H80V80H40V40ZM50 50V70H70V50H50Z" fill="white"/>
+</g>
+<defs><clipPath id="clip0_1_2"><rect width="120" height="120" fill="white"/></clipPath></defs>
+</svg>"""
+COREL = """<?xml version="1.0" encoding="UTF-8" standalone="no"?>
+<svg xmlns="http://www.w3.org/2000/svg" xml:space="preserve" width="30mm" height="30mm" version="1.1"
+ style="shape-rendering:geometricPrecision; fill-rule:evenodd; clip-rule:evenodd" viewBox="0 0 3000 3000">
+ <defs><style type="text/css"><![CDATA[
+    .fil0 {fill:#2B2A29}
+    .fil1 {fill:#E31E24}
+ ]]></style></defs>
+ <g id="Layer_x0020_1">
+  <polygon class="fil0" points="1500,100 2900,1500 1500,2900 100,1500 "/>
+  <circle class="fil1" cx="1500" cy="1500" r="600"/>
+ </g>
+</svg>"""
+SKETCH = """<?xml version="1.0" encoding="UTF-8"?>
+<svg width="48px" height="48px" viewBox="0 0 48 48" version="1.1" xmlns="http://www.w3.org/2000/svg">
+    <title>icon</title>
+    <g id="Page-1" stroke="none" stroke-width="1" fill="none" fill-rule="evenodd">
+        <g id="Artboard" transform="translate(-20.000000, -20.000000)" fill="#4A90E2">
+            <path d="M44,20 L68,44 L44,68 L20,44 Z M44,32 L32,44 L44,56 L56,44 Z"></path>
+        </g>
+    </g>
+</svg>"""
+
+
+@pytest.mark.parametrize("text, fills, bounds, area", [
+    (FIGMA, ["#f24e1e", "#ffffff"], (10, 10, 110, 110), math.pi * 50 ** 2),  # the clip frame: no effect
+    (COREL, ["#2b2a29", "#e31e24"], (100, 100, 2900, 2900), 2 * 1400 ** 2),  # CSS in CDATA
+    (SKETCH, ["#4a90e2"], (0, 0, 48, 48), 2 * 24 ** 2 - 2 * 12 ** 2),  # inherited evenodd: a hole
+])
+def test_design_tool_exports_read_as_drawn(tmp_path, text, fills, bounds, area):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        el = load_element(_write(tmp_path, "x.svg", text))
+    assert [a.style.fill for a in el.paths] == fills
+    from repulsionpak.geometry.outline import art_area
+
+    geom = art_area(el.paths)
+    np.testing.assert_allclose(geom.bounds, bounds, atol=1e-6)
+    assert geom.area == pytest.approx(area, rel=5e-3)  # Figma's circle: four cubics
+
+
 def test_point_budget(tmp_path, monkeypatch):
     pts = " ".join(f"L{i} {i % 7}" for i in range(1, 3000))
     p = _write(
