@@ -271,6 +271,25 @@ def test_stroke_dashes_and_miter_limit_are_kept_and_scaled(tmp_path, attrs, dash
     assert st.stroke_miterlimit == limit and st.stroke_width == pytest.approx(2.0)
 
 
+@pytest.mark.parametrize("sheet, shape, fill", [
+    (".x.y { fill: #0000ff }", '<path class="y x" d="M0 0h9v9z"/>', "#0000ff"),  # compound
+    ("g .c { fill: #ff00ff }", '<g><g><path class="c" d="M0 0h9v9z"/></g></g>', "#ff00ff"),  # descendant
+    ("svg > .c { fill: #ff00ff }", '<g><path class="c" d="M0 0h9v9z"/></g>', "#000000"),  # not a child
+    ("[data-k='1'] { fill: #00ffff }", '<path data-k="1" d="M0 0h9v9z"/>', "#00ffff"),  # attribute
+    (".d { fill: #abcdef !important }", '<rect class="d" width="9" height="9" fill="red"/>', "#abcdef"),
+    (".d { fill: #abcdef }", '<rect class="d" width="9" height="9" style="fill:#111111"/>', "#111111"),
+    (".d { fill: #abcdef !important }", '<rect class="d" width="9" height="9" style="fill:#111111"/>', "#abcdef"),
+    ("", '<rect width="9" height="9" style="fill:#333333 !important"/>', "#333333"),
+    ("#i { fill: #222222 } .d { fill: #abcdef }", '<rect id="i" class="d" width="9" height="9"/>', "#222222"),
+    (".d { fill: #222222 } .d { fill: #abcdef }", '<rect class="d" width="9" height="9"/>', "#abcdef"),
+    ("@media print { .d { fill: #ff0000 } } .d:hover { fill: #ff0000 }",
+     '<rect class="d" width="9" height="9" fill="#00ff00"/>', "#00ff00"),
+])
+def test_css_cascade_as_browsers_apply_it(tmp_path, sheet, shape, fill):
+    el = load_element(_write(tmp_path, "css.svg", _svg(f"<style>{sheet}</style>{shape}")))
+    assert [a.style.fill for a in el.paths] == [fill]
+
+
 def test_default_fill_black_and_colours_as_hex(tmp_path):
     body = '<rect width="1" height="1"/><rect width="1" height="1" fill="rgb(255,0,0)" stroke="currentColor" color="teal"/>'
     el = load_element(_write(tmp_path, "c.svg", _svg(body)))

@@ -603,6 +603,93 @@ _NON_RENDERED = {"symbol", "mask", "marker"}
 _CONTAINERS_OK = {"defs", "clipPath", "pattern"}
 
 
+_IMPORTANT = re.compile(r"\s*!\s*important\s*$", re.IGNORECASE)
+
+
+def _inline_declarations(style: str | None) -> list[tuple[str, str, bool]]:
+    """``(property, value, important)`` of a ``style`` attribute, in order."""
+    out = []
+    for part in (style or "").split(";"):
+        name, sep, value = part.partition(":")
+        name = name.strip().lower()
+        if not sep or not name:
+            continue
+        important = bool(_IMPORTANT.search(value))
+        out.append((name, _IMPORTANT.sub("", value).strip(), important))
+    return out
+
+
+def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:
+    """Resolve the CSS cascade of the file's ``<style>`` sheets into each element's
+    ``style`` attribute, and drop the sheets.
+
+    Selectors are matched by cssselect2 (type, class, id, attribute, compound,
+    descendant, child, sibling and structural selectors, as browsers match them);
+    declarations are ordered as CSS orders them: ``!important`` ones first, then the
+    element's own ``style``, then the sheets' by specificity and order, all above the
+    presentation attributes (``fill="red"``). svgelements, which reads the result, only
+    knows single class, id and type selectors and took ``!important`` as part of the value
+    (a fill ``#abc !important`` came out black). At-rules (``@media``, ``@import``,
+    ``@font-face``) are ignored."""
+    sheets = [el for el in root.iter() if _local(el.tag) == "style"]
+    inline_marked = [el for el in root.iter() if "!" in (el.get("style") or "")]
+    if not sheets and not inline_marked:
+        return
+    matcher = None
+    if sheets:
+        import cssselect2
+        import tinycss2
+
+        matcher = cssselect2.Matcher()
+        for sheet in sheets:
+            kind = (sheet.get("type") or "text/css").strip().lower()
+            if kind not in ("text/css", ""):
+                continue
+            for rule in tinycss2.parse_stylesheet("".join(sheet.itertext()), skip_comments=True,
+                                                  skip_whitespace=True):
+                if rule.type != "qualified-rule":
+                    continue
+                decls = [(d.lower_name, tinycss2.serialize(d.value).strip(), bool(d.important))
+                         for d in tinycss2.parse_declaration_list(rule.content, skip_comments=True,
+                                                                  skip_whitespace=True)
+                         if d.type == "declaration"]
+                try:
+                    selectors = cssselect2.compile_selector_list(rule.prelude)
+                except cssselect2.SelectorError:
+                    notes.add("CSS rule with a selector not understood")
+                    continue
+                for sel in selectors:
+                    if sel.pseudo_element is None:
+                        matcher.add_selector(sel, decls)
+        parent = {c: p for p in root.iter() for c in p}
+        for sheet in sheets:
+            if sheet in parent:
+                parent[sheet].remove(sheet)
+    todo = {id(el): el for el in inline_marked}
+    matched: dict[int, list] = {}
+    if matcher is not None:
+        import cssselect2
+
+        for w in cssselect2.ElementWrapper.from_xml_root(root).iter_subtree():
+            found = matcher.match(w)
+            if found:
+                matched[id(w.etree_element)] = found
+                todo[id(w.etree_element)] = w.etree_element
+    for key, el in todo.items():
+        normal: dict[str, str] = {}
+        important: dict[str, str] = {}
+        for _spec, _order, _pseudo, decls in matched.get(key, ()):  # lowest to highest
+            for name, value, imp in decls:
+                (important if imp else normal)[name] = value
+        own = _inline_declarations(el.get("style"))
+        final = dict(normal)
+        final.update({n: v for n, v, imp in own if not imp})
+        final.update(important)
+        final.update({n: v for n, v, imp in own if imp})
+        if final:
+            el.set("style", ";".join(f"{n}:{v}" for n, v in final.items()))
+
+
 def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
     """Make the tree safe for svgelements: move non-rendered containers into ``<defs>``
     (svgelements would otherwise draw their children), drop ``foreignObject``."""
@@ -964,6 +1051,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     _check_tree(path, root_xml)
     _check_attributes(path, root_xml)
     notes: set[str] = set()
+    _apply_stylesheets(root_xml, notes)
     _sanitize(path, root_xml, notes)
     hoist_clip_paths(root_xml)
     gradients = _gradient_colours(root_xml)
