@@ -290,6 +290,20 @@ def test_css_cascade_as_browsers_apply_it(tmp_path, sheet, shape, fill):
     assert [a.style.fill for a in el.paths] == [fill]
 
 
+@pytest.mark.parametrize("colour, fill, alpha", [
+    ("transparent", None, 1.0),  # paints nothing (svgelements made it black)
+    ("rgb(255 0 0 / 50%)", "#ff0000", 0.5),  # CSS Color 4: spaces and a slash
+    ("rgb(100% 0% 0% / .25)", "#ff0000", 0.25),
+    ("hsl(120deg 100% 50%)", "#00ff00", 1.0),
+    ("hsla(0, 100%, 50%, 0.25)", "#ff0000", 0.25),
+    ("#11223344", "#112233", 0x44 / 255),
+])
+def test_fill_colours_css_writes(tmp_path, colour, fill, alpha):
+    body = f'<rect width="5" height="5" fill="{colour}" stroke="#0000ff"/>'
+    st = load_element(_write(tmp_path, "c.svg", _svg(body))).paths[0].style
+    assert st.fill == fill and st.fill_opacity == pytest.approx(alpha, abs=2 / 255)
+
+
 def test_default_fill_black_and_colours_as_hex(tmp_path):
     body = '<rect width="1" height="1"/><rect width="1" height="1" fill="rgb(255,0,0)" stroke="currentColor" color="teal"/>'
     el = load_element(_write(tmp_path, "c.svg", _svg(body)))

@@ -965,10 +965,35 @@ def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None,
             return None, 1.0
         if s.lower() == "none":
             return None, 1.0
-    c = Color(s)
+    if s.lower() == "transparent":  # paints nothing, like none
+        return None, 1.0
+    c = Color(_comma_colour(s))
     if c.value is None:
         return None, 1.0
     return c.hexrgb.lower(), c.alpha / 255.0
+
+
+_SPACE_COLOUR = re.compile(
+    r"(rgb|hsl)a?\(\s*([^\s,()/]+)\s+([^\s,()/]+)\s+([^\s,()/]+)\s*(?:/\s*([^\s,()/]+)\s*)?\)",
+    re.IGNORECASE)
+
+
+def _comma_colour(s: str) -> str:
+    """CSS Color 4's ``rgb(255 0 0 / 50%)`` (and ``hsl``) in the comma form svgelements
+    reads (``rgba(255,0,0,0.5)``); any other string unchanged."""
+    m = _SPACE_COLOUR.fullmatch(s.strip())
+    if m is None:
+        return s
+    fn, a, b, c, alpha = m.groups()
+    a = a[:-3] if fn.lower() == "hsl" and a.lower().endswith("deg") else a
+    if alpha is None:
+        return f"{fn.lower()}({a},{b},{c})"
+    if alpha.endswith("%"):
+        try:
+            alpha = repr(float(alpha[:-1]) / 100.0)
+        except ValueError:
+            return s
+    return f"{fn.lower()}a({a},{b},{c},{alpha})"
 
 
 def _style_of(
