@@ -714,10 +714,26 @@ SKETCH = """<?xml version="1.0" encoding="UTF-8"?>
 </svg>"""
 
 
+INKSCAPE = """<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink"
+ xmlns:sodipodi="http://sodipodi.sourceforge.net/DTD/sodipodi-0.dtd" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"
+ width="100mm" height="50mm" viewBox="0 0 100 50">
+  <sodipodi:namedview id="nv" pagecolor="#ffffff"/>
+  <g inkscape:label="sketch" inkscape:groupmode="layer" id="layer0" style="display:none">
+    <rect width="100" height="50" style="fill:#ff0000"/>
+  </g>
+  <g inkscape:label="Layer 1" inkscape:groupmode="layer" id="layer1" transform="translate(-10,-20)">
+    <path style="fill:#ff6600;fill-opacity:1;stroke:#000000;stroke-width:0.5;stroke-dasharray:none"
+          d="m 20,30 h 20 v 20 h -20 z" id="rect1" sodipodi:nodetypes="ccccc"/>
+    <use x="0" y="0" xlink:href="#rect1" id="use1" transform="translate(40,0)" width="100%" height="100%"/>
+  </g>
+</svg>"""
+
+
 @pytest.mark.parametrize("text, fills, bounds, area", [
     (FIGMA, ["#f24e1e", "#ffffff"], (10, 10, 110, 110), math.pi * 50 ** 2),  # the clip frame: no effect
     (COREL, ["#2b2a29", "#e31e24"], (100, 100, 2900, 2900), 2 * 1400 ** 2),  # CSS in CDATA
     (SKETCH, ["#4a90e2"], (0, 0, 48, 48), 2 * 24 ** 2 - 2 * 12 ** 2),  # inherited evenodd: a hole
+    (INKSCAPE, ["#ff6600", "#ff6600"], (9.75, 9.75, 70.25, 30.25), 2 * 20.5 ** 2),  # a clone; hidden layer
 ])
 def test_design_tool_exports_read_as_drawn(tmp_path, text, fills, bounds, area):
     with warnings.catch_warnings():
