@@ -501,3 +501,52 @@ def test_png_does_not_touch_pyplot(tmp_path):
     )
     subprocess.run([sys.executable, "-c", code], check=True)
     assert (tmp_path / "p.png").stat().st_size > 0
+
+
+# --------------------------------------------------------------------------- group opacity
+
+
+GROUP_OPACITY = """<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">
+<g opacity="0.5"><g style="opacity:0.8">
+  <rect width="40" height="40" fill="#ff0000"/><rect x="20" y="20" width="40" height="40" fill="#00ff00"/>
+</g><rect x="50" y="50" width="40" height="40" fill="#0000ff" opacity="0.5"/></g>
+<rect x="0" y="60" width="30" height="30"/>
+</svg>"""
+
+
+def test_translucent_groups_are_written_as_groups(tmp_path):
+    """Shapes overlapping inside a group with opacity compose as one layer: the group is
+    written back as <g opacity> around them, not as the product on each path (where the
+    red square would show through the green one)."""
+    src = tmp_path / "el.svg"
+    src.write_text(GROUP_OPACITY)
+    el = load_element(src)
+    assert [a.style.opacity for a in el.paths] == pytest.approx([0.4, 0.4, 0.25, 1.0])
+    assert [len(a.style.layers) for a in el.paths] == [2, 2, 1, 0]
+    box = tmp_path / "box.svg"
+    box.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                   '<rect width="100" height="100" fill="none"/></svg>')
+    out = tmp_path / "out.svg"
+    write_packing_svg(out, load_container(box), [PlacedArt("el.svg", "primary", el.paths)], 1.0)
+    group = next(g for g in ET.parse(out).getroot().iter(f"{NS}g") if g.get("class") == "element primary")
+    outer = [c for c in group if c.tag == f"{NS}g"]
+    assert [g.get("opacity") for g in outer] == ["0.5"]
+    inner = [c for c in outer[0] if c.tag == f"{NS}g"]
+    assert [g.get("opacity") for g in inner] == ["0.8"] and len(list(inner[0])) == 2
+    assert [p.get("opacity") for p in inner[0]] == [None, None]  # the groups carry it
+    assert [p.get("opacity") for p in outer[0] if p.tag == f"{NS}path"] == ["0.5"]
+    # read back: the same shapes, the same opacity per shape
+    _, placed, _ = read_packing_svg(out)
+    assert [a.style.opacity for a in placed[0].paths] == pytest.approx([0.4, 0.4, 0.25, 1.0])
+    # and drawn as the source is drawn (an independent renderer)
+    resvg_py = pytest.importorskip("resvg_py")
+    import io as _io
+
+    import matplotlib.image as mpimg
+
+    def pixel(path, x, y):
+        png = bytes(resvg_py.svg_to_bytes(svg_path=str(path), width=100, height=100))
+        return mpimg.imread(_io.BytesIO(png), format="png")[y, x]
+
+    for x, y in [(30, 30), (10, 10), (55, 55), (70, 70), (15, 75)]:  # overlap, red, green+blue, blue, black
+        np.testing.assert_allclose(pixel(out, x, y), pixel(src, x, y), atol=2 / 255)

@@ -36,6 +36,12 @@ class Style:
     #: dash and gap lengths (user units before scaling, like ``stroke_width``); () = solid
     stroke_dasharray: tuple[float, ...] = ()
     stroke_dashoffset: float = 0.0
+    #: the groups with an opacity below 1 this shape is drawn in, outermost first, as
+    #: ``(key, opacity)`` (``key`` tells groups of one file apart): written back as nested
+    #: ``<g opacity>`` around the paths, so shapes overlapping inside a translucent group
+    #: compose as one layer, as browsers draw them. ``opacity`` is the product of the
+    #: shape's own and these (what previews and visibility use).
+    layers: tuple[tuple[int, float], ...] = ()
 
     @property
     def visible(self) -> bool:

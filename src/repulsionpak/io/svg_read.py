@@ -23,6 +23,7 @@ and :func:`flatten_shape` are shared with ``pathfile``, ``svg_write`` and ``png`
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import gzip
 import io
 import math
@@ -1130,7 +1131,9 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
         attrs = vals.get("attributes") or {}
         return dict(attrs)
 
-    def walk(node, opacity: float, hole: bool, groups: tuple, clips: tuple = ()):
+    layer_keys = iter(range(1, 1 << 62))
+
+    def walk(node, opacity: float, hole: bool, groups: tuple, clips: tuple = (), layers: tuple = ()):
         for child in node:
             if isinstance(child, se.Shape):
                 attrs = own(child)
@@ -1145,6 +1148,8 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 )
                 op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
                 style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
+                if layers:
+                    style = dataclasses.replace(style, layers=layers)
                 segs = list(child.segments(transformed=False))
                 own_clips = clip_refs(child.values.get("clip-path"), mat, notes)
                 vis = str(child.values.get("visibility", "visible")).strip().lower()
@@ -1158,13 +1163,15 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                     notes.add("filter")
                 if "mask" in attrs:
                     notes.add("mask (ignored, shape drawn unmasked)")
-                op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
+                group_op = _clamp01(_float_attr(attrs.get("opacity"), 1.0))
+                op = opacity * group_op
                 own_clips = clip_refs(
                     child.values.get("clip-path"),
                     _matrix_to_np(child.transform * inv_viewport),
                     notes,
                 )
-                walk(child, op, hole or _is_hole(attrs), groups + (attrs,), clips + own_clips)
+                inner = layers + ((next(layer_keys), group_op),) if group_op < 1.0 else layers
+                walk(child, op, hole or _is_hole(attrs), groups + (attrs,), clips + own_clips, inner)
             elif isinstance(child, se.Text):
                 notes.add("text")
             elif isinstance(child, se.Image):
@@ -1173,7 +1180,8 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     root_own = own(doc)
     # a clip-path on the root <svg> is in the file's user units (as resvg draws it)
     root_clips = clip_refs(doc.values.get("clip-path"), np.eye(3), notes)
-    walk(doc, _clamp01(_float_attr(root_own.get("opacity"), 1.0)), False, (), root_clips)
+    root_op = _clamp01(_float_attr(root_own.get("opacity"), 1.0))
+    walk(doc, root_op, False, (), root_clips, ((0, root_op),) if root_op < 1.0 else ())
     defs = clip_defs(doc, inv_viewport, notes) if any(s.clips for s in shapes) else {}
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))

@@ -29,6 +29,7 @@ Output is deterministic and written atomically.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import re
@@ -138,8 +139,32 @@ def _art_path_xml(art: ArtPath, stroke_scale: float, indent: str,
     attrs = []
     if src is not None and src.id and suffix:
         attrs.append(("id", src.id + suffix))
-    attrs += _style_attrs(art.style, stroke_scale, fill_url, stroke_url)
+    style = art.style
+    if style.layers:  # the enclosing <g opacity> carry the groups' share (see _layered)
+        groups = math.prod(op for _, op in style.layers)
+        style = dataclasses.replace(style, opacity=style.opacity / groups if groups > 0 else 0.0)
+    attrs += _style_attrs(style, stroke_scale, fill_url, stroke_url)
     return f"{indent}<path{_attrs(attrs)} d={quoteattr(d)}/>"
+
+
+def _layered(items: list[tuple[tuple, str]], indent: str) -> list[str]:
+    """Lines of ``(layers, path line)`` items (in drawing order) with each run of paths
+    that share a translucent group wrapped in ``<g opacity>``, nested as in the source:
+    shapes overlapping inside it then compose as one layer."""
+    out, open_ = [], ()
+    for layers, line in items:
+        common = 0
+        while common < min(len(open_), len(layers)) and open_[common] == layers[common]:
+            common += 1
+        for depth in range(len(open_), common, -1):
+            out.append(indent + "  " * (depth - 1) + "</g>")
+        for depth in range(common, len(layers)):
+            out.append(indent + "  " * depth + f'<g opacity="{_fmt_g(layers[depth][1])}">')
+        out.append("  " * len(layers) + line)
+        open_ = layers
+    for depth in range(len(open_), 0, -1):
+        out.append(indent + "  " * (depth - 1) + "</g>")
+    return out
 
 
 def _container_shape_xml(art: ArtPath, indent: str) -> str | None:
@@ -294,11 +319,11 @@ def packing_svg_string(
                               f"element {pa.source}")
             line = _art_path_xml(art, pa.stroke_scale, "      ", paint, suffix, decimals)
             if line:
-                body.append(line)
+                body.append((art.style.layers, line))
         defs = paint.defs()
         if defs:
             lines.append("      <defs>" + "".join(defs) + "</defs>")
-        lines.extend(body)
+        lines.extend(_layered(body, "      "))
         lines.append("    </g>")
     lines.append("  </g>")
 
