@@ -304,6 +304,15 @@ def test_fill_colours_css_writes(tmp_path, colour, fill, alpha):
     assert st.fill == fill and st.fill_opacity == pytest.approx(alpha, abs=2 / 255)
 
 
+@pytest.mark.parametrize("given, kept", [
+    ("stroke", "stroke fill markers"), ("stroke fill", "stroke fill markers"),
+    ("markers", "markers fill stroke"), ("fill stroke", "normal"), ("normal", "normal"), ("bogus", "normal"),
+])
+def test_paint_order_is_kept(tmp_path, given, kept):
+    body = f'<rect width="5" height="5" fill="#f00" stroke="#000" style="paint-order: {given}"/>'
+    assert load_element(_write(tmp_path, "p.svg", _svg(body))).paths[0].style.paint_order == kept
+
+
 def test_default_fill_black_and_colours_as_hex(tmp_path):
     body = '<rect width="1" height="1"/><rect width="1" height="1" fill="rgb(255,0,0)" stroke="currentColor" color="teal"/>'
     el = load_element(_write(tmp_path, "c.svg", _svg(body)))

@@ -53,6 +53,7 @@ def _placed() -> list[PlacedArt]:
                     opacity=0.8,
                     stroke_linejoin="round",
                     stroke_miterlimit=10.0,
+                    paint_order="stroke fill markers",
                 ),
             ),
             ArtPath(
@@ -159,6 +160,7 @@ def test_output_structure(tmp_path, container):
         and p1.get("opacity") == "0.8"
     )
     assert p1.get("stroke-miterlimit") == "10" and p1.get("stroke-dasharray") is None
+    assert p1.get("paint-order") == "stroke fill markers" and p2.get("paint-order") is None
     assert (p2.get("stroke-dasharray"), p2.get("stroke-dashoffset")) == ("1 0.5", "0.25")  # × stroke_scale
     assert (
         p1.get("stroke-linejoin") == "round"
@@ -257,6 +259,7 @@ def test_round_trip(tmp_path, container):
                     sa_.stroke_width * a.stroke_scale
                 )
                 assert sb_.stroke_miterlimit == sa_.stroke_miterlimit
+                assert sb_.paint_order == sa_.paint_order
                 assert sb_.stroke_dasharray == pytest.approx(tuple(d * a.stroke_scale for d in sa_.stroke_dasharray))
                 assert sb_.stroke_dashoffset == pytest.approx(sa_.stroke_dashoffset * a.stroke_scale)
 

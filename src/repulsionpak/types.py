@@ -36,6 +36,9 @@ class Style:
     #: dash and gap lengths (user units before scaling, like ``stroke_width``); () = solid
     stroke_dasharray: tuple[float, ...] = ()
     stroke_dashoffset: float = 0.0
+    #: SVG's ``paint-order`` ("normal": fill, then stroke, then markers; "stroke": the
+    #: stroke below the fill, as outlined lettering is drawn)
+    paint_order: str = "normal"
     #: the groups with an opacity below 1 this shape is drawn in, outermost first, as
     #: ``(key, opacity)`` (``key`` tells groups of one file apart): written back as nested
     #: ``<g opacity>`` around the paths, so shapes overlapping inside a translucent group

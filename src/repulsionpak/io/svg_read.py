@@ -1043,7 +1043,19 @@ def _style_of(
         stroke_miterlimit=limit if math.isfinite(limit) and limit >= 1.0 else 4.0,
         stroke_dasharray=dashes,
         stroke_dashoffset=offset if math.isfinite(offset) else 0.0,
+        paint_order=_paint_order(values.get("paint-order")),
     )
+
+
+def _paint_order(raw) -> str:
+    """``paint-order`` normalised: "normal", or the order of fill, stroke and markers as
+    given (the missing ones follow in their normal order), e.g. "stroke fill markers"."""
+    words = [w for w in str(raw or "").strip().lower().split() if w in ("fill", "stroke", "markers")]
+    if not words:
+        return "normal"
+    seen = list(dict.fromkeys(words))
+    order = seen + [w for w in ("fill", "stroke", "markers") if w not in seen]
+    return "normal" if order == ["fill", "stroke", "markers"] else " ".join(order)
 
 
 def _dasharray(raw) -> tuple[float, ...]:

@@ -85,32 +85,40 @@ def _draw_art(ax, art: ArtPath, stroke_scale: float, pt_per_unit: float) -> None
     from matplotlib.patches import PathPatch
 
     st = art.style
-    if st.fill is not None and st.opacity * st.fill_opacity > 0:
-        fp = _fill_path(art)
-        if fp is not None:
-            ax.add_artist(  # not add_patch: the limits are set, no data-limit update
-                PathPatch(
-                    fp,
-                    facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity),
-                    edgecolor="none",
-                    linewidth=0,
+
+    def fill():
+        if st.fill is not None and st.opacity * st.fill_opacity > 0:
+            fp = _fill_path(art)
+            if fp is not None:
+                ax.add_artist(  # not add_patch: the limits are set, no data-limit update
+                    PathPatch(
+                        fp,
+                        facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity),
+                        edgecolor="none",
+                        linewidth=0,
+                    )
                 )
-            )
-    width = st.stroke_width * stroke_scale * pt_per_unit
-    if st.stroke is not None and st.opacity * st.stroke_opacity > 0 and width > 0:
-        sp = _stroke_path(art)
-        if sp is not None:
-            ax.add_artist(  # not add_patch: the limits are set, no data-limit update
-                PathPatch(
-                    sp,
-                    facecolor="none",
-                    edgecolor=to_rgba(st.stroke, st.opacity * st.stroke_opacity),
-                    linewidth=width,
-                    capstyle=_CAPS.get(st.stroke_linecap, "butt"),
-                    joinstyle=_JOINS.get(st.stroke_linejoin, "miter"),
-                    linestyle=_dashes(st, stroke_scale * pt_per_unit, width),
+
+    def stroke():
+        width = st.stroke_width * stroke_scale * pt_per_unit
+        if st.stroke is not None and st.opacity * st.stroke_opacity > 0 and width > 0:
+            sp = _stroke_path(art)
+            if sp is not None:
+                ax.add_artist(  # not add_patch: the limits are set, no data-limit update
+                    PathPatch(
+                        sp,
+                        facecolor="none",
+                        edgecolor=to_rgba(st.stroke, st.opacity * st.stroke_opacity),
+                        linewidth=width,
+                        capstyle=_CAPS.get(st.stroke_linecap, "butt"),
+                        joinstyle=_JOINS.get(st.stroke_linejoin, "miter"),
+                        linestyle=_dashes(st, stroke_scale * pt_per_unit, width),
+                    )
                 )
-            )
+
+    order = st.paint_order.split() if st.paint_order != "normal" else ["fill", "stroke"]
+    for part in order:  # paint-order: "stroke fill markers" draws the stroke first
+        {"fill": fill, "stroke": stroke}.get(part, lambda: None)()
 
 
 def _dashes(st, pt_per_unit: float, width: float):

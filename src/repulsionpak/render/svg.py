@@ -115,6 +115,8 @@ def _style_attrs(style: Style, stroke_scale: float = 1.0, fill_url: str | None =
         out.append(("stroke-dasharray", " ".join(_fmt_g(d * k) for d in style.stroke_dasharray)))
         if style.stroke_dashoffset != 0.0:
             out.append(("stroke-dashoffset", _fmt_g(style.stroke_dashoffset * k)))
+    if style.stroke is not None and style.fill is not None and style.paint_order != "normal":
+        out.append(("paint-order", style.paint_order))
     return out
 
 
