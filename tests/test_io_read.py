@@ -141,6 +141,14 @@ def test_use_of_another_file_is_not_drawn_and_says_so(tmp_path):
     assert len(el.paths) == 1
 
 
+def test_markers_are_reported_not_drawn(tmp_path):
+    body = ('<defs><marker id="a" viewBox="0 0 10 10" refX="5" refY="5"><path d="M0 0 L10 5 L0 10 z"/></marker></defs>'
+            '<path d="M10 50 L90 50" stroke="#000" stroke-width="4" marker-end="url(#a)"/>')
+    with pytest.warns(UserWarning, match="m.svg: skipped unsupported content: markers"):
+        el = load_element(_write(tmp_path, "m.svg", _svg(body)))
+    assert len(el.paths) == 1  # the line; the marker's own path is not drawn on its own either
+
+
 def test_no_viewbox_means_px_user_units(tmp_path):
     p = _write(
         tmp_path,

@@ -1153,6 +1153,9 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                     notes.add("filter")
                 if "mask" in attrs:
                     notes.add("mask (ignored, shape drawn unmasked)")
+                if any(str(child.values.get(k) or "").strip().lower().startswith("url(")
+                       for k in ("marker-start", "marker-mid", "marker-end", "marker")):
+                    notes.add("markers (arrowheads and the like are not drawn)")
                 m = child.transform * inv_viewport
                 mat = _matrix_to_np(m)
                 det_scale = math.sqrt(
