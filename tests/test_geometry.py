@@ -671,3 +671,43 @@ def test_distance_transform_of_a_disc_is_the_distance_to_its_rim():
     assert (d[r >= 40] == 0).all()
     inner = r < 35
     np.testing.assert_allclose(d[inner], 40 - r[inner], atol=1.0)
+
+
+# --------------------------------------------------------------------------------------
+# detailed art: the skin of a jagged outline, overlays GEOS refuses
+
+
+def test_skin_of_a_jagged_outline_is_quick_and_still_holds_the_outline():
+    """A traced or noisy drawing of 6,000 vertices: GEOS's offset of it took minutes and
+    gigabytes at 20,000; simplified within ``detail`` first and offset by that much more,
+    the skin still keeps every outline vertex ``offset`` inside."""
+    from repulsionpak.geometry.outline import MAX_SKIN_INPUT_VERTICES, skin_polygon
+
+    n = 3 * MAX_SKIN_INPUT_VERTICES
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    r = 20 + np.sin(37 * t) + np.random.default_rng(0).normal(0, 0.1, n)
+    outline = Polygon(np.column_stack([r * np.cos(t), r * np.sin(t)]))
+    skin = skin_polygon(outline, 0.6, detail=0.025)  # (its time: docs/benchmarks.md)
+    pts = shapely.points(np.asarray(outline.exterior.coords))
+    assert shapely.contains(skin, pts).all()
+    assert shapely.distance(skin.exterior, pts).min() >= 0.6 - 1e-9
+    assert len(skin.exterior.coords) < n  # and no more detailed than it needs to be
+
+
+def test_overlay_falls_back_when_geos_refuses():
+    from shapely.errors import GEOSException
+
+    from repulsionpak.geometry.robust import overlay, union_all
+
+    a, b = box(0, 0, 2, 2), box(1, 1, 3, 3)
+    calls = []
+
+    def refusing(x, y, **kw):  # GEOS's "TopologyException: Ring edge missing", until snapped
+        calls.append(sorted(kw))
+        if "grid_size" not in kw:
+            raise GEOSException("TopologyException: Ring edge missing at 1 1")
+        return shapely.intersection(x, y, **kw)
+
+    assert overlay(refusing, a, b).area == pytest.approx(1.0, rel=1e-6)
+    assert calls == [[], [], ["grid_size"]]  # as given, made valid, then snap-rounded
+    assert union_all([a, b]).area == pytest.approx(7.0)

@@ -56,6 +56,8 @@ from shapely.geometry import Polygon, box
 from . import metrics as _metrics
 from .errors import ParameterError
 from .geometry.edt import distance_transform
+from .geometry.robust import overlay
+from .geometry.robust import union_all as robust_union_all
 from .geometry.outline import _polygonal
 from .types import Container, PlacedArt
 
@@ -103,7 +105,7 @@ def _union(geoms: Sequence) -> shapely.Geometry:
     geoms = [g for g in geoms if g is not None and not g.is_empty]
     if not geoms:
         return Polygon()
-    return _polygonal(shapely.union_all(geoms))
+    return _polygonal(robust_union_all(geoms))
 
 
 def area_fraction(container_region, art_geoms) -> float:
@@ -112,7 +114,7 @@ def area_fraction(container_region, art_geoms) -> float:
     if region.area <= 0:
         raise ParameterError("the container has no area")
     art = _union(_as_geoms(art_geoms))
-    return float(shapely.intersection(art, region).area / region.area)
+    return float(overlay(shapely.intersection, art, region).area / region.area)
 
 
 def _pairs(geoms: list, predicate: str = "intersects", distance: float | None = None) -> np.ndarray:
@@ -136,7 +138,7 @@ def overlap_area(art_geoms) -> float:
     if len(pairs) == 0:
         return 0.0
     a = np.array(geoms, dtype=object)
-    inter = shapely.intersection(a[pairs[:, 0]], a[pairs[:, 1]])
+    inter = overlay(shapely.intersection, a[pairs[:, 0]], a[pairs[:, 1]])
     return float(np.sum(shapely.area(inter)))
 
 
@@ -156,7 +158,7 @@ def outside(container_region, art_geoms, tol: float = 0.0) -> list[int]:
     for i, g in enumerate(_as_geoms(art_geoms)):
         if g.is_empty or shapely.contains(grown, g):
             continue
-        if shapely.difference(g, grown).area > eps:
+        if overlay(shapely.difference, g, grown).area > eps:
             out.append(i)
     return out
 
@@ -442,14 +444,14 @@ def scp_vector(container_region, art_geoms, r, quad_segs: int = 32) -> dict:
     """
     region = _polygonal(container_region)
     art = _union(_as_geoms(art_geoms))
-    neg = shapely.difference(region, art)
+    neg = overlay(shapely.difference, region, art)
     r = np.asarray(r, dtype=float).ravel()
     q = []
     for ri in r:
         if ri <= 0:
             q.append(neg.area / region.area)
             continue
-        free = shapely.difference(region.buffer(-ri, quad_segs=quad_segs), art.buffer(ri, quad_segs=quad_segs))
+        free = overlay(shapely.difference, region.buffer(-ri, quad_segs=quad_segs), art.buffer(ri, quad_segs=quad_segs))
         q.append(free.area / region.area)
     q0 = neg.area / region.area
     return {

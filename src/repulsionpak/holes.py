@@ -27,6 +27,8 @@ import shapely
 
 from .controls import ElementControls
 from .geometry.outline import art_area
+from .geometry.robust import overlay
+from .geometry.robust import union_all as robust_union_all
 from .params import RenderParams
 from .render.placed import curve_tolerance, refined
 from .types import ArtPath, Element, PlacedArt
@@ -182,11 +184,11 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
             others = [geoms[j] for j in tree.query(hole)] + added
             for g in others:  # none expected (meshes cover holes); never closer than the gap
                 if g is not host and g.intersects(hole):
-                    free = free.difference(g.buffer(keep))
+                    free = overlay(shapely.difference, free, g.buffer(keep))
             here: list = []  # copies put in this hole: parts of a pinched hole may be close
             for part in getattr(free, "geoms", [free]):
                 for g in here:
-                    part = part.difference(g.buffer(keep))
+                    part = overlay(shapely.difference, part, g.buffer(keep))
                 if isinstance(part, shapely.MultiPolygon):
                     part = max(part.geoms, key=lambda q: q.area)
                 if part.is_empty or not isinstance(part, shapely.Polygon):
@@ -223,8 +225,8 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     # come within cos(π/16) ≈ 0.98 of the radius at corners): widen it to cover it
     reach = (keep + eps) / math.cos(math.pi / 16)
     geoms = [shapely.simplify(p.art, eps) for p in placed]
-    taken = shapely.union_all([g.buffer(reach, quad_segs=4) for g in geoms if not g.is_empty])
-    free = shapely.buffer(region, -(1.005 * margin)).difference(taken)
+    taken = robust_union_all([g.buffer(reach, quad_segs=4) for g in geoms if not g.is_empty])
+    free = overlay(shapely.difference, shapely.buffer(region, -(1.005 * margin)), taken)
     if free.is_empty:
         return []
     parts = [q for q in getattr(free, "geoms", [free]) if isinstance(q, shapely.Polygon)]
@@ -240,7 +242,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
                 continue
             copy, g = got
             out.append(copy)
-            rest = part.difference(g.buffer(reach, quad_segs=4))
+            rest = overlay(shapely.difference, part, g.buffer(reach, quad_segs=4))
             todo += [q for q in getattr(rest, "geoms", [rest])
                      if isinstance(q, shapely.Polygon) and not q.is_empty and q.area >= math.pi * min_radius ** 2]
             todo.sort(key=lambda q: -q.area)

@@ -32,6 +32,7 @@ import shapely
 
 from .errors import ParameterError
 from .geometry.outline import _polygonal
+from .geometry.robust import overlay
 from .geometry.overlap import OverlapGrid, intersection_areas, nelder_mead_sym, rings_of
 
 __all__ = [
@@ -85,7 +86,7 @@ def outside_area(container_region, art_geoms: Sequence) -> float:
         g = _polygonal(g)
         if g.is_empty or shapely.contains(region, g):
             continue
-        total += float(shapely.difference(g, region).area)
+        total += float(overlay(shapely.difference, g, region).area)
     return total
 
 
@@ -118,7 +119,7 @@ def _sym_areas(a: shapely.Geometry, b: shapely.Geometry, params: np.ndarray) -> 
 
     moved = shapely.transform(copies, move)
     # |A △ B| = |A| + |B| − 2 |A ∩ B| (one overlay, cheaper than the symmetric difference)
-    inter = shapely.area(shapely.intersection(moved, b))
+    inter = shapely.area(overlay(shapely.intersection, moved, b))
     return np.maximum(a.area * np.exp(2.0 * params[:, 1]) + b.area - 2.0 * inter, 0.0)
 
 

@@ -83,7 +83,7 @@ def build_template(outline: Outline, scale: float, gap: float,
     geom = shapely.affinity.scale(
         shapely.affinity.translate(outline.geometry, -outline.center[0], -outline.center[1]),
         scale, scale, origin=(0, 0))
-    skin = skin_polygon(geom, params.skin_offset * gap)
+    skin = skin_polygon(geom, params.skin_offset * gap, detail=0.5 * params.skin_tolerance * gap)
     spacing = params.mesh_spacing * gap
     ring = resample_adaptive(ring_coords(skin), spacing, params.skin_tolerance * gap,
                              params.min_boundary_vertices)

@@ -31,6 +31,7 @@ import shapely
 from shapely.ops import polylabel
 
 from .geometry.outline import _polygonal
+from .geometry.robust import overlay
 from .render.placed import refined, similarity_matrix
 from .types import PlacedArt
 
@@ -99,7 +100,7 @@ def distortion(art, copy) -> float:
     """Area of the symmetric difference of two art geometries over the first's area."""
     if art.is_empty or art.area <= 0:
         return 0.0
-    return float(shapely.symmetric_difference(art, copy).area / art.area)
+    return float(overlay(shapely.symmetric_difference, art, copy).area / art.area)
 
 
 def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarray
@@ -128,7 +129,7 @@ def _edge_distance(region_boundary, region, g) -> float:
     minus the depth of its deepest point outside."""
     if shapely.contains(region, g):
         return float(shapely.distance(region_boundary, g))
-    out = shapely.get_coordinates(shapely.difference(g, region))
+    out = shapely.get_coordinates(overlay(shapely.difference, g, region))
     if len(out) == 0:
         return 0.0
     return -float(np.max(shapely.distance(region_boundary, shapely.points(out))))
@@ -235,7 +236,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             counts["gap"] += 1
             if dd <= 0.0:
                 counts["overlap_pairs"] += 1
-                inter = shapely.intersection(gi, gj)
+                inter = overlay(shapely.intersection, gi, gj)
                 depth = _thickness(inter)
                 total = min_gap + depth + 2 * tol
                 pi = pj = _centre(inter) if not inter.is_empty else 0.5 * (centre(i) + centre(j))
@@ -305,7 +306,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             line = np.asarray(shapely.shortest_line(g, boundary).coords)
             pt, u = line[0], line[0] - line[1]
         else:  # the art's point farthest outside
-            coords = np.asarray(shapely.get_coordinates(shapely.difference(g, region)))
+            coords = np.asarray(shapely.get_coordinates(overlay(shapely.difference, g, region)))
             pt = coords[np.argmax(((coords - c) ** 2).sum(axis=1))]
             u = c - pt
         nu = float(np.hypot(*u))
