@@ -765,7 +765,7 @@ def test_design_tool_exports_read_as_drawn(tmp_path, text, fills, bounds, area):
 
 
 def test_point_budget(tmp_path, monkeypatch):
-    pts = " ".join(f"L{i} {i % 7}" for i in range(1, 3000))
+    pts = " ".join(f"L{i} {(i % 2) * 6}" for i in range(1, 3000))  # every point a corner: none thinned
     p = _write(
         tmp_path,
         "many.svg",
@@ -1008,3 +1008,35 @@ def test_fuzz_path_data(tmp_path, d, rule):
         else:
             for art in res.paths:
                 assert all(len(s) >= 2 and np.all(np.isfinite(s)) for s in art.subpaths)
+
+
+# --------------------------------------------------------------------------- dense drawings
+
+
+def _dense_polygon(n: int) -> str:
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    r = 40 + 4 * np.sin(5 * t) + 2 * np.cos(11 * t)
+    return " ".join(f"{50 + x:.5f},{50 + y:.5f}" for x, y in zip(r * np.cos(t), r * np.sin(t)))
+
+
+def test_a_dense_drawing_is_thinned_within_a_quarter_of_the_curve_tolerance(tmp_path):
+    """A traced or digitized outline (6,000 points): its runs of lines keep what
+    Douglas-Peucker keeps within 2.5e-4 of the element's size, a quarter of what every copy
+    is written to; curves stay as drawn. (20,000 points took ~10 minutes to pack.)"""
+    body = (f'<polygon points="{_dense_polygon(6000)}" fill="#369"/>'
+            '<path d="M 45 45 C 48 40 52 40 55 45 Z" fill="#fff"/>')
+    el = load_element(_write(tmp_path, "dense.svg", _svg(body)))
+    poly, curve = el.paths
+    assert 50 < len(poly.subpaths[0]) < 600 and (poly.source.curves[0].order == 1).all()
+    assert list(curve.source.curves[0].order) == [3, 1]  # the cubic and its closing line, untouched
+    exact = shapely.Polygon(np.array([p.split(",") for p in _dense_polygon(6000).split()], float))
+    thin = shapely.Polygon(poly.subpaths[0])
+    size = np.hypot(*np.ptp(np.asarray(exact.exterior.coords), axis=0))
+    assert exact.hausdorff_distance(thin) <= svg_read.DENSE_TOLERANCE * size * (1 + 1e-6)
+    np.testing.assert_allclose(poly.source.curves[0].ctrl[:, 0], poly.subpaths[0])  # curves = outline
+
+
+def test_a_drawing_under_the_limit_is_kept_as_drawn(tmp_path):
+    n = svg_read.MAX_LINE_SEGMENTS // 2
+    el = load_element(_write(tmp_path, "d.svg", _svg(f'<polygon points="{_dense_polygon(n)}"/>')))
+    assert len(el.paths[0].subpaths[0]) == n

@@ -44,7 +44,7 @@ from ..geometry.outline import (
     art_area_problem,
     relative_thickness,
 )
-from ..types import ArtPath, Container, Element, Style
+from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
 
 __all__ = [
@@ -1473,8 +1473,79 @@ def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
             path,
             f"has no visible geometry ({why}); an element needs at least one visible path",
         )
+    arts = thin_dense_lines(arts)
     return Element(name=path.stem, source=path.name, paths=tuple(arts),
                    paint_servers=paint_servers(path, doc.xml, arts))
+
+
+#: an element drawn with more straight segments than this (a traced or digitized
+#: drawing; the suites' and examples' art has at most ~550) is thinned when read
+MAX_LINE_SEGMENTS = 2000
+#: ... within this share of its size: a quarter of the curve tolerance every copy is
+#: written to (``render.curve_tolerance``, 0.001 of the copy's size), so no copy changes
+DENSE_TOLERANCE = 2.5e-4
+
+
+def _thin_runs(order: np.ndarray, ctrl: np.ndarray, closed: bool, tol: float):
+    """The segments of one subpath with each run of consecutive lines reduced to the
+    vertices Douglas–Peucker keeps within ``tol`` (run ends, and every curve, kept)."""
+    n = len(order)
+    keep_order, keep_ctrl = [], []
+    i = 0
+    while i < n:
+        if order[i] != 1:
+            keep_order.append(order[i])
+            keep_ctrl.append(ctrl[i])
+            i += 1
+            continue
+        j = i
+        while j < n and order[j] == 1:
+            j += 1
+        pts = np.vstack([ctrl[i:j, 0], ctrl[j - 1, 1][None]])
+        if j - i >= 3:
+            kept = np.asarray(shapely.simplify(shapely.LineString(pts), tol, preserve_topology=False).coords)
+            pts = kept if len(kept) >= 2 else pts[[0, -1]]
+        for a, b in zip(pts[:-1], pts[1:]):
+            keep_order.append(1)
+            keep_ctrl.append(np.array([a, b, b, b]))
+        i = j
+    return CurveSubpath(np.array(keep_order, np.int8), np.array(keep_ctrl), closed)
+
+
+def thin_dense_lines(arts: list[ArtPath]) -> list[ArtPath]:
+    """``arts`` as they are, unless they hold more than :data:`MAX_LINE_SEGMENTS`
+    straight segments: then each run of lines is thinned within
+    :data:`DENSE_TOLERANCE` of the element's size (curves are kept as drawn). A 20,000-
+    point polygon took ~10 minutes to pack (every copy mapped, fitted, verified and
+    written with all 20,000 segments, a 29 MB SVG); thinned, it holds the detail its
+    copies are written with."""
+    def lines(art):
+        if art.source is not None and art.source.curves:
+            return sum(int((c.order == 1).sum()) for c in art.source.curves)
+        return sum(len(p) for p in art.subpaths)
+
+    if sum(lines(a) for a in arts) <= MAX_LINE_SEGMENTS:
+        return arts
+    pts = np.concatenate([np.asarray(p, dtype=float).reshape(-1, 2) for a in arts for p in a.subpaths])
+    tol = DENSE_TOLERANCE * float(np.hypot(*np.ptp(pts, axis=0)))
+    out = []
+    for art in arts:
+        if art.source is not None and art.source.curves:
+            from ..render.curves import flatten_subpath
+
+            curves = tuple(_thin_runs(c.order, c.ctrl, c.closed, tol) for c in art.source.curves)
+            subs = tuple((c.ctrl[:, 0] if c.closed else np.vstack([c.ctrl[:, 0], c.ctrl[-1:, 1]]))
+                         if (c.order == 1).all() else flatten_subpath(c, tol) for c in curves)
+            out.append(dataclasses.replace(art, subpaths=subs,
+                                           source=dataclasses.replace(art.source, curves=curves)))
+        else:
+            subs = []
+            for p, closed in zip(art.subpaths, art.closed):
+                ring = np.vstack([p, p[:1]]) if closed else np.asarray(p)
+                kept = np.asarray(shapely.simplify(shapely.LineString(ring), tol, preserve_topology=False).coords)
+                subs.append(kept[:-1] if closed and len(kept) > 3 else (kept if not closed else np.asarray(p)))
+            out.append(dataclasses.replace(art, subpaths=tuple(subs)))
+    return out
 
 
 def container_from_shapes(
