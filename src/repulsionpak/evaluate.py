@@ -56,9 +56,9 @@ from shapely.geometry import Polygon, box
 from . import metrics as _metrics
 from .errors import ParameterError
 from .geometry.edt import distance_transform
+from .geometry.outline import _polygonal
 from .geometry.robust import overlay
 from .geometry.robust import union_all as robust_union_all
-from .geometry.outline import _polygonal
 from .types import Container, PlacedArt
 
 __all__ = [
