@@ -1010,15 +1010,13 @@ def _style_of(
         sw = 1.0
     if not math.isfinite(sw) or sw < 0:
         sw = 0.0
-    if "non-scaling-stroke" in str(values.get("vector-effect", "")):
-        sw = sw / vp_scale if vp_scale > 0 else sw
+    if "non-scaling-stroke" in str(values.get("vector-effect", "")):  # lengths in the viewport's units
+        to_user = (lambda v: v / vp_scale) if vp_scale > 0 else (lambda v: v)
     else:
-        sw = sw * det_scale
-    stroke_scale = (1.0 / vp_scale if vp_scale > 0 else 1.0) if "non-scaling-stroke" in str(
-        values.get("vector-effect", "")) else det_scale
-    dashes = _dasharray(values.get("stroke-dasharray"))
-    dashes = tuple(d * stroke_scale for d in dashes)
-    offset = _float_attr(values.get("stroke-dashoffset"), 0.0) * stroke_scale if dashes else 0.0
+        to_user = lambda v: v * det_scale  # noqa: E731
+    sw = to_user(sw)
+    dashes = tuple(to_user(d) for d in _dasharray(values.get("stroke-dasharray")))
+    offset = to_user(_float_attr(values.get("stroke-dashoffset"), 0.0)) if dashes else 0.0
     limit = _float_attr(values.get("stroke-miterlimit"), 4.0)
     cap = str(values.get("stroke-linecap", "butt")).strip().lower()
     join = str(values.get("stroke-linejoin", "miter")).strip().lower()
