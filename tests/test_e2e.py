@@ -149,3 +149,19 @@ def test_evaluate_cli_json_agrees_with_library(tmp_path):
     assert data["scp"]["q"][0] == pytest.approx(1 - data["area_fraction"], abs=0.01)
     assert 8.0 / 2 in [pytest.approx(r) for r in data["scp"]["r"]]
     assert (tmp_path / "scp.png").stat().st_size > 5000
+
+
+def test_a_second_sigterm_aborts_like_a_second_ctrl_c():
+    import os
+    import signal
+
+    from repulsionpak.cli import _StopFlag
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with _StopFlag() as stop:
+            os.kill(os.getpid(), sig)
+            assert stop()  # the first: stop after the current iteration
+            with pytest.raises(KeyboardInterrupt):
+                os.kill(os.getpid(), sig)
+                for _ in range(1000):  # the handler runs between bytecodes
+                    pass

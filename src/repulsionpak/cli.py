@@ -148,7 +148,9 @@ class _FrameProgress:
 
 class _StopFlag:
     """SIGINT/SIGTERM handler: the first signal asks the simulation to stop after the
-    current iteration (a partial packing is then written); a second Ctrl-C aborts."""
+    current iteration (a partial packing is then written); a second one aborts (Ctrl-C
+    twice, or ``kill`` twice: a run busy verifying very detailed art would otherwise not
+    end before the verification does)."""
 
     def __init__(self):
         self.stop = False
@@ -156,7 +158,7 @@ class _StopFlag:
 
     def __enter__(self):
         def handler(signum, frame):
-            if self.stop and signum == signal.SIGINT:
+            if self.stop:
                 raise KeyboardInterrupt
             self.stop = True
 
