@@ -631,7 +631,7 @@ def test_bind_points_index_gives_the_same_binding_as_trying_every_triangle(scale
                      verts,  # on vertices: several triangles hold them
                      0.5 * (a + b), (a + b + c) / 3])  # on edges, at centroids
     tri, bary = bind_points(pts, verts, tris)
-    ref_t, ref_b = _bind_all(pts, a, b, c, 64, np.empty(len(pts), np.int32), np.empty((len(pts), 3)))
+    ref_t, ref_b = _bind_all(pts, a, b, c, 64)
     np.testing.assert_array_equal(tri, ref_t)
     np.testing.assert_array_equal(bary, ref_b)
 

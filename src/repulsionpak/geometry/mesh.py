@@ -80,10 +80,10 @@ def bind_points(points: np.ndarray, verts: np.ndarray, tris: np.ndarray,
     verts = np.asarray(verts, dtype=float)
     tris = np.asarray(tris)
     a, b, c = verts[tris[:, 0]], verts[tris[:, 1]], verts[tris[:, 2]]
+    if len(points) == 0 or len(tris) == 0:
+        return _bind_all(points, a, b, c, chunk)
     out_t = np.empty(len(points), np.int32)
     out_b = np.empty((len(points), 3))
-    if len(points) == 0 or len(tris) == 0:
-        return _bind_all(points, a, b, c, chunk, out_t, out_b)
     lo = np.minimum(np.minimum(a, b), c)
     hi = np.maximum(np.maximum(a, b), c)
     # a point outside a triangle by less than 1e-9 of its height still counts as inside:
@@ -103,15 +103,15 @@ def bind_points(points: np.ndarray, verts: np.ndarray, tris: np.ndarray,
     rest = np.ones(len(points), bool)
     rest[pi[first]] = False
     if rest.any():  # beyond the border: the nearest of all triangles
-        t_rest, b_rest = _bind_all(points[rest], a, b, c, chunk, np.empty(int(rest.sum()), np.int32),
-                                   np.empty((int(rest.sum()), 3)))
-        out_t[rest], out_b[rest] = t_rest, b_rest
+        out_t[rest], out_b[rest] = _bind_all(points[rest], a, b, c, chunk)
     return out_t, out_b
 
 
-def _bind_all(points, a, b, c, chunk, out_t, out_b):
+def _bind_all(points, a, b, c, chunk):
     """:func:`bind_points` trying every triangle for every point (chunks of ``chunk``
     points)."""
+    out_t = np.empty(len(points), np.int32)
+    out_b = np.empty((len(points), 3))
     for s in range(0, len(points), chunk):
         p = points[s:s + chunk, None, :]
         bc = barycentric(p, a[None], b[None], c[None])  # (p, T, 3)

@@ -26,6 +26,7 @@ import contextlib
 import dataclasses
 import gzip
 import io
+import itertools
 import math
 import re
 import warnings
@@ -638,7 +639,7 @@ def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:
         return
     matcher = None
     if sheets:
-        import cssselect2
+        import cssselect2  # noqa: PLC0415  (only files with style sheets need it)
         import tinycss2
 
         matcher = cssselect2.Matcher()
@@ -669,8 +670,6 @@ def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:
     todo = {id(el): el for el in inline_marked}
     matched: dict[int, list] = {}
     if matcher is not None:
-        import cssselect2
-
         for w in cssselect2.ElementWrapper.from_xml_root(root).iter_subtree():
             found = matcher.match(w)
             if found:
@@ -1141,7 +1140,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
         attrs = vals.get("attributes") or {}
         return dict(attrs)
 
-    layer_keys = iter(range(1, 1 << 62))
+    layer_keys = itertools.count(1)  # tells the translucent groups of this file apart
 
     def walk(node, opacity: float, hole: bool, groups: tuple, clips: tuple = (), layers: tuple = ()):
         for child in node:
@@ -1532,8 +1531,7 @@ def thin_dense_lines(arts: list[ArtPath]) -> list[ArtPath]:
             from ..render.curves import flatten_subpath
 
             curves = tuple(_thin_runs(c.order, c.ctrl, c.closed, tol) for c in art.source.curves)
-            subs = tuple((c.ctrl[:, 0] if c.closed else np.vstack([c.ctrl[:, 0], c.ctrl[-1:, 1]]))
-                         if (c.order == 1).all() else flatten_subpath(c, tol) for c in curves)
+            subs = tuple(flatten_subpath(c, tol) for c in curves)  # lines: their end points
             out.append(dataclasses.replace(art, subpaths=subs,
                                            source=dataclasses.replace(art.source, curves=curves)))
         else:
@@ -1541,7 +1539,10 @@ def thin_dense_lines(arts: list[ArtPath]) -> list[ArtPath]:
             for p, closed in zip(art.subpaths, art.closed):
                 ring = np.vstack([p, p[:1]]) if closed else np.asarray(p)
                 kept = np.asarray(shapely.simplify(shapely.LineString(ring), tol, preserve_topology=False).coords)
-                subs.append(kept[:-1] if closed and len(kept) > 3 else (kept if not closed else np.asarray(p)))
+                if not closed:
+                    subs.append(kept)
+                else:  # a ring thinned below a triangle stays as it was
+                    subs.append(kept[:-1] if len(kept) > 3 else np.asarray(p))
             out.append(dataclasses.replace(art, subpaths=tuple(subs)))
     return out
 
