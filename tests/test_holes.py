@@ -2,6 +2,7 @@
 away from their host, and the negative space gets more even."""
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -17,6 +18,7 @@ from repulsionpak.holes import HoleLibrary, fill_holes, fill_pockets
 from repulsionpak.io import load_container, load_element
 from repulsionpak.pack import pack
 from repulsionpak.params import Params, params_from_dict
+from repulsionpak.types import PlacedArt
 
 GAP = 12.0
 
@@ -202,3 +204,23 @@ def test_a_long_pocket_gets_as_many_copies_as_it_holds(tmp_path):
     xs = sorted(g.centroid.x for g in big)
     assert xs[0] < 120 and xs[-1] > 13880 and max(np.diff(xs)) < 150  # the whole strip, no hole
     _assert_gap_and_margin(cont, geoms)
+
+
+def test_hole_copies_keep_the_gap_from_their_host_s_island(tmp_path):
+    """A bullseye (a ring with a disc in its hole) is one element: the copy put in its hole
+    must keep the gap from the disc too (it was centred on the disc, inside the art)."""
+    d = "M 2,50 A 48,48 0 1 1 98,50 A 48,48 0 1 1 2,50 Z " \
+        "M 16,50 A 34,34 0 1 0 84,50 A 34,34 0 1 0 16,50 Z " \
+        "M 36,50 A 14,14 0 1 1 64,50 A 14,14 0 1 1 36,50 Z"
+    (tmp_path / "bullseye.svg").write_text(
+        f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><path d="{d}"/></svg>')
+    e = load_element(tmp_path / "bullseye.svg")
+    host = PlacedArt(e.source, "primary", e.paths)
+    gap = 2.0
+    assert len(host.art.geoms) == 2  # the ring and the island
+    extra = fill_holes([host], HoleLibrary.of([e]), gap, np.random.default_rng(0), min_radius=1.0, depth=1)
+    assert extra  # the ring's inside between the disc and the ring holds small copies
+    for c in extra:
+        assert shapely.distance(c.art, host.art) >= gap
+    for a, b in itertools.combinations(extra, 2):
+        assert shapely.distance(a.art, b.art) >= gap

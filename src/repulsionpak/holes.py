@@ -100,10 +100,14 @@ def _written(art: ArtPath, m: np.ndarray, tol: float) -> ArtPath:
 
 
 def _holes(geom) -> list:
+    """``(hole, islands)`` for every hole of ``geom``'s polygons: the hole as a polygon and
+    the other parts of ``geom`` inside it (a bullseye's centre disc, the dot in a ring)."""
+    parts = [p for p in getattr(geom, "geoms", [geom]) if isinstance(p, shapely.Polygon)]
     out = []
-    for p in getattr(geom, "geoms", [geom]):
-        if isinstance(p, shapely.Polygon):
-            out.extend(shapely.Polygon(r) for r in p.interiors)
+    for p in parts:
+        for r in p.interiors:
+            hole = shapely.Polygon(r)
+            out.append((hole, [q for q in parts if q is not p and q.intersects(hole)]))
     return out
 
 
@@ -177,10 +181,12 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
         host, level = queue.pop(0)
         if level >= depth:
             continue
-        for hole in _holes(host):
+        for hole, islands in _holes(host):
             if hole.area < math.pi * min_radius ** 2:
                 continue
             free = hole.buffer(-keep)
+            for g in islands:  # the host's own art inside the hole keeps the gap too
+                free = overlay(shapely.difference, free, g.buffer(keep))
             others = [geoms[j] for j in tree.query(hole)] + added
             for g in others:  # none expected (meshes cover holes); never closer than the gap
                 if g is not host and g.intersects(hole):
