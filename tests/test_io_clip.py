@@ -214,6 +214,36 @@ def test_written_art_is_the_clipped_geometry(tmp_path):
     np.testing.assert_allclose(g.bounds, (10, 10, 90, 90), atol=0.05)
 
 
+def test_clipped_gradient_keeps_its_paint(tmp_path):
+    """A shape painted with a gradient and clipped keeps the gradient (it came out in the
+    gradient's first colour), mapped on the unclipped shape's box as renderers do."""
+    resvg_py = pytest.importorskip("resvg_py")
+    import matplotlib.image as mpimg
+
+    src = _write(tmp_path, "g.svg", (
+        '<defs><linearGradient id="g1"><stop offset="0" stop-color="#f00"/>'
+        '<stop offset="1" stop-color="#00f"/></linearGradient>'
+        '<clipPath id="c1"><circle cx="50" cy="50" r="45"/></clipPath></defs>'
+        '<rect x="0" y="0" width="100" height="100" fill="url(#g1)" stroke="url(#g1)" '
+        'stroke-width="20" clip-path="url(#c1)"/>'))
+    el = load_element(src)
+    assert len(el.paths) == 2 and list(el.paint_servers) == ["g1"]
+    out = tmp_path / "packing.svg"
+    write_packing_svg(out, load_container(src), [PlacedArt(el.source, "primary", el.paths,
+                                                           paint_servers=el.paint_servers)], 1.0)
+    text = out.read_text()
+    written = out.with_name("written.svg")  # the copy alone, without the container's outline
+    written.write_text(text.replace('class="container-region"', 'class="container-region" display="none"'))
+
+    def rgb(path):
+        png = bytes(resvg_py.svg_to_bytes(svg_path=str(path), width=100, height=100))
+        return mpimg.imread(io.BytesIO(png), format="png")[..., :3]
+
+    a, b = rgb(src), rgb(written)
+    assert a[50, 90, 2] > 0.8 and a[50, 10, 0] > 0.8  # the source: red on the left, blue on the right
+    assert np.abs(a[20:80, 20:80] - b[20:80, 20:80]).mean() < 0.02
+
+
 # --------------------------------------------------------------------------- against resvg
 
 

@@ -46,7 +46,7 @@ import shapely
 
 from ..errors import InputError
 from ..geometry.outline import art_area
-from ..types import ArtPath, Style
+from ..types import ArtPath, ShapeSource, Style
 
 __all__ = [
     "ClipChild",
@@ -386,10 +386,17 @@ def polygon_rings(geom) -> list[np.ndarray]:
     return rings
 
 
-def _as_fill(rings: list[np.ndarray], style: Style, colour, alpha: float) -> ArtPath:
+def _as_fill(rings: list[np.ndarray], style: Style, colour, alpha: float,
+             src: ShapeSource | None = None, paint: str | None = None) -> ArtPath:
+    """The clipped part as a filled polygon; a gradient or pattern it was painted with
+    (``paint``, an id) stays, mapped as on the whole shape (``src``'s transform and
+    bounding box: a clip does not change the box a paint's ``objectBoundingBox`` is on)."""
+    source = None
+    if paint is not None and src is not None:
+        source = ShapeSource(curves=(), tag="", matrix=src.matrix, fill_paint=paint, local_bbox=src.local_bbox)
     return ArtPath(tuple(rings), tuple(True for _ in rings),
                    dataclasses.replace(style, fill=colour, fill_opacity=alpha, stroke=None,
-                                       fill_rule="evenodd"))
+                                       fill_rule="evenodd"), source=source)
 
 
 def clip_art(art: ArtPath, region: shapely.Geometry) -> list[ArtPath]:
@@ -407,16 +414,16 @@ def clip_art(art: ArtPath, region: shapely.Geometry) -> list[ArtPath]:
         return [art]
     if not shapely.intersects(painted, region):
         return []
-    st = art.style
+    st, src = art.style, art.source
     out = []
     fill = art_area([ArtPath(art.subpaths, art.closed, dataclasses.replace(st, stroke=None))])
     if not fill.is_empty:
         rings = polygon_rings(_polygonal(shapely.intersection(fill, region)))
         if rings:
-            out.append(_as_fill(rings, st, st.fill, st.fill_opacity))
+            out.append(_as_fill(rings, st, st.fill, st.fill_opacity, src, src and src.fill_paint))
     stroke = art_area([ArtPath(art.subpaths, art.closed, dataclasses.replace(st, fill=None))])
     if not stroke.is_empty:
         rings = polygon_rings(_polygonal(shapely.intersection(stroke, region)))
         if rings:
-            out.append(_as_fill(rings, st, st.stroke, st.stroke_opacity))
+            out.append(_as_fill(rings, st, st.stroke, st.stroke_opacity, src, src and src.stroke_paint))
     return out
