@@ -187,6 +187,36 @@ def test_large_meshes_are_solved_by_lapack_with_the_same_spline():
     W2, _ = tps_weights(twin, pts)
     assert np.all(np.isfinite(W2)) and np.allclose(W2.sum(1), 1)
 
+def test_a_huge_mesh_is_mapped_through_a_subset_of_its_vertices(tmp_path, monkeypatch):
+    """A mesh with more than ``TPS_MAX_CENTRES`` vertices (an element hundreds of gaps
+    across: 182,000 vertices asked for a 248 GB system) gets the spline through that many
+    of them, spread over the skin and the inside; affine maps stay exact and a smooth bend
+    stays close to the spline through every vertex."""
+    from repulsionpak.render import deform
+
+    el = _element(tmp_path, DISC)
+    t = _template(el, 1.0)
+    full = deform.build_plan(t)
+    assert full.centres is None
+    k = len(t.verts) // 3
+    monkeypatch.setattr(deform, "TPS_MAX_CENTRES", k)
+    sub = deform.build_plan(t)
+    c = sub.centres
+    assert len(c) <= k and len(np.unique(c)) == len(c) and sub.R.shape[1] == len(c)
+    assert (c < t.n_skin).sum() >= 0.7 * len(c) and (c >= t.n_skin).sum() > 0
+    # the centres cover the skin evenly: no gap along it wider than 3 of their spacings
+    skin = np.sort(c[c < t.n_skin])
+    assert np.diff(np.r_[skin, skin[0] + t.n_skin]).max() <= 3 * t.n_skin / len(skin)
+    A = np.array([[0.8, 0.3], [-0.2, 1.1]])
+    moved = t.verts @ A.T + [5.0, -7.0]
+    assert np.allclose(sub.apply(moved)[0], sub.points @ A.T + [5.0, -7.0], atol=1e-7)
+    bent = _bend(t.verts)
+    size = float(np.ptp(t.verts, axis=0).max())
+    assert np.abs(sub.apply(bent)[0] - full.apply(bent)[0]).max() <= 2e-3 * size  # 0.11 % here
+    paths, tol = render_copy(t, bent, GAP)  # the whole render path takes the subset plan
+    assert paths and tol > 0
+
+
 # --------------------------------------------------------------------------- fitting
 
 

@@ -219,6 +219,9 @@ class MapPlan:
     1: both end points included). ``t`` (P,) are the samples' segment parameters,
     ``W``/``D`` (P, K) the position and derivative (d/dt) weights, applied to
     ``R @ verts`` (``R`` (K, N): the spline coefficients; None for the barycentric map).
+    ``centres``: the mesh vertices the spline passes through when it is fitted on a
+    subset of a large mesh (:data:`TPS_MAX_CENTRES`); ``R`` then applies to
+    ``verts[centres]``. None: every vertex.
     """
 
     curves: tuple[tuple[CurveSubpath, ...], ...]
@@ -229,10 +232,14 @@ class MapPlan:
     D: np.ndarray
     smooth: bool
     R: np.ndarray | None = None
+    centres: np.ndarray | None = None
 
     def apply(self, verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mapped samples (P, 2) and their derivatives d/dt (P, 2) for deformed ``verts``."""
-        x = verts if self.R is None else self.R @ verts
+        if self.R is None:
+            x = verts
+        else:
+            x = self.R @ (verts if self.centres is None else verts[self.centres])
         return self.W @ x, self.D @ x
 
 
@@ -312,11 +319,42 @@ def build_plan(template, smooth: bool = True, density: float = 8.0, smoothing: f
     points = np.concatenate(pts) if pts else np.zeros((0, 2))
     dirs = np.concatenate(ders) if ders else np.zeros((0, 2))
     t = np.concatenate(ts) if ts else np.zeros(0)
+    centres = None
     if smooth:
-        W, D, R = tps_factors(verts, points, dirs, smoothing=smoothing)
+        if len(verts) > TPS_MAX_CENTRES:
+            centres = spline_centres(verts, template.n_skin, TPS_MAX_CENTRES)
+        W, D, R = tps_factors(verts if centres is None else verts[centres], points, dirs, smoothing=smoothing)
     else:
         (W, D), R = linear_weights(verts, tris, points, dirs), None
-    return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth, R)
+    return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth, R, centres)
+
+
+#: the smooth map of a mesh with more vertices than this (an element hundreds of gaps
+#: across) is the spline through this many of them: the spline's dense system grows as
+#: the square of its centres (182,000 vertices asked for 248 GB) and its solve as the
+#: cube (1,500 centres: ~1 s, once per template)
+TPS_MAX_CENTRES = 1500
+
+
+def spline_centres(verts: np.ndarray, n_skin: int, k: int) -> np.ndarray:
+    """``k`` vertex indices spread over a large mesh: evenly along the skin boundary
+    (``verts[:n_skin]``, three quarters of them: the art lies along it), and one interior
+    vertex per cell of a grid over the rest, sorted."""
+    n = len(verts)
+    nb = min(n_skin, (3 * k) // 4)
+    boundary = np.unique(np.linspace(0, n_skin - 1, nb).round().astype(np.int64))
+    inner = np.arange(n_skin, n)
+    m = k - len(boundary)
+    if len(inner) > m > 0:
+        p = verts[inner]
+        lo, span = p.min(axis=0), np.maximum(np.ptp(p, axis=0), 1e-12)
+        cell = float(np.sqrt(span[0] * span[1] / m)) or 1.0
+        key = np.floor((p - lo) / cell).astype(np.int64)
+        _, first = np.unique(key[:, 0] * (int(key[:, 1].max()) + 1) + key[:, 1], return_index=True)
+        inner = inner[np.sort(first)[:m]]
+    elif m <= 0:
+        inner = inner[:0]
+    return np.concatenate([boundary, inner])
 
 
 _PLANS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()

@@ -90,6 +90,7 @@ class _TemplateDraw:
     """Per template: the rows of its map that the frames use, and how they form paths."""
 
     M: np.ndarray  # (P', N_t) samples as a linear function of the mesh vertices
+    cols: np.ndarray | None = None  # the vertices M applies to (the spline's centres); None: all
     # per art path: (style, [(start, stop, closed), ...]) into the P' rows
     paths: list = field(default_factory=list)
 
@@ -227,7 +228,7 @@ class FrameRenderer:
         idx = np.concatenate(rows) if rows else np.zeros(0, np.int64)
         W = plan.W[idx]
         M = W if plan.R is None else W @ plan.R
-        td = _TemplateDraw(np.ascontiguousarray(M), paths)
+        td = _TemplateDraw(np.ascontiguousarray(M), paths=paths, cols=plan.centres)
         self._templates[index] = td
         return td
 
@@ -260,7 +261,7 @@ class FrameRenderer:
             t = templates[ti]
             td = self._template(ti, t, render_params)
             verts = np.asarray(x, dtype=float)[idx] * unit  # (copies, N_t, 2)
-            q = td.M @ verts  # (copies, P, 2)
+            q = td.M @ (verts if td.cols is None else verts[:, td.cols])  # (copies, P, 2)
             q = (q - self.origin) * self.px_per_unit
             for k, e in enumerate(els):
                 mapped[e] = (t, td, q[k], verts[k])
