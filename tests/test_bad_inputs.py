@@ -166,9 +166,10 @@ def test_cli_reports_one_error_line_and_writes_nothing(case, tmp_path):
         (["--count", "0"], 3, "--count must be >= 1"),
         (["--seed", "-1"], 3, "--seed must be >= 0"),
         (["--max-iterations", "0"], 3, "--max-iterations must be >= 1"),
+        (["--margin", "1e6"], 3, "edge margin (1e+06) leaves no room in the container"),
     ],
     ids=["gap0", "gap-neg", "gap-nan", "gap-inf", "gap-1e9", "gap-300", "count0", "seed-neg",
-         "maxit0"],
+         "maxit0", "margin-1e6"],
 )
 def test_cli_bad_options(tmp_path, options, code, fragment):
     out = tmp_path / "o.svg"
