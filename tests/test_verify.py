@@ -73,6 +73,25 @@ def test_without_repair_violations_are_reported_not_fixed():
     assert out == placed
 
 
+def test_a_stop_ends_the_repair_and_what_still_violates_is_dropped():
+    """Ctrl-C during the verification (``should_stop``): the rounds end where they are,
+    the violators are dropped with a warning that says why, and the promises hold."""
+    placed = [square(30, 30), square(45, 32), square(10, 70), square(-5, 40)]
+    calls = []
+
+    def stop():
+        calls.append(1)
+        return len(calls) > 1  # one round, then stop
+
+    with pytest.warns(UserWarning, match="the repair was stopped"):
+        out, v = verify_and_repair(placed, CONTAINER, gap=5, margin=2.5, min_gap=4.5, should_stop=stop)
+    assert len(calls) == 2 and v.ok and v.dropped
+    check(out, 5, 2.5, 4.5)
+    assert any(p is placed[2] for p in out)  # the element that never violated is kept as is
+    full, w = verify_and_repair(placed, CONTAINER, gap=5, margin=2.5, min_gap=4.5)
+    assert w.ok and not w.dropped and len(full) == 4  # without the stop every one is kept
+
+
 def test_a_secondary_too_close_to_a_primary_gives_way_alone():
     """Of a primary and a secondary too close, only the secondary moves or shrinks (a
     pocket filler never costs the element it fills around); two primaries share."""
@@ -219,3 +238,51 @@ def test_pair_distances_memo_reuses_only_unchanged_pairs():
     assert again.tolist() == pytest.approx([3.0, 4.0, np.hypot(3.0, 4.0)])
     assert len(memo) == 5  # two new entries, the unchanged pair reused
     assert again.tolist() == shapely.distance(g[a], g[b]).tolist()
+
+
+def test_a_stop_during_the_simulation_still_gets_the_full_repair(tmp_path):
+    """The stop flag stays set once the simulation stopped early: the partial packing's
+    verification must still run all its rounds (nothing dropped for the stop)."""
+    import warnings
+
+    from repulsionpak import scenes
+    from repulsionpak.io import load_container, load_element
+    from repulsionpak.pack import pack
+    from repulsionpak.params import params_from_dict
+
+    (tmp_path / "c.svg").write_text(scenes.container_svg("circle", size=400))
+    (tmp_path / "e.svg").write_text(scenes.element_svg("cross"))
+    params = params_from_dict({"gap": 8.0, "seed": 1, "placement": {"count": 12}})
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        packing = pack(load_container(tmp_path / "c.svg"), [load_element(tmp_path / "e.svg")], params,
+                       should_stop=lambda: True)
+    assert packing.partial and packing.verification.ok
+    assert not any("repair was stopped" in str(w.message) for w in caught)
+
+
+def test_a_stop_during_the_verification_marks_the_packing_partial(tmp_path):
+    """Ctrl-C once the simulation is over ends the repair rounds: the packing is written
+    as partial (``stopped_by["verify"]``), its promises kept, no pocket fill after it."""
+    import sys
+
+    from repulsionpak import scenes
+    from repulsionpak.io import load_container, load_element
+    from repulsionpak.pack import pack
+    from repulsionpak.params import params_from_dict
+
+    (tmp_path / "c.svg").write_text(scenes.container_svg("circle", size=400))
+    (tmp_path / "e.svg").write_text(scenes.element_svg("cross"))
+    params = params_from_dict({"gap": 8.0, "seed": 1, "placement": {"count": 12}, "sim": {"max_iterations": 300}})
+    pressed = []
+
+    def stop():  # Ctrl-C pressed when the verification asks for the first time
+        if not pressed and sys._getframe(1).f_code.co_name == "verify_and_repair":
+            pressed.append(1)
+        return bool(pressed)
+
+    with pytest.warns(UserWarning, match="the repair was stopped"):
+        packing = pack(load_container(tmp_path / "c.svg"), [load_element(tmp_path / "e.svg")], params,
+                       should_stop=stop)
+    assert pressed and packing.stopped_by["verify"] == "interrupted" and packing.partial
+    assert packing.stopped_by["primary"] != "interrupted" and packing.verification.ok

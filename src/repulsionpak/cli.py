@@ -148,9 +148,9 @@ class _FrameProgress:
 
 class _StopFlag:
     """SIGINT/SIGTERM handler: the first signal asks the simulation to stop after the
-    current iteration (a partial packing is then written); a second one aborts (Ctrl-C
-    twice, or ``kill`` twice: a run busy verifying very detailed art would otherwise not
-    end before the verification does)."""
+    current iteration (a partial packing is then written), or, once the simulation is
+    over, the verification to end its repair rounds (what still violates is dropped); a
+    second one aborts (Ctrl-C twice, or ``kill`` twice)."""
 
     def __init__(self):
         self.stop = False

@@ -254,10 +254,15 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         limits[limits <= 0] = np.inf
         limits = straighten_limits(packing.model, limits)
         placed, _, straightened = straighten(placed, rest_art(packing.templates, packing.model), limits)
+    # a stop asked for during the verification ends its repair rounds; one asked for
+    # during the simulation does not (the partial packing is repaired in full)
+    stop_repair = None if should_stop is None or should_stop() else should_stop
     packing.placed, packing.verification = verify_and_repair(
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
         min_scale=v.min_scale, repair=v.repair, straightened=straightened,
-        grow_to=v.grow_to * gap, max_scale=v.max_grow)
+        grow_to=v.grow_to * gap, max_scale=v.max_grow, should_stop=stop_repair)
+    if stop_repair is not None and v.repair and stop_repair():
+        packing.stopped_by["verify"] = "interrupted"  # a partial packing (exit 130), promises kept
     packing.seconds["verify"] = time.perf_counter() - t4
     sec = params.secondary
     if (sec.fill_holes or sec.fill_leftover) and secondary and not packing.partial:

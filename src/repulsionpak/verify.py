@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -426,12 +427,14 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
 def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float,
                       min_scale: float = 0.5, rounds: int = 24, repair: bool = True,
                       straightened: list | None = None, grow_to: float = 0.0,
-                      max_scale: float = 1.15
+                      max_scale: float = 1.15, should_stop: Callable[[], bool] | None = None
                       ) -> tuple[list[PlacedArt], Verification]:
     """Check (and, with ``repair``, enforce) the promises on the art of ``placed``.
 
     ``margin`` and ``min_gap`` in container units. Returns the (possibly shrunk, with
-    dropped elements removed) art and the verification of what is returned."""
+    dropped elements removed) art and the verification of what is returned.
+    ``should_stop()`` true ends the repair rounds early (Ctrl-C while very detailed art is
+    repaired): what still violates is then dropped, so the promises hold all the same."""
     region = _polygonal(region)
     boundary = region.boundary
     shapely.prepare(region)
@@ -487,7 +490,11 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 stuck[i] |= mark_stuck
                 place(i)
 
+    stopped = False
     for r in range(rounds if repair else 0):
+        if should_stop is not None and should_stop():
+            stopped = True
+            break
         contacts: dict = {}
         need, rel, push, counts, _, _ = check(contacts=contacts)
         bad = np.flatnonzero(need > 0)
@@ -538,7 +545,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                     place(i)
             if moved:
                 keep_helpful(moved, need, False)
-    if repair and grow_to > 0:  # give back the room the repair (or the simulation) left
+    if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed)
     # final verification, exact, on what is returned
@@ -555,13 +562,15 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not exact[i].is_empty]
     for i, src in dropped:
         if placed[i].kind == "primary":
-            warnings.warn(f"element {i} ({src}) was dropped: moving and shrinking it (to "
-                          f"{min_scale:g} of its size) could not keep the gap and the edge margin",
-                          stacklevel=2)
+            warnings.warn(f"element {i} ({src}) was dropped: " + (
+                "the repair was stopped before it kept the gap and the edge margin" if stopped else
+                f"moving and shrinking it (to {min_scale:g} of its size) could not keep the gap and the "
+                "edge margin"), stacklevel=2)
     n_sec = sum(1 for i, _ in dropped if placed[i].kind != "primary")
     if n_sec:
-        warnings.warn(f"{n_sec} secondary element(s) dropped: their pockets could not hold them "
-                      "a gap away from everything", stacklevel=2)
+        warnings.warn(f"{n_sec} secondary element(s) dropped: " + (
+            "the repair was stopped before they kept the gap" if stopped else
+            "their pockets could not hold them a gap away from everything"), stacklevel=2)
     out, shrunk = [], {}
     for i in range(n):
         if not alive[i]:
