@@ -64,7 +64,7 @@ def letter_svg(ch: str, size: float = 100.0) -> str:
 
     tp = TextPath((0, 0), ch, size=size, prop=FontProperties(family="DejaVu Sans"))
     v = tp.vertices.copy()
-    x0, y0 = v[:, 0].min(), v[:, 1].min()
+    x0 = v[:, 0].min()
     h = v[:, 1].max()
     v[:, 0] -= x0 - 5
     v[:, 1] = h - v[:, 1] + 5  # y down

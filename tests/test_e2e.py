@@ -94,7 +94,6 @@ def test_container_with_two_regions():
     p = pack(container, elements, params_from_dict({"gap": 6.0, "seed": 3, "placement": {"count": 12}}))
     check_packing(container, p.placed, 6.0, 0.40)
     # both regions are used
-    import shapely
 
     per_region = [sum(1 for a in p.placed if ev.art_geometry(a).intersects(r)) for r in container.region.geoms]
     assert min(per_region) >= 3

@@ -4,7 +4,6 @@ the end). Small scenes from the shipped example library."""
 
 from __future__ import annotations
 
-import io
 import json
 import math
 import sys

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import io
 import math
 
 import numpy as np
 import pytest
 import shapely
 
-from curve_scenes import BADGE, DISC, SQUARE, letter_svg
+from curve_scenes import DISC, SQUARE, letter_svg
 from repulsionpak.io import load_element
 from repulsionpak.io.svg_source import arc_to_cubics
 from repulsionpak.params import RenderParams

@@ -24,7 +24,6 @@ segment, so mapping a copy is two small matrix products.
 
 from __future__ import annotations
 
-import math
 import weakref
 from dataclasses import dataclass
 

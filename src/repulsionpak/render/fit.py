@@ -333,7 +333,6 @@ def _try_span(order, q, g, t, a, b, tol, cos_tol, ang_tol, tsx, tsy, us, tex, te
             c[r, 0], c[r, 1] = p3x, p3y
         return 1
     t0x, t0y, t3x, t3y = d0x / n0, d0y / n0, d3x / n3, d3y / n3
-    best_err = 1e300
     # a quadratic when one fits (fewer numbers): control point where the end tangents meet
     det = t0x * t3y - t3x * t0y  # p0 + al·t0 = p3 - be·t3
     if abs(det) > 1e-9:
