@@ -144,9 +144,10 @@ def checked_gap(container: Container, elements: Sequence[Element], params: Param
         raise ParameterError(f"the gap ({gap:g}) is absurdly large for a container of "
                              f"{maxx - minx:g}×{maxy - miny:g} units; use a gap of about 1% of its size")
     margin = margin_of(params, gap)
-    if margin > 0 and shapely.buffer(container.region, -margin, quad_segs=2).is_empty:
-        deepest = max(float(shapely.maximum_inscribed_circle(p, 1e-3 * max(maxx - minx, maxy - miny)).length)
-                      for p in shapely.get_parts(container.region))
+    tol = 1e-3 * max(maxx - minx, maxy - miny)  # the largest inscribed circle to this (ms, any detail)
+    deepest = max((float(shapely.maximum_inscribed_circle(p, tol).length)
+                   for p in shapely.get_parts(container.region) if not p.is_empty), default=0.0)
+    if deepest + tol <= margin:
         raise ParameterError(f"the edge margin ({margin:g}) leaves no room in the container: no point of it is "
                              f"more than {deepest:.4g} from its edge" + ("" if params.margin is not None else
                              " (the margin is half the gap by default: use a smaller gap)"))
