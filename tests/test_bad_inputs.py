@@ -308,7 +308,11 @@ def test_extremely_thin_element_warns(tmp_path):
     with pytest.warns(UserWarning, match=r"hair\.svg: the art is extremely thin \(mean thickness 8\.8e-06"):
         el = load_element(hair)
     assert el.paths[0].style.stroke_width == pytest.approx(0.001)
-    thin = tmp_path / "thin.svg"  # a 1-unit stroke on a 113-unit line is fine
+    line = tmp_path / "line.svg"  # a 0.5-unit stroke on a 113-unit line: copies interlock
+    line.write_text(hair.read_text().replace('stroke-width="0.001"', 'stroke-width="0.5"'))
+    with pytest.warns(UserWarning, match=r"line\.svg: the art is thin line work \(mean thickness 4\.4e-03"):
+        load_element(line)
+    thin = tmp_path / "thin.svg"  # a 1-unit one is fine
     thin.write_text(hair.read_text().replace('stroke-width="0.001"', 'stroke-width="1"'))
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -193,6 +193,12 @@ MIN_RELATIVE_THICKNESS = 1e-6
 #: invisible once packed, and such elements' packings are slow to settle (measured: a
 #: 1e-5 hairline ran to max_iterations; a 0.027 line converged). The readers warn.
 THIN_RELATIVE_THICKNESS = 1e-4
+#: Line art thinner than this (strokes under ~0.6 % of the drawing) packs poorly: copies
+#: interlock while they grow, and the verification drops those it cannot separate (an X
+#: of two strokes, 10 copies in a circle: none dropped at 2 % and 1 %, 5 of 10 at 0.5 %;
+#: docs/algorithm.md "Very thin elements"). The readers say so. The thinnest art of the
+#: suites and examples is 0.05 (a lizard, a thin ring).
+THIN_LINE_RELATIVE_THICKNESS = 6e-3
 
 
 def relative_thickness(geom) -> float:

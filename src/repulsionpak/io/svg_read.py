@@ -40,6 +40,7 @@ import shapely
 
 from ..errors import InputError, ParameterError, RepulsionPakError
 from ..geometry.outline import (
+    THIN_LINE_RELATIVE_THICKNESS,
     THIN_RELATIVE_THICKNESS,
     art_area,
     art_area_problem,
@@ -1691,7 +1692,7 @@ def check_element_area(path, element: Element) -> None:
     filled or stroked, or degenerate shapes such as a path retracing itself): caught
     here, in milliseconds, instead of after a simulation that cannot place it. Art
     thinner than :data:`~repulsionpak.geometry.outline.THIN_RELATIVE_THICKNESS` of its
-    size gets a warning."""
+    size gets a warning, line art thinner than ``THIN_LINE_RELATIVE_THICKNESS`` another."""
     geom = art_area(element.paths)
     problem = art_area_problem(geom)
     if problem is not None:
@@ -1703,6 +1704,13 @@ def check_element_area(path, element: Element) -> None:
             f"the art is extremely thin (mean thickness {t:.1e} of its size): it will be "
             "almost invisible in the packing, and the simulation may not settle; "
             "thicken its strokes",
+        )
+    elif t < THIN_LINE_RELATIVE_THICKNESS:
+        warn(
+            path,
+            f"the art is thin line work (mean thickness {t:.1e} of its size): its copies interlock "
+            "easily, and the final check drops those it cannot separate (a warning names each); "
+            "strokes of 1% of its size or more pack better",
         )
 
 
