@@ -240,39 +240,40 @@ def test_pair_distances_memo_reuses_only_unchanged_pairs():
     assert again.tolist() == shapely.distance(g[a], g[b]).tolist()
 
 
+def _crosses(tmp_path):
+    """A small scene: a circle 400 across and a cross element (12 copies at gap 8)."""
+    from repulsionpak import scenes
+    from repulsionpak.io import load_container, load_element
+
+    (tmp_path / "c.svg").write_text(scenes.container_svg("circle", size=400))
+    (tmp_path / "e.svg").write_text(scenes.element_svg("cross"))
+    return load_container(tmp_path / "c.svg"), [load_element(tmp_path / "e.svg")]
+
+
 def test_a_stop_during_the_simulation_still_gets_the_full_repair(tmp_path):
     """The stop flag stays set once the simulation stopped early: the partial packing's
     verification must still run all its rounds (nothing dropped for the stop)."""
     import warnings
 
-    from repulsionpak import scenes
-    from repulsionpak.io import load_container, load_element
     from repulsionpak.pack import pack
     from repulsionpak.params import params_from_dict
 
-    (tmp_path / "c.svg").write_text(scenes.container_svg("circle", size=400))
-    (tmp_path / "e.svg").write_text(scenes.element_svg("cross"))
     params = params_from_dict({"gap": 8.0, "seed": 1, "placement": {"count": 12}})
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        packing = pack(load_container(tmp_path / "c.svg"), [load_element(tmp_path / "e.svg")], params,
-                       should_stop=lambda: True)
+        packing = pack(*_crosses(tmp_path), params, should_stop=lambda: True)
     assert packing.partial and packing.verification.ok
     assert not any("repair was stopped" in str(w.message) for w in caught)
 
 
 def test_a_stop_during_the_verification_marks_the_packing_partial(tmp_path):
     """Ctrl-C once the simulation is over ends the repair rounds: the packing is written
-    as partial (``stopped_by["verify"]``), its promises kept, no pocket fill after it."""
+    as partial (``stopped_by["verify"]``), its promises kept."""
     import sys
 
-    from repulsionpak import scenes
-    from repulsionpak.io import load_container, load_element
     from repulsionpak.pack import pack
     from repulsionpak.params import params_from_dict
 
-    (tmp_path / "c.svg").write_text(scenes.container_svg("circle", size=400))
-    (tmp_path / "e.svg").write_text(scenes.element_svg("cross"))
     params = params_from_dict({"gap": 8.0, "seed": 1, "placement": {"count": 12}, "sim": {"max_iterations": 300}})
     pressed = []
 
@@ -282,7 +283,6 @@ def test_a_stop_during_the_verification_marks_the_packing_partial(tmp_path):
         return bool(pressed)
 
     with pytest.warns(UserWarning, match="the repair was stopped"):
-        packing = pack(load_container(tmp_path / "c.svg"), [load_element(tmp_path / "e.svg")], params,
-                       should_stop=stop)
+        packing = pack(*_crosses(tmp_path), params, should_stop=stop)
     assert pressed and packing.stopped_by["verify"] == "interrupted" and packing.partial
     assert packing.stopped_by["primary"] != "interrupted" and packing.verification.ok
