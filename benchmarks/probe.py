@@ -1,7 +1,10 @@
 """Random scenes beyond both suites: look for a broken promise where nobody looked yet.
 
 Each scene combines the suites' own element kinds (plus glyphs, most of which neither
-suite uses) with one of their containers, a gap of 0.5–3 % of the container, 5–100
+suite uses, and the probe kinds of :mod:`repulsionpak.scenes` no suite uses: a bullseye
+with a disc in its hole, three separate dots, a spiral, a comb, a lightning bolt, stroked
+line art) with one of their containers (or a crescent, a cross, a target with a disc in
+its ring), a gap of 0.5–3 % of the container, 5–100
 primaries and a drawing scale of 0.01×–100×, all drawn from ``--seed``; each is packed
 and measured exactly as ``benchmarks/contract.py`` does (``scenes.run_scene``, then the
 seven promises). This is how 5-pointed stars at a 0.5 % gap (Q_s(gap/2)/Q_s(0)

@@ -68,12 +68,22 @@ ELEMENT_KINDS: dict[str, str] = {
     "thinring": "holed",
     "pentagon": "convex",
     "ellipse": "convex",
+    # probe kinds (benchmarks/probe.py draws from every kind; no suite uses these): shapes
+    # that found bugs no suite scene had (a bullseye's island, November 27)
+    "bullseye": "holed",
+    "dots": "spiky",
+    "spiral": "thin",
+    "comb": "thin",
+    "zigzag": "spiky",
+    "lineart": "thin",
 }
 #: glyphs whose outline has a counter (a hole)
 _HOLED_GLYPHS = set("ABDOPQRabdegopq&0689")
 CONTAINER_KINDS = ("circle", "square", "star", "band", "holed", "two",
                    # holdout containers (scenes.holdout_suite)
-                   "triangle", "ellipse", "annulus", "ell", "glyph", "hexagon")
+                   "triangle", "ellipse", "annulus", "ell", "glyph", "hexagon",
+                   # probe containers (benchmarks/probe.py)
+                   "crescent", "cross", "target")
 #: the letter the ``glyph`` container is drawn as
 GLYPH_CONTAINER_CHAR = "C"
 #: issue 10: p95 of the distortion per element category
@@ -85,6 +95,8 @@ _COLOURS = {
     "crescent": "#ff9da7", "ring": "#17becf", "glyph": "#333333",
     "heart": "#d62728", "bean": "#8c564b", "gear": "#7f7f7f", "arrow": "#2ca02c", "ell": "#1f77b4",
     "keyhole": "#bcbd22", "thinring": "#9467bd", "pentagon": "#e377c2", "ellipse": "#ff7f0e",
+    "bullseye": "#c33c8a", "dots": "#cc3333", "spiral": "#3366cc", "comb": "#339933",
+    "zigzag": "#ee9900", "lineart": "#222222",
 }
 _GLYPH_PREFIX = "glyph-"
 
@@ -256,6 +268,37 @@ def element_svg(kind: str, size: float = 100.0, scale: float = 1.0, fill: str | 
     elif kind == "ellipse":
         h = s / 3
         body = f'  <ellipse cx="{_num(c)}" cy="{_num(h / 2)}" rx="{_num(r)}" ry="{_num(h / 2)}" {paint}/>'
+    elif kind == "bullseye":
+        # a ring (inner radius 0.7) with a disc (radius 0.35) in its hole: one element
+        body = (f'  <path fill-rule="evenodd" d="{_circle_d(c, c, r)} {_circle_d(c, c, 0.7 * r)} '
+                f'{_circle_d(c, c, 0.35 * r)}" {paint}/>')
+    elif kind == "dots":
+        # three separate discs
+        body = "\n".join(f'  <circle cx="{_num(x * s)}" cy="{_num(y * s)}" r="{_num(q * s)}" {paint}/>'
+                         for x, y, q in ((0.2, 0.2, 0.18), (0.8, 0.25, 0.15), (0.48, 0.78, 0.2)))
+    elif kind == "spiral":
+        # a band 0.09 wide winding 1.6 turns out from the centre
+        t = np.linspace(0.0, 1.0, 120)
+        a, rad = 2 * math.pi * 1.6 * t, (0.1 + 0.34 * t) * s
+        out = np.column_stack([c + (rad + 0.045 * s) * np.cos(a), c + (rad + 0.045 * s) * np.sin(a)])
+        inn = np.column_stack([c + (rad - 0.045 * s) * np.cos(a), c + (rad - 0.045 * s) * np.sin(a)])
+        body = f'  <polygon points="{_pts(np.vstack([out, inn[::-1]]))}" {paint}/>'
+    elif kind == "comb":
+        # a back 0.3 deep and four teeth 0.1 wide
+        pts = [(0, s), (s, s), (s, 0), (0.9 * s, 0), (0.9 * s, 0.7 * s)]
+        for x in (0.675, 0.45, 0.225):
+            pts += [((x + 0.05) * s, 0.7 * s), ((x + 0.05) * s, 0), ((x - 0.05) * s, 0), ((x - 0.05) * s, 0.7 * s)]
+        pts += [(0.1 * s, 0.7 * s), (0.1 * s, 0), (0, 0)]
+        body = f'  <polygon points="{_pts(pts)}" {paint}/>'
+    elif kind == "zigzag":
+        # a lightning bolt
+        pts = [(0.35, 0), (0.75, 0), (0.55, 0.4), (0.8, 0.4), (0.25, 1.0), (0.4, 0.55), (0.15, 0.55)]
+        body = f'  <polygon points="{_pts([(x * s, y * s) for x, y in pts])}" {paint}/>'
+    elif kind == "lineart":
+        # an open quadratic stroked 0.06 wide with round caps (no fill)
+        body = (f'  <path d="M {_num(0.1 * s)} {_num(0.9 * s)} Q {_num(c)} {_num(-0.3 * s)} {_num(0.9 * s)} '
+                f'{_num(0.9 * s)}" fill="none" stroke="{colour}" stroke-width="{_num(0.06 * s)}" '
+                f'stroke-linecap="round"/>')
     else:  # ring
         body = (f'  <path fill-rule="evenodd" d="{_circle_d(c, c, r)} {_circle_d(c, c, 0.6 * r)}" {paint}/>')
     return _svg(w, h, body)
@@ -377,6 +420,21 @@ def container_svg(kind: str, size: float = 1000.0, scale: float = 1.0) -> str:
         w, h = float(m.group(1)), float(m.group(2))
         d = re.search(r' d="([^"]+)"', g).group(1)
         body = f'  <path fill-rule="evenodd" d="{d}" {style}/>'
+    elif kind == "crescent":
+        # the crescent element's outline (two arcs; horns tapering to points)
+        g = element_svg("crescent", s)
+        m = re.search(r'width="([^"]+)" height="([^"]+)"', g)
+        w, h = float(m.group(1)), float(m.group(2))
+        d = re.search(r' d="([^"]+)"', g).group(1)
+        body = f'  <path d="{d}" {style}/>'
+    elif kind == "cross":
+        a, b = 0.35 * s, 0.65 * s
+        pts = [(a, 0), (b, 0), (b, a), (s, a), (s, b), (b, b), (b, s), (a, s), (a, b), (0, b), (0, a), (a, a)]
+        body = f'  <polygon points="{_pts(pts)}" {style}/>'
+    elif kind == "target":
+        # a ring (inner radius 0.66) and a disc (0.36) in its hole: two regions, one inside the other
+        body = (f'  <path fill-rule="evenodd" d="{_circle_d(c, c, r)} {_circle_d(c, c, 0.66 * r)} '
+                f'{_circle_d(c, c, 0.36 * r)}" {style}/>')
     else:
         raise ParameterError(f"unknown container kind {kind!r}; known: {', '.join(CONTAINER_KINDS)}")
     return _svg(w, h, body)
