@@ -14,6 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from repulsionpak.errors import InputError, ParameterError
+from repulsionpak.geometry.outline import art_area
 from repulsionpak.io import (
     load_container,
     load_element,
@@ -141,12 +142,17 @@ def test_use_of_another_file_is_not_drawn_and_says_so(tmp_path):
     assert len(el.paths) == 1
 
 
-def test_markers_are_reported_not_drawn(tmp_path):
+def test_markers_are_drawn_once_where_they_are_used(tmp_path):
+    """The marker's content is drawn at the line's end (test_io_markers.py has the rest),
+    not on its own where it is defined."""
     body = ('<defs><marker id="a" viewBox="0 0 10 10" refX="5" refY="5"><path d="M0 0 L10 5 L0 10 z"/></marker></defs>'
             '<path d="M10 50 L90 50" stroke="#000" stroke-width="4" marker-end="url(#a)"/>')
-    with pytest.warns(UserWarning, match="m.svg: skipped unsupported content: markers"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
         el = load_element(_write(tmp_path, "m.svg", _svg(body)))
-    assert len(el.paths) == 1  # the line; the marker's own path is not drawn on its own either
+    assert len(el.paths) == 2
+    head = art_area(el.paths[1:])
+    assert head.bounds == pytest.approx((84, 44, 96, 56), abs=1e-6)  # 3 × 4 units square at (90, 50)
 
 
 def test_no_viewbox_means_px_user_units(tmp_path):

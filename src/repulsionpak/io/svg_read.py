@@ -48,6 +48,7 @@ from ..geometry.outline import (
 )
 from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
+from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
 
 __all__ = [
     "MAX_FILE_BYTES",
@@ -1151,9 +1152,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                     notes.add("filter")
                 if "mask" in attrs:
                     notes.add("mask (ignored, shape drawn unmasked)")
-                if any(str(child.values.get(k) or "").strip().lower().startswith("url(")
-                       for k in ("marker-start", "marker-mid", "marker-end", "marker")):
-                    notes.add("markers (arrowheads and the like are not drawn)")
+                markers = marker_ids(child.values) if type(child).__name__ in MARKABLE else {}
                 m = child.transform * inv_viewport
                 mat = _matrix_to_np(m)
                 det_scale = math.sqrt(
@@ -1170,6 +1169,13 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                     SvgShape(segs, mat, style, hole or _is_hole(attrs), attrs, groups,
                              clips + own_clips, vis in ("hidden", "collapse"), node=child)
                 )
+                if markers:  # drawn after the shape, with its opacity, groups and clips
+                    for kind, mid in markers.items():
+                        for sh in marker_shapes(mid, kind, child, segs, mat, style, op):
+                            shapes.append(dataclasses.replace(
+                                sh, groups=groups, clips=clips + own_clips,
+                                hidden=sh.hidden or vis in ("hidden", "collapse"),
+                                style=dataclasses.replace(sh.style, layers=layers) if layers else sh.style))
             elif isinstance(child, (se.Group, se.Use)):
                 attrs = own(child)
                 if "filter" in attrs:
@@ -1189,6 +1195,38 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 notes.add("text")
             elif isinstance(child, se.Image):
                 notes.add("image")
+
+    ids = {el.get("id"): el for el in root_xml.iter() if isinstance(el.tag, str) and el.get("id")}
+
+    def marker_shapes(mid, kind, child, segs, mat, style, op) -> list[SvgShape]:
+        """The shapes ``kind`` (marker-start/-mid/-end) ``mid`` puts on ``child`` (see
+        :mod:`.svg_markers`), in file user units."""
+        el = ids.get(mid)
+        if el is None or _local(el.tag) != "marker":
+            notes.add(f"{kind} naming no <marker> ({mid})")
+            return []
+        sw = child.stroke_width if child.stroke_width is not None else 1.0
+        try:
+            sw = float(sw)
+        except (TypeError, ValueError):
+            sw = 1.0
+        mats = [mat @ t for t in placements(segs, el, kind, sw)]
+        if not mats:
+            return []
+        data = marker_svg(el, mats, style.fill or "none", style.stroke or "none")
+        mdoc = se.SVG.parse(io.BytesIO(data), reify=False, on_error="ignore")
+        out: list[SvgShape] = []
+        for c in mdoc.elements():
+            if not isinstance(c, se.Shape):
+                continue
+            cm = _matrix_to_np(c.transform)
+            ds = math.sqrt(abs(cm[0, 0] * cm[1, 1] - cm[0, 1] * cm[1, 0]))
+            cst = _style_of(c, op * _clamp01(_float_attr(own(c).get("opacity"), 1.0)), ds, vp_scale,
+                            gradients, notes)
+            vis = str(c.values.get("visibility", "visible")).strip().lower()
+            out.append(SvgShape(list(c.segments(transformed=False)), cm, cst, False, own(c),
+                                hidden=vis in ("hidden", "collapse"), node=c))
+        return out
 
     root_own = own(doc)
     # a clip-path on the root <svg> is in the file's user units (as resvg draws it)

@@ -1,0 +1,196 @@
+"""Markers (``marker-start``, ``marker-mid``, ``marker-end``: arrowheads, dots on the
+vertices of a line) drawn as the art they put on a path, as browsers draw them.
+
+A ``<marker>``'s content is placed at a vertex of the path, line, polyline or polygon
+that refers to it: its reference point (``refX``, ``refY`` in its ``viewBox``) on the
+vertex, turned to the path's direction there (``orient="auto"``: the tangent at the start
+and the end, the bisector of the two tangents at a middle vertex; ``auto-start-reverse``;
+a fixed angle), scaled by the stroke width (``markerUnits="strokeWidth"``, the default)
+and by its ``viewBox`` into ``markerWidth`` × ``markerHeight`` (``preserveAspectRatio``).
+``context-fill`` and ``context-stroke`` take the referring shape's paint. The content is
+not clipped to the marker's viewport (``overflow: hidden``); most arrowheads fit in it.
+
+:func:`marker_ids` tells which markers a shape uses, :func:`placements` where their
+copies go, and :func:`marker_svg` writes a marker's content as a small SVG document whose
+shapes the reader parses like any others.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+__all__ = ["MARKABLE", "marker_ids", "placements", "marker_svg"]
+
+#: the shapes markers are drawn on (SVG 2: path, line, polyline, polygon)
+MARKABLE = ("Path", "SimpleLine", "Polyline", "Polygon")
+_URL = re.compile(r"\s*url\(\s*['\"]?#([^'\")\s]+)['\"]?\s*\)\s*$")
+_KINDS = ("marker-start", "marker-mid", "marker-end")
+#: attributes of <marker> itself that are not presentation attributes its content inherits
+_OWN = {"id", "refX", "refY", "markerWidth", "markerHeight", "markerUnits", "orient", "viewBox",
+        "preserveAspectRatio", "overflow", "class"}
+
+
+def _url_id(value) -> str | None:
+    m = _URL.match(str(value)) if value else None
+    return m.group(1) if m else None
+
+
+def marker_ids(values) -> dict[str, str]:
+    """``{"marker-start" | "marker-mid" | "marker-end": id}`` of a shape's resolved
+    presentation values (the ``marker`` shorthand sets all three)."""
+    both = _url_id(values.get("marker"))
+    out = {}
+    for k in _KINDS:
+        v = _url_id(values.get(k)) or both
+        if v:
+            out[k] = v
+    return out
+
+
+def _xy(p) -> np.ndarray:
+    return np.array([float(p.x), float(p.y)])
+
+
+def _tangents(seg) -> tuple[np.ndarray, np.ndarray]:
+    """Directions of an svgelements segment at its start and its end (zero vectors when
+    it has no length)."""
+    a, b = _xy(seg.start), _xy(seg.end)
+    name = type(seg).__name__
+    if name == "CubicBezier":
+        c1, c2 = _xy(seg.control1), _xy(seg.control2)
+        d0 = next((v for v in (c1 - a, c2 - a, b - a) if np.hypot(*v) > 0), b - a)
+        d1 = next((v for v in (b - c2, b - c1, b - a) if np.hypot(*v) > 0), b - a)
+        return d0, d1
+    if name == "QuadraticBezier":
+        c = _xy(seg.control)
+        d0 = c - a if np.hypot(*(c - a)) > 0 else b - a
+        d1 = b - c if np.hypot(*(b - c)) > 0 else b - a
+        return d0, d1
+    if name == "Arc":
+        e = 1e-4
+        return _xy(seg.point(e)) - a, b - _xy(seg.point(1.0 - e))
+    return b - a, b - a  # Line, Close
+
+
+def _angle(v) -> float | None:
+    return math.atan2(v[1], v[0]) if v is not None and np.hypot(*v) > 0 else None
+
+
+def _vertices(segs) -> list[tuple[np.ndarray, float | None, float | None]]:
+    """The path's vertices ``(point, angle in, angle out)`` in order (radians; None where
+    no segment arrives or leaves)."""
+    verts: list[list] = []
+    for seg in segs:
+        name = type(seg).__name__
+        if name == "Move":
+            if seg.end is not None:
+                verts.append([_xy(seg.end), None, None])
+            continue
+        if seg.start is None or seg.end is None:
+            continue
+        d0, d1 = _tangents(seg)
+        if verts and verts[-1][2] is None:
+            verts[-1][2] = d0
+        verts.append([_xy(seg.end), d1, None])
+    return [(p, _angle(i), _angle(o)) for p, i, o in verts]
+
+
+def _number(el, name, default: float) -> float:
+    try:
+        v = float(str(el.get(name, default)).strip().rstrip("px") or default)
+    except ValueError:
+        return default
+    return v if math.isfinite(v) else default
+
+
+def _viewbox(el) -> np.ndarray:
+    """(3, 3) map from the marker's content coordinates to its viewport (``viewBox`` and
+    ``preserveAspectRatio`` into ``markerWidth`` × ``markerHeight``)."""
+    w, h = _number(el, "markerWidth", 3.0), _number(el, "markerHeight", 3.0)
+    vb = [float(x) for x in re.split(r"[\s,]+", (el.get("viewBox") or "").strip()) if x] \
+        if el.get("viewBox") else []
+    if len(vb) != 4 or not (vb[2] > 0 and vb[3] > 0):
+        return np.eye(3)
+    x, y, vw, vh = vb
+    par = (el.get("preserveAspectRatio") or "xMidYMid meet").split()
+    align = par[0] if par else "xMidYMid"
+    sx, sy = w / vw, h / vh
+    if align != "none":
+        s = max(sx, sy) if (len(par) > 1 and par[1] == "slice") else min(sx, sy)
+        sx = sy = s
+    tx, ty = -x * sx, -y * sy
+    if align != "none":
+        fx = {"xMin": 0.0, "xMid": 0.5, "xMax": 1.0}.get(align[:4], 0.5)
+        fy = {"YMin": 0.0, "YMid": 0.5, "YMax": 1.0}.get(align[4:], 0.5)
+        tx += fx * (w - vw * sx)
+        ty += fy * (h - vh * sy)
+    return np.array([[sx, 0.0, tx], [0.0, sy, ty], [0.0, 0.0, 1.0]])
+
+
+def placements(segs, marker: ET.Element, kind: str, stroke_width: float) -> list[np.ndarray]:
+    """(3, 3) matrices from ``marker``'s content coordinates to the shape's local ones,
+    one per vertex it is drawn on (``kind``: marker-start, -mid or -end)."""
+    verts = _vertices(segs)
+    if not verts:
+        return []
+    if kind == "marker-start":
+        chosen = [(verts[0], "start")]
+    elif kind == "marker-end":
+        chosen = [(verts[-1], "end")]
+    else:
+        chosen = [(v, "mid") for v in verts[1:-1]]
+    units = (marker.get("markerUnits") or "strokeWidth").strip()
+    k = stroke_width if units == "strokeWidth" else 1.0
+    vb = _viewbox(marker)
+    ref = vb @ np.array([_number(marker, "refX", 0.0), _number(marker, "refY", 0.0), 1.0])
+    orient = (marker.get("orient") or "0").strip()
+    out = []
+    for (p, a_in, a_out), where in chosen:
+        if orient in ("auto", "auto-start-reverse"):
+            if where == "start":
+                a = a_out if a_out is not None else 0.0
+                if orient == "auto-start-reverse":
+                    a += math.pi
+            elif where == "end":
+                a = a_in if a_in is not None else 0.0
+            elif a_in is None or a_out is None:
+                a = a_in if a_out is None else a_out
+                a = a or 0.0
+            else:  # the bisector of the two directions
+                a = math.atan2(math.sin(a_in) + math.sin(a_out), math.cos(a_in) + math.cos(a_out))
+        else:
+            try:
+                a = math.radians(float(orient.removesuffix("deg")))
+            except ValueError:
+                a = 0.0
+        c, s = math.cos(a), math.sin(a)
+        place = np.array([[c * k, -s * k, p[0]], [s * k, c * k, p[1]], [0.0, 0.0, 1.0]])
+        shift = np.array([[1.0, 0.0, -ref[0]], [0.0, 1.0, -ref[1]], [0.0, 0.0, 1.0]])
+        out.append(place @ shift @ vb)
+    return out
+
+
+def _svg_matrix(m: np.ndarray) -> str:
+    return "matrix(" + " ".join(repr(float(v)) for v in (m[0, 0], m[1, 0], m[0, 1], m[1, 1], m[0, 2], m[1, 2])) + ")"
+
+
+def marker_svg(marker: ET.Element, matrices: list[np.ndarray], context_fill: str, context_stroke: str) -> bytes:
+    """A small SVG document drawing ``marker``'s content once per matrix (content ->
+    the file's user units), its own presentation attributes inherited, ``context-fill``
+    and ``context-stroke`` replaced by the referring shape's paints."""
+    ns = "http://www.w3.org/2000/svg"
+    inherited = {k: v for k, v in marker.attrib.items() if k not in _OWN and not k.startswith("{")}
+    body = "".join(ET.tostring(c, encoding="unicode") for c in marker if isinstance(c.tag, str))
+    body = body.replace("context-stroke", context_stroke).replace("context-fill", context_fill)
+    attrs = "".join(f' {k}="{_escape(v)}"' for k, v in inherited.items())
+    attrs = attrs.replace("context-stroke", context_stroke).replace("context-fill", context_fill)
+    groups = "".join(f'<g transform="{_svg_matrix(m)}"><g{attrs}>{body}</g></g>' for m in matrices)
+    return (f'<svg xmlns="{ns}" xmlns:xlink="http://www.w3.org/1999/xlink">{groups}</svg>').encode()
+
+
+def _escape(v: str) -> str:
+    return str(v).replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;")
