@@ -349,6 +349,12 @@ def glyph_svg(char: str, size: float = 100.0, scale: float = 1.0, fill: str | No
     return _svg(x1 - x0, y1 - y0, body)
 
 
+def _size_and_d(svg_text: str) -> tuple[float, float, str]:
+    """Width, height and the (first) path data of an SVG text written by this module."""
+    m = re.search(r'width="([^"]+)" height="([^"]+)"', svg_text)
+    return float(m.group(1)), float(m.group(2)), re.search(r' d="([^"]+)"', svg_text).group(1)
+
+
 def container_svg(kind: str, size: float = 1000.0, scale: float = 1.0) -> str:
     """SVG text of a container whose larger side is ``size × scale`` user units.
 
@@ -413,19 +419,12 @@ def container_svg(kind: str, size: float = 1000.0, scale: float = 1.0) -> str:
         w, h = float(pts[:, 0].max()), float(pts[:, 1].max())
         body = f'  <polygon points="{_pts(pts)}" {style}/>'
     elif kind == "glyph":
-        m = re.search(r'width="([^"]+)" height="([^"]+)"', glyph_svg(GLYPH_CONTAINER_CHAR, 100.0))
-        k = s / max(float(m.group(1)), float(m.group(2)))  # the glyph's larger side is s
-        g = glyph_svg(GLYPH_CONTAINER_CHAR, 100.0 * k)
-        m = re.search(r'width="([^"]+)" height="([^"]+)"', g)
-        w, h = float(m.group(1)), float(m.group(2))
-        d = re.search(r' d="([^"]+)"', g).group(1)
+        w, h, _ = _size_and_d(glyph_svg(GLYPH_CONTAINER_CHAR, 100.0))
+        w, h, d = _size_and_d(glyph_svg(GLYPH_CONTAINER_CHAR, 100.0 * s / max(w, h)))  # larger side s
         body = f'  <path fill-rule="evenodd" d="{d}" {style}/>'
     elif kind == "crescent":
         # the crescent element's outline (two arcs; horns tapering to points)
-        g = element_svg("crescent", s)
-        m = re.search(r'width="([^"]+)" height="([^"]+)"', g)
-        w, h = float(m.group(1)), float(m.group(2))
-        d = re.search(r' d="([^"]+)"', g).group(1)
+        w, h, d = _size_and_d(element_svg("crescent", s))
         body = f'  <path d="{d}" {style}/>'
     elif kind == "cross":
         a, b = 0.35 * s, 0.65 * s

@@ -167,7 +167,8 @@ def _np_matrix(m) -> np.ndarray:
     return np.array([[m.a, m.c, m.e], [m.b, m.d, m.f], [0.0, 0.0, 1.0]], dtype=float)
 
 
-def _clip_id(value) -> str | None:
+def url_id(value) -> str | None:
+    """The id of a ``url(#id)`` reference (a clip-path, a marker ...), or None."""
     m = _URL.match(str(value)) if value else None
     return m.group(1) if m else None
 
@@ -193,7 +194,7 @@ def clip_defs(doc, inv_viewport, notes: set[str]) -> dict[str, ClipDef]:
                         list(child.segments(transformed=False)),
                         inv_clip @ _np_matrix(child.transform * inv_viewport),
                         "evenodd" if rule == "evenodd" else "nonzero",
-                        _clip_id(vals.get("clip-path")),
+                        url_id(vals.get("clip-path")),
                     )
                 )
             elif isinstance(child, (se.Group, se.Use)):
@@ -212,7 +213,7 @@ def clip_defs(doc, inv_viewport, notes: set[str]) -> dict[str, ClipDef]:
         cd = ClipDef(
             str(key),
             units == "objectBoundingBox",
-            clip_id_of_clip=_clip_id((obj.values or {}).get("clip-path")),
+            clip_id_of_clip=url_id((obj.values or {}).get("clip-path")),
             matrix=clip_m,
         )
         if np.all(np.isfinite(clip_m)) and abs(np.linalg.det(clip_m)) > 0:

@@ -23,29 +23,25 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from .svg_clip import url_id
+
 __all__ = ["MARKABLE", "marker_ids", "placements", "marker_svg"]
 
 #: the shapes markers are drawn on (SVG 2: path, line, polyline, polygon)
 MARKABLE = ("Path", "SimpleLine", "Polyline", "Polygon")
-_URL = re.compile(r"\s*url\(\s*['\"]?#([^'\")\s]+)['\"]?\s*\)\s*$")
 _KINDS = ("marker-start", "marker-mid", "marker-end")
 #: attributes of <marker> itself that are not presentation attributes its content inherits
 _OWN = {"id", "refX", "refY", "markerWidth", "markerHeight", "markerUnits", "orient", "viewBox",
         "preserveAspectRatio", "overflow", "class"}
 
 
-def _url_id(value) -> str | None:
-    m = _URL.match(str(value)) if value else None
-    return m.group(1) if m else None
-
-
 def marker_ids(values) -> dict[str, str]:
     """``{"marker-start" | "marker-mid" | "marker-end": id}`` of a shape's resolved
     presentation values (the ``marker`` shorthand sets all three)."""
-    both = _url_id(values.get("marker"))
+    both = url_id(values.get("marker"))
     out = {}
     for k in _KINDS:
-        v = _url_id(values.get(k)) or both
+        v = url_id(values.get(k)) or both
         if v:
             out[k] = v
     return out
@@ -110,25 +106,15 @@ def _number(el, name, default: float) -> float:
 def _viewbox(el) -> np.ndarray:
     """(3, 3) map from the marker's content coordinates to its viewport (``viewBox`` and
     ``preserveAspectRatio`` into ``markerWidth`` × ``markerHeight``)."""
+    import svgelements as se
+
     w, h = _number(el, "markerWidth", 3.0), _number(el, "markerHeight", 3.0)
     vb = [float(x) for x in re.split(r"[\s,]+", (el.get("viewBox") or "").strip()) if x] \
         if el.get("viewBox") else []
     if len(vb) != 4 or not (vb[2] > 0 and vb[3] > 0):
         return np.eye(3)
-    x, y, vw, vh = vb
-    par = (el.get("preserveAspectRatio") or "xMidYMid meet").split()
-    align = par[0] if par else "xMidYMid"
-    sx, sy = w / vw, h / vh
-    if align != "none":
-        s = max(sx, sy) if (len(par) > 1 and par[1] == "slice") else min(sx, sy)
-        sx = sy = s
-    tx, ty = -x * sx, -y * sy
-    if align != "none":
-        fx = {"xMin": 0.0, "xMid": 0.5, "xMax": 1.0}.get(align[:4], 0.5)
-        fy = {"YMin": 0.0, "YMid": 0.5, "YMax": 1.0}.get(align[4:], 0.5)
-        tx += fx * (w - vw * sx)
-        ty += fy * (h - vh * sy)
-    return np.array([[sx, 0.0, tx], [0.0, sy, ty], [0.0, 0.0, 1.0]])
+    m = se.Matrix(se.Viewbox.viewbox_transform(0.0, 0.0, w, h, *vb, el.get("preserveAspectRatio")))
+    return np.array([[m.a, m.c, m.e], [m.b, m.d, m.f], [0.0, 0.0, 1.0]])
 
 
 def placements(segs, marker: ET.Element, kind: str, stroke_width: float) -> list[np.ndarray]:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import gzip
 import io
 import itertools
@@ -998,19 +999,29 @@ def _comma_colour(s: str) -> str:
     return f"{fn.lower()}a({a},{b},{c},{alpha})"
 
 
+def _stroke_width(shape) -> float:
+    """A shape's ``stroke-width`` in its own coordinates (1 when unset or unreadable, 0
+    when negative or not finite)."""
+    sw = shape.stroke_width if shape.stroke_width is not None else 1.0
+    try:
+        sw = float(sw)
+    except (TypeError, ValueError):
+        return 1.0
+    return sw if math.isfinite(sw) and sw >= 0 else 0.0
+
+
+def _det_scale(mat: np.ndarray) -> float:
+    """The length scale of the (3, 3) affine ``mat``: sqrt(|det|) of its linear part."""
+    return math.sqrt(abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0]))
+
+
 def _style_of(
     shape, opacity: float, det_scale: float, vp_scale: float, gradients, notes
 ) -> Style:
     values = shape.values
     fill, fill_alpha = _paint(values.get("fill", "black"), gradients, notes)
     stroke, stroke_alpha = _paint(values.get("stroke", "none"), gradients, notes)
-    sw = shape.stroke_width if shape.stroke_width is not None else 1.0
-    try:
-        sw = float(sw)
-    except (TypeError, ValueError):
-        sw = 1.0
-    if not math.isfinite(sw) or sw < 0:
-        sw = 0.0
+    sw = _stroke_width(shape)
     if "non-scaling-stroke" in str(values.get("vector-effect", "")):  # lengths in the viewport's units
         to_user = (lambda v: v / vp_scale) if vp_scale > 0 else (lambda v: v)
     else:
@@ -1155,9 +1166,7 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 markers = marker_ids(child.values) if type(child).__name__ in MARKABLE else {}
                 m = child.transform * inv_viewport
                 mat = _matrix_to_np(m)
-                det_scale = math.sqrt(
-                    abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0])
-                )
+                det_scale = _det_scale(mat)
                 op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
                 style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
                 if layers:
@@ -1196,21 +1205,19 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
             elif isinstance(child, se.Image):
                 notes.add("image")
 
-    ids = {el.get("id"): el for el in root_xml.iter() if isinstance(el.tag, str) and el.get("id")}
+    @functools.cache
+    def markers_by_id() -> dict:  # built when a shape first uses a marker
+        return {el.get("id"): el for el in root_xml.iter()
+                if isinstance(el.tag, str) and _local(el.tag) == "marker" and el.get("id")}
 
     def marker_shapes(mid, kind, child, segs, mat, style, op) -> list[SvgShape]:
         """The shapes ``kind`` (marker-start/-mid/-end) ``mid`` puts on ``child`` (see
         :mod:`.svg_markers`), in file user units."""
-        el = ids.get(mid)
-        if el is None or _local(el.tag) != "marker":
+        el = markers_by_id().get(mid)
+        if el is None:
             notes.add(f"{kind} naming no <marker> ({mid})")
             return []
-        sw = child.stroke_width if child.stroke_width is not None else 1.0
-        try:
-            sw = float(sw)
-        except (TypeError, ValueError):
-            sw = 1.0
-        mats = [mat @ t for t in placements(segs, el, kind, sw)]
+        mats = [mat @ t for t in placements(segs, el, kind, _stroke_width(child))]
         if not mats:
             return []
         data = marker_svg(el, mats, style.fill or "none", style.stroke or "none")
@@ -1220,9 +1227,8 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
             if not isinstance(c, se.Shape):
                 continue
             cm = _matrix_to_np(c.transform)
-            ds = math.sqrt(abs(cm[0, 0] * cm[1, 1] - cm[0, 1] * cm[1, 0]))
-            cst = _style_of(c, op * _clamp01(_float_attr(own(c).get("opacity"), 1.0)), ds, vp_scale,
-                            gradients, notes)
+            cst = _style_of(c, op * _clamp01(_float_attr(own(c).get("opacity"), 1.0)), _det_scale(cm),
+                            vp_scale, gradients, notes)
             vis = str(c.values.get("visibility", "visible")).strip().lower()
             out.append(SvgShape(list(c.segments(transformed=False)), cm, cst, False, own(c),
                                 hidden=vis in ("hidden", "collapse"), node=c))
