@@ -167,9 +167,14 @@ def test_cli_reports_one_error_line_and_writes_nothing(case, tmp_path):
         (["--seed", "-1"], 3, "--seed must be >= 0"),
         (["--max-iterations", "0"], 3, "--max-iterations must be >= 1"),
         (["--margin", "1e6"], 3, "edge margin (1e+06) leaves no room in the container"),
+        # the circle is 460 units across: a 0.05 gap needs ~66 million vertices (it used to
+        # try: ~460,000 elements placed for minutes, deaf to SIGTERM); a 1e-9 gap stopped
+        # in the container's flattening with a message about points
+        (["--gap", "0.05"], 3, "is too fine: its meshes would need about 66,"),
+        (["--gap", "1e-9"], 3, "use a gap of at least 0.4"),
     ],
     ids=["gap0", "gap-neg", "gap-nan", "gap-inf", "gap-1e9", "gap-300", "count0", "seed-neg",
-         "maxit0", "margin-1e6"],
+         "maxit0", "margin-1e6", "gap-too-fine", "gap-1e-9"],
 )
 def test_cli_bad_options(tmp_path, options, code, fragment):
     out = tmp_path / "o.svg"
@@ -470,3 +475,22 @@ def test_unpainted_helper_next_to_a_painted_outline_warns(tmp_path):
                       r"count as container geometry and add 65% of its area"):
         c = load_container(p)
     assert c.area == pytest.approx(576.0)
+
+
+def test_too_fine_a_gap_is_refused_before_anything_is_built_unless_the_limit_is_raised():
+    import dataclasses
+    import time
+
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.pack import check_fineness, pack
+    from repulsionpak.params import Params
+
+    cont = load_container(CIRCLE)
+    params = dataclasses.replace(Params(), gap=0.3)  # ~1.85 million vertices
+    t = time.perf_counter()
+    with pytest.raises(errors.ParameterError, match=r"too fine.*1,84\d,\d+ vertices.*max_vertices = 1,000,000"):
+        pack(cont, load_elements([APPLE]), params)
+    assert time.perf_counter() - t < 5
+    raised = dataclasses.replace(params, placement=dataclasses.replace(params.placement, max_vertices=2_000_000))
+    check_fineness(cont, 0.3, raised)  # the user's choice: no error
+    check_fineness(cont, 4.6, Params())  # 1% of the circle: ~7,900 vertices

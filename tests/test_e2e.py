@@ -158,9 +158,26 @@ def test_a_second_sigterm_aborts_like_a_second_ctrl_c():
 
     for sig in (signal.SIGINT, signal.SIGTERM):
         with _StopFlag() as stop:
+            assert not stop()  # the simulation asks: it has started
             os.kill(os.getpid(), sig)
             assert stop()  # the first: stop after the current iteration
             with pytest.raises(KeyboardInterrupt):
                 os.kill(os.getpid(), sig)
                 for _ in range(1000):  # the handler runs between bytecodes
+                    pass
+
+
+def test_a_signal_before_the_simulation_aborts_at_once():
+    """While the inputs are read, meshed and placed there is nothing to write: the first
+    Ctrl-C or SIGTERM ends the run (a placement of ~460,000 elements ignored SIGTERM)."""
+    import os
+    import signal
+
+    from repulsionpak.cli import _StopFlag
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        with _StopFlag():
+            with pytest.raises(KeyboardInterrupt):
+                os.kill(os.getpid(), sig)
+                for _ in range(1000):
                     pass

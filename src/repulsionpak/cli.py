@@ -54,6 +54,9 @@ def _errors():
         yield
     except RepulsionPakError as exc:
         _fail(exc)
+    except KeyboardInterrupt:  # typer would turn it into a silent exit 130
+        typer.echo("repulsionpak: interrupted", err=True)
+        raise typer.Exit(130) from None
 
 
 def _same_file(a: Path, b: Path) -> bool:
@@ -150,15 +153,18 @@ class _StopFlag:
     """SIGINT/SIGTERM handler: the first signal asks the simulation to stop after the
     current iteration (a partial packing is then written), or, once the simulation is
     over, the verification to end its repair rounds (what still violates is dropped); a
-    second one aborts (Ctrl-C twice, or ``kill`` twice)."""
+    second one aborts (Ctrl-C twice, or ``kill`` twice). A signal before the simulation
+    first asks whether to stop (while the inputs are read, meshed and placed: nothing to
+    write yet) aborts at once."""
 
     def __init__(self):
         self.stop = False
+        self.polled = False  # the simulation has started asking
         self._old = {}
 
     def __enter__(self):
         def handler(signum, frame):
-            if self.stop:
+            if self.stop or not self.polled:
                 raise KeyboardInterrupt
             self.stop = True
 
@@ -168,6 +174,7 @@ class _StopFlag:
         return self
 
     def __call__(self) -> bool:
+        self.polled = True
         return self.stop
 
     def __exit__(self, *exc):
@@ -267,7 +274,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill)
     if params.seed is None:
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
-    from .pack import CONTAINER_TOLERANCE, default_gap
+    from .io.svg_read import TooManyPoints
+    from .pack import CONTAINER_TOLERANCE, check_fineness, default_gap
 
     # the container's curves are flattened finely (gap/1000; without a gap, read twice:
     # the default gap comes from the container's size), so the edge margin is checked
@@ -275,7 +283,11 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     # (on a concave stretch the chords lie outside the curve: art kept gap/2 from a
     # gap/100 polygon came 0.494 gap from the drawn curve inside a letter C)
     tol = None if params.gap is None else CONTAINER_TOLERANCE * params.gap
-    cont = load_container(container, tolerance=tol)
+    try:
+        cont = load_container(container, tolerance=tol)
+    except TooManyPoints:  # a gap far too fine for the container flattens it to millions of points
+        check_fineness(load_container(container), params.gap, params)  # says so, if that is why
+        raise
     g = params.gap if params.gap is not None else default_gap(cont)
     if tol is None:
         cont = load_container(container, tolerance=CONTAINER_TOLERANCE * g)

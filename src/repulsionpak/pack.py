@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -143,6 +144,7 @@ def checked_gap(container: Container, elements: Sequence[Element], params: Param
     if gap * 4 >= min(maxx - minx, maxy - miny):
         raise ParameterError(f"the gap ({gap:g}) is absurdly large for a container of "
                              f"{maxx - minx:g}×{maxy - miny:g} units; use a gap of about 1% of its size")
+    check_fineness(container, gap, params)
     margin = margin_of(params, gap)
     tol = 1e-3 * max(maxx - minx, maxy - miny)  # the largest inscribed circle to this (ms, any detail)
     deepest = max((float(shapely.maximum_inscribed_circle(p, tol).length)
@@ -152,6 +154,25 @@ def checked_gap(container: Container, elements: Sequence[Element], params: Param
                              f"more than {deepest:.4g} from its edge" + ("" if params.margin is not None else
                              " (the margin is half the gap by default: use a smaller gap)"))
     return gap
+
+
+def check_fineness(container: Container, gap: float, params: Params) -> None:
+    """Refuse a gap so fine for the container that its meshes would need more than
+    ``placement.max_vertices`` vertices (estimated as area / gap²: skins are sampled a gap
+    apart and the elements grow until they fill the container, however many there are)."""
+    need = container.area / (gap * gap)
+    limit = params.placement.max_vertices
+    if need > limit:
+        minx, miny, maxx, maxy = container.bounds
+        size = max(maxx - minx, maxy - miny)
+        least = math.sqrt(container.area / limit)
+        about = f"{need:,.0f}" if need < 1e12 else f"{need:.1e}"
+        raise ParameterError(
+            f"the gap ({gap:g}, {100 * gap / size:.2g}% of the container's {size:g} units) is too fine: its "
+            f"meshes would need about {about} vertices (the container's area / gap²), more than "
+            f"placement.max_vertices = {limit:,}; use a gap of at least {least:.3g} "
+            f"({100 * least / size:.2g}% of the container's size; 1% is typical), or raise "
+            "placement.max_vertices in a --config file to try anyway")
 
 
 def prepare(container: Container, elements: Sequence[Element], params: Params,

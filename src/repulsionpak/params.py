@@ -66,6 +66,10 @@ class PlacementParams:
         "fixes the scale at which skins are built so the final art gap matches the requested gap.")
     rotate: bool = _doc(True, "-", "Give every element a random initial orientation.")
     candidates_per_point: int = _doc(30, "-", "Candidates per point for farthest-point blue noise.")
+    max_vertices: int = _doc(
+        1_000_000, "vertices", "Largest mesh a run may need, estimated as the container's area / gap² "
+        "(the meshes are sampled a gap apart; runs measured 0.4–1.2 times that): a finer gap is refused "
+        "before anything is built (1M vertices take about 4 GB and an hour). Raise it to try anyway.")
 
 
 @dataclass(frozen=True)
@@ -282,6 +286,7 @@ class Params:
             (pl.count is None or pl.count >= 1, "placement.count must be >= 1"),
             (pl.count is None or pl.count <= MAX_COUNT, f"placement.count must be <= {MAX_COUNT}"),
             (pl.candidates_per_point >= 1, "placement.candidates_per_point must be >= 1"),
+            (pl.max_vertices >= 1, "placement.max_vertices must be >= 1"),
             (pl.element_size > 0, "placement.element_size must be > 0"),
             (0 < pl.initial_fraction < pl.target_fraction <= 1,
              "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),

@@ -1248,8 +1248,12 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
 # --------------------------------------------------------------------------- flattening
 
 
+class TooManyPoints(InputError):
+    """A file flattens to more than its point budget (:class:`PointBudget`)."""
+
+
 class PointBudget:
-    """Counts flattened vertices of one file; InputError past ``limit``."""
+    """Counts flattened vertices of one file; :class:`TooManyPoints` past ``limit``."""
 
     def __init__(self, path, limit: int | None = None):
         self.path, self.used = path, 0
@@ -1260,7 +1264,7 @@ class PointBudget:
             raise InputError(self.path, "has non-finite coordinates (NaN or infinity)")
         self.used += n
         if self.used > self.limit:
-            raise InputError(
+            raise TooManyPoints(
                 self.path,
                 f"produces more than {self.limit} points after flattening curves; simplify the file or use a larger tolerance",
             )
