@@ -353,11 +353,10 @@ def test_bowtie_container_is_repaired_with_a_warning(tmp_path):
     assert out.exists()
 
 
-@pytest.mark.parametrize("kind", ["text", "image", "filter"])
+@pytest.mark.parametrize("kind", ["image", "filter"])
 @pytest.mark.parametrize("loader", [load_element, load_container])
 def test_unsupported_content_is_skipped_with_a_warning(tmp_path, kind, loader):
     extra = {
-        "text": '<text x="5" y="5">label</text>',
         "image": '<image href="photo.png" width="50" height="50"/>',
         "filter": '<defs><filter id="f"><feGaussianBlur stdDeviation="2"/></filter></defs>'
                   '<circle cx="70" cy="70" r="5" filter="url(#f)"/>',
@@ -371,6 +370,20 @@ def test_unsupported_content_is_skipped_with_a_warning(tmp_path, kind, loader):
         assert got.paths[0].style.fill == "#123456"
     else:
         assert got.area >= 1600.0
+
+
+def test_text_in_a_container_is_geometry(tmp_path):
+    """Text is drawn as glyph outlines (tests/test_io_text.py), in a container too: lettering
+    can be filled. (It was skipped with a warning.)"""
+    p = tmp_path / "lettering.svg"
+    p.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 300 200">'
+                 '<text x="150" y="170" font-family="DejaVu Sans" font-weight="bold" font-size="200" '
+                 'text-anchor="middle" fill="none" stroke="#000">R</text></svg>')
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        c = load_container(p)
+    assert 5000 < c.area < 0.6 * 300 * 200
+    assert sum(len(g.interiors) for g in shapely.get_parts(c.region)) == 1  # the R's counter
 
 
 def test_unit_checks_on_api_arguments(tmp_path):

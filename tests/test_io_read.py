@@ -242,12 +242,14 @@ def test_container_errors(tmp_path):
 
 
 def test_styles_inherited_and_invisible_dropped():
-    with pytest.warns(UserWarning, match="styles.svg.*text"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the text is drawn (tests/test_io_text.py), not skipped
         el = load_element(FIX / "styles.svg")
     assert (
-        len(el.paths) == 4
-    )  # fill+stroke none, display:none, hidden, opacity 0 dropped
-    s0, s1, s2, s3 = (a.style for a in el.paths)
+        len(el.paths) == 5
+    )  # fill+stroke none, display:none, hidden, opacity 0 dropped; the text's glyphs last
+    s0, s1, s2, s3, s4 = (a.style for a in el.paths)
+    assert s4.fill == "#000000" and art_area(el.paths[4:]).bounds[0] >= 50  # "hello" at x = 50
     assert (s0.fill, s0.stroke, s0.stroke_width, s0.opacity, s0.stroke_linejoin) == (
         "#00ff00",
         "#112233",
@@ -609,7 +611,7 @@ def _bad_inputs(tmp_path: Path) -> dict[str, Path]:
             b'<?xml version="1.0"?><!DOCTYPE svg [<!ENTITY x SYSTEM "file:///etc/passwd">]>'
             b'<svg xmlns="http://www.w3.org/2000/svg"><text>&x;</text></svg>'
         ),
-        "nogeometry.svg": S('<text x="1" y="1">only text</text>').encode(),
+        "nogeometry.svg": S('<image href="x.png" width="5" height="5"/><text x="1" y="1"> </text>').encode(),
         "infinite.svg": S('<path d="M0 0 L1e400 0 L1 1 Z"/>').encode(),
         "overflow.svg": S(
             '<path d="M0 0 L1 0 L1 1 Z" transform="scale(1e200) scale(1e200)"/>'
@@ -793,12 +795,12 @@ def test_point_budget(tmp_path, monkeypatch):
 
 def test_unsupported_content_warns_and_is_skipped(tmp_path):
     body = (
-        '<image href="x.png" width="5" height="5"/><text>t</text>'
+        '<image href="x.png" width="5" height="5"/>'
         '<rect width="5" height="5" filter="url(#f)"/>'
         '<symbol id="s"><rect width="50" height="50"/></symbol>'
         '<mask id="m"><rect width="70" height="70" fill="white"/></mask>'
     )
-    with pytest.warns(UserWarning, match="warn.svg.*filter.*image.*text"):
+    with pytest.warns(UserWarning, match="warn.svg.*filter.*image"):
         el = load_element(_write(tmp_path, "warn.svg", _svg(body)))
     assert len(el.paths) == 1  # symbol and mask content are not drawn
     np.testing.assert_allclose(el.paths[0].subpaths[0].max(axis=0), [5, 5])

@@ -50,6 +50,7 @@ from ..geometry.outline import (
 from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
 from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
+from .svg_text import text_to_paths
 
 __all__ = [
     "MAX_FILE_BYTES",
@@ -1089,8 +1090,9 @@ def _dasharray(raw) -> tuple[float, ...]:
 def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     """Parse SVG bytes into shapes with user-unit matrices and styles (not flattened).
 
-    Invisible shapes are kept (check ``shape.style.visible``); text, images, filters
-    and masks are reported with one warning naming the file. Clip paths are recorded
+    Invisible shapes are kept (check ``shape.style.visible``); text is drawn as glyph
+    outlines (:mod:`.svg_text`); images, filters and masks are reported with one warning
+    naming the file. Clip paths are recorded
     (``shape.clips``, ``doc.clip_defs``) for :func:`shape_clipper`.
     """
     import svgelements as se
@@ -1101,6 +1103,9 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     notes: set[str] = set()
     _apply_stylesheets(root_xml, notes)
     _sanitize(path, root_xml, notes)
+    fonts_missing = text_to_paths(root_xml, notes)
+    if fonts_missing:
+        warn(path, fonts_missing)
     hoist_clip_paths(root_xml)
     gradients = _gradient_colours(root_xml)
     svg_root = {

@@ -1,0 +1,364 @@
+"""``<text>`` drawn as glyph outlines, so that lettering packs like any other art.
+
+Design tools write lettering as ``<text>`` unless told to convert it to outlines, and a
+text-only element used to be refused ("no visible geometry"). Before svgelements reads a
+file, every ``<text>`` becomes a ``<g>`` with the text's own attributes (fill, stroke,
+class, style, transform, clip-path, id ...) holding one ``<path>`` of glyph outlines per
+run of characters; each ``<tspan>`` (and ``<a>``, ``<textPath>``) becomes a nested ``<g>``
+with its attributes, so colours and strokes cascade as they did.
+
+The outlines come from matplotlib's font machinery (FreeType, the fonts matplotlib finds:
+its own DejaVu and STIX families and the system's), laid out as browsers lay out a line:
+``x``/``y`` (first values), ``dx``/``dy``, ``text-anchor`` per text chunk, kerning,
+``font-family`` (a list, with the generic families), ``font-size`` (px, pt, pc, mm, cm, in,
+em, %, keywords), ``font-weight``, ``font-style``, the ``font`` shorthand, and
+``xml:space``. Not supported, with a warning: per-character position lists, ``rotate``,
+``letter-spacing``/``word-spacing``, ``textLength``, text along a path (drawn on a straight
+line), vertical writing. A family that is not installed falls back to the default serif
+font, as in browsers, with a warning naming it: the copies then show that font, not the
+one the file asks for.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+__all__ = ["text_to_paths"]
+
+_TEXT_LIKE = {"tspan", "a", "textPath"}
+_POSITION_ATTRS = ("x", "y", "dx", "dy", "rotate", "textLength", "lengthAdjust")
+_XML_SPACE = "{http://www.w3.org/XML/1998/namespace}space"
+_GENERIC = {"serif", "sans-serif", "monospace", "cursive", "fantasy"}
+_SIZE_KEYWORDS = {"xx-small": 9.0, "x-small": 10.0, "small": 13.0, "medium": 16.0, "large": 18.0,
+                  "x-large": 24.0, "xx-large": 32.0, "xxx-large": 48.0}
+_UNITS = {"": 1.0, "px": 1.0, "pt": 4.0 / 3.0, "pc": 16.0, "mm": 96.0 / 25.4, "cm": 96.0 / 2.54,
+          "in": 96.0, "q": 96.0 / 101.6}
+_DEFAULT_SIZE = 16.0  # a browser's "medium"
+
+
+def _local(tag) -> str:
+    return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else ""
+
+
+def _style_decls(el: ET.Element) -> dict[str, str]:
+    out = {}
+    for decl in (el.get("style") or "").split(";"):
+        if ":" in decl:
+            k, v = decl.split(":", 1)
+            out[k.strip().lower()] = v.strip()
+    return out
+
+
+def _split_families(text: str) -> list[str]:
+    return [f.strip().strip("'\"").strip() for f in text.split(",") if f.strip().strip("'\"").strip()]
+
+
+def _shorthand(value: str) -> dict[str, str]:
+    """The ``font`` shorthand: [style] [variant] [weight] [stretch] size[/line-height] family."""
+    tokens = re.findall(r"'[^']*'|\"[^\"]*\"|[^\s]+", value)
+    for i, tok in enumerate(tokens):
+        size = tok.split("/", 1)[0]
+        if re.fullmatch(r"[\d.]+[a-zA-Z%]*", size) or size.lower() in _SIZE_KEYWORDS:
+            out = {"font-size": size, "font-family": " ".join(tokens[i + 1:])}
+            for t in tokens[:i]:
+                t = t.lower()
+                if t in ("italic", "oblique"):
+                    out["font-style"] = t
+                elif t in ("bold", "bolder", "lighter") or re.fullmatch(r"\d{3}", t):
+                    out["font-weight"] = t
+            return out
+    return {}
+
+
+class _Props:
+    """Computed font properties of one element (inherited down the text's tree)."""
+
+    def __init__(self, parent: "_Props | None", el: ET.Element | None):
+        own: dict[str, str] = {}
+        if el is not None:
+            for name in ("font-family", "font-size", "font-weight", "font-style", "text-anchor",
+                         "letter-spacing", "word-spacing", "writing-mode"):
+                if el.get(name) is not None:
+                    own[name] = el.get(name).strip()
+            decls = _style_decls(el)
+            if "font" in decls:
+                own.update(_shorthand(decls["font"]))
+            own.update({k: v for k, v in decls.items() if k.startswith(("font-", "text-anchor", "letter-",
+                                                                         "word-", "writing-"))})
+        base = parent
+        self.size = base.size if base else _DEFAULT_SIZE
+        self.family = base.family if base else ["serif"]  # browsers' default font
+        self.weight = base.weight if base else "normal"
+        self.style = base.style if base else "normal"
+        self.anchor = base.anchor if base else "start"
+        self.unsupported: set[str] = set()
+        for name, v in own.items():
+            if v.lower() == "inherit":
+                continue
+            if name == "font-size":
+                self.size = _font_size(v, self.size)
+            elif name == "font-family":
+                self.family = _split_families(v) or self.family
+            elif name == "font-weight":
+                self.weight = _weight(v, self.weight)
+            elif name == "font-style":
+                self.style = "italic" if v.lower() in ("italic", "oblique") or v.lower().startswith("oblique") \
+                    else "normal"
+            elif name == "text-anchor":
+                self.anchor = v.lower() if v.lower() in ("start", "middle", "end") else self.anchor
+            elif name in ("letter-spacing", "word-spacing") and v.lower() not in ("normal", "0", "0px"):
+                self.unsupported.add(name)
+            elif name == "writing-mode" and v.lower() not in ("horizontal-tb", "lr", "lr-tb", "rl", "rl-tb"):
+                self.unsupported.add("vertical writing")
+
+
+def _font_size(v: str, parent: float) -> float:
+    v = v.strip().lower()
+    if v in _SIZE_KEYWORDS:
+        return _SIZE_KEYWORDS[v]
+    if v == "larger":
+        return parent * 1.2
+    if v == "smaller":
+        return parent / 1.2
+    m = re.fullmatch(r"([+-]?[\d.]+(?:e[+-]?\d+)?)\s*([a-z%]*)", v)
+    if not m:
+        return parent
+    num, unit = float(m.group(1)), m.group(2)
+    if unit == "%":
+        return parent * num / 100.0
+    if unit in ("em", "rem"):
+        return parent * num
+    if unit == "ex":
+        return parent * num / 2.0
+    return num * _UNITS.get(unit, 1.0) if num > 0 else parent
+
+
+def _weight(v: str, parent: str) -> str:
+    v = v.strip().lower()
+    if v in ("normal", "bold"):
+        return v
+    if v == "bolder":
+        return "bold"
+    if v == "lighter":
+        return "normal"
+    if re.fullmatch(r"\d{3}", v):
+        return "bold" if int(v) >= 600 else "normal"
+    return parent
+
+
+def _first_length(el: ET.Element, name: str) -> float | None:
+    v = el.get(name)
+    if not v:
+        return None
+    parts = [p for p in re.split(r"[\s,]+", v.strip()) if p]
+    if not parts:
+        return None
+    m = re.fullmatch(r"([+-]?[\d.]+(?:e[+-]?\d+)?)\s*([a-z]*)", parts[0].lower())
+    if not m:
+        return None
+    return float(m.group(1)) * _UNITS.get(m.group(2), 1.0)
+
+
+class _Fonts:
+    """matplotlib fonts by (families, weight, style), and the families it lacks."""
+
+    def __init__(self):
+        from matplotlib.font_manager import FontProperties, findfont
+        from matplotlib.textpath import TextToPath
+
+        self._fp, self._findfont = FontProperties, findfont
+        self._ttp = TextToPath()
+        self.missing: set[str] = set()
+        self.fallback = "DejaVu Serif"
+        self._cache: dict = {}
+        self._names = None
+
+    def _installed(self, family: str) -> bool:
+        if self._names is None:
+            from matplotlib.font_manager import fontManager
+
+            self._names = {f.name.lower() for f in fontManager.ttflist}
+        return family.lower() in self._names
+
+    def prop(self, props: _Props):
+        key = (tuple(props.family), props.weight, props.style)
+        if key not in self._cache:
+            from matplotlib.font_manager import get_font
+
+            families = list(props.family)
+            named = [f for f in families if f.lower() not in _GENERIC]
+            installed = [f for f in named if self._installed(f)]
+            if named and not installed:
+                self.missing.add(named[0])
+            # a family that is not installed falls back to the browsers' default, serif
+            # (Chrome's and resvg's "Times New Roman"), not to matplotlib's sans-serif
+            use = installed + [f for f in families if f.lower() in _GENERIC] or ["serif"]
+            fp = self._fp(family=use, weight=props.weight, style=props.style, size=self._ttp.FONT_SCALE)
+            self.fallback = get_font(self._findfont(fp, fallback_to_default=True)).family_name
+            self._cache[key] = fp
+        return self._cache[key]
+
+    def run(self, s: str, props: _Props) -> tuple[np.ndarray, np.ndarray, float]:
+        """Glyph outline of ``s`` (vertices with y down, baseline at 0, pen at 0; path
+        codes) and its advance, at ``props.size``."""
+        from matplotlib.ft2font import LoadFlags
+        from matplotlib.textpath import TextPath
+
+        fp = self.prop(props)
+        scale = props.size / self._ttp.FONT_SCALE
+        tp = TextPath((0, 0), s, size=props.size, prop=fp)
+        verts = np.array(tp.vertices, dtype=float)
+        verts[:, 1] = -verts[:, 1]
+        font = self._ttp._get_font(fp)
+        glyphs = self._ttp.get_glyphs_with_font(font, s, return_new_glyphs_only=False)[0]
+        if not glyphs:
+            return verts, np.asarray(tp.codes), 0.0
+        last_x = glyphs[-1][1]
+        glyph = font.load_char(ord(s[-1]), flags=LoadFlags.NO_HINTING)
+        return verts, np.asarray(tp.codes), (last_x + glyph.linearHoriAdvance / 65536.0) * scale
+
+
+def _path_data(verts: np.ndarray, codes: np.ndarray) -> str:
+    out, i, n = [], 0, len(codes)
+    f = lambda p: f"{p[0]:.6g} {p[1]:.6g}"  # noqa: E731
+    while i < n:
+        c = codes[i]
+        if c == 1:
+            out.append("M" + f(verts[i]))
+            i += 1
+        elif c == 2:
+            out.append("L" + f(verts[i]))
+            i += 1
+        elif c == 3:
+            out.append("Q" + f(verts[i]) + " " + f(verts[i + 1]))
+            i += 2
+        elif c == 4:
+            out.append("C" + f(verts[i]) + " " + f(verts[i + 1]) + " " + f(verts[i + 2]))
+            i += 3
+        elif c == 79:
+            out.append("Z")
+            i += 1
+        else:  # STOP
+            i += 1
+    return "".join(out)
+
+
+def _collapse(s: str, preserve: bool) -> str:
+    if preserve:
+        return s.replace("\n", " ").replace("\r", " ").replace("\t", " ")
+    return re.sub(r" +", " ", s.replace("\r", "").replace("\n", "").replace("\t", " "))
+
+
+def text_to_paths(root: ET.Element, notes: set[str]) -> str | None:
+    """Replace every ``<text>`` under ``root`` by a ``<g>`` of glyph-outline ``<path>``s
+    (see the module docstring); what is not supported is added to ``notes``. Returns a
+    warning naming the font families that are not installed, if any."""
+    texts = [el for el in root.iter() if _local(el.tag) == "text"]
+    if not texts:
+        return None
+    logger = logging.getLogger("matplotlib.font_manager")
+    level = logger.level
+    logger.setLevel(logging.ERROR)  # "findfont: Font family ... not found": said once, below
+    try:
+        return _convert(root, texts, notes)
+    finally:
+        logger.setLevel(level)
+
+
+def _convert(root: ET.Element, texts: list[ET.Element], notes: set[str]) -> str | None:
+    parent = {c: p for p in root.iter() for c in p}
+    fonts = _Fonts()
+    for text in texts:
+        holder = parent.get(text)
+        if holder is None:
+            continue
+        ns = text.tag[:text.tag.index("}") + 1] if text.tag.startswith("{") else ""
+        chain, p = [], parent.get(text)
+        while p is not None:  # font properties inherited from the groups around the text
+            chain.append(p)
+            p = parent.get(p)
+        props = None
+        for anc in reversed(chain):
+            props = _Props(props, anc)
+        group = _as_group(text, ns)
+        pieces: list[dict] = []  # text chunks: anchor, start and end x, [(target, verts, codes)]
+        state = {"x": 0.0, "y": 0.0, "first": True}
+        _layout(text, group, _Props(props, text), ns, fonts, pieces, state, notes,
+                text.get(_XML_SPACE) == "preserve")
+        for chunk in pieces:
+            width = 0.0 if chunk["start"] is None else chunk["end"] - chunk["start"]
+            shift = {"start": 0.0, "middle": -0.5 * width, "end": -width}[chunk["anchor"]]
+            for target, verts, codes in chunk["items"]:
+                v = verts.copy()
+                v[:, 0] += shift
+                d = _path_data(v, codes)
+                if d:
+                    ET.SubElement(target, ns + "path", {"d": d})
+        holder[list(holder).index(text)] = group
+    if not fonts.missing:
+        return None
+    return (f"text in a font that is not installed ({', '.join(sorted(fonts.missing))}) is drawn in "
+            f"the default serif font ({fonts.fallback}) instead; install the font or convert the "
+            "text to outlines to pack the lettering as designed")
+
+
+def _as_group(el: ET.Element, ns: str) -> ET.Element:
+    attrs = {k: v for k, v in el.attrib.items() if k not in _POSITION_ATTRS}
+    g = ET.Element(ns + "g", attrs)
+    g.tail = el.tail if _local(el.tag) == "text" else None
+    return g
+
+
+def _layout(el, target, props: _Props, ns, fonts: _Fonts, pieces, state, notes, preserve) -> None:
+    for name in props.unsupported:
+        notes.add(f"text {name} (ignored)")
+    for name in ("rotate", "textLength"):
+        if el.get(name):
+            notes.add(f"text {name} (ignored)")
+    for name in ("x", "y", "dx", "dy"):
+        v = el.get(name)
+        if v and len([p for p in re.split(r"[\s,]+", v.strip()) if p]) > 1:
+            notes.add("text with a position per character (the first one used)")
+    x, y = _first_length(el, "x"), _first_length(el, "y")
+    if x is not None or y is not None or not pieces:
+        state["x"] = x if x is not None else state["x"]
+        state["y"] = y if y is not None else state["y"]
+        pieces.append({"anchor": props.anchor, "start": None, "end": 0.0, "items": []})
+    state["x"] += _first_length(el, "dx") or 0.0
+    state["y"] += _first_length(el, "dy") or 0.0
+    if _local(el.tag) == "textPath":
+        notes.add("text along a path (drawn on a straight line)")
+    _emit(el.text, target, props, fonts, pieces, state, preserve)
+    for child in el:
+        name = _local(child.tag)
+        if name in _TEXT_LIKE:
+            sub = _as_group(child, ns)
+            target.append(sub)
+            keep = preserve if child.get(_XML_SPACE) is None else child.get(_XML_SPACE) == "preserve"
+            _layout(child, sub, _Props(props, child), ns, fonts, pieces, state, notes, keep)
+        _emit(child.tail, target, props, fonts, pieces, state, preserve)
+
+
+def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve) -> None:
+    if not s:
+        return
+    s = _collapse(s, preserve)
+    if state["first"] and not preserve:
+        s = s.lstrip(" ")
+    if not s:
+        return
+    state["first"] = False
+    verts, codes, advance = fonts.run(s, props)
+    chunk = pieces[-1]
+    if chunk["start"] is None:
+        chunk["start"] = state["x"]
+    if len(verts):
+        verts[:, 0] += state["x"]
+        verts[:, 1] += state["y"]
+        chunk["items"].append((target, verts, codes))
+    state["x"] += advance
+    chunk["end"] = state["x"]
