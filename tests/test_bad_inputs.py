@@ -507,3 +507,70 @@ def test_too_fine_a_gap_is_refused_before_anything_is_built_unless_the_limit_is_
     raised = dataclasses.replace(params, placement=dataclasses.replace(params.placement, max_vertices=2_000_000))
     check_fineness(cont, 0.3, raised)  # the user's choice: no error
     check_fineness(cont, 4.6, Params())  # 1% of the circle: ~7,900 vertices
+
+
+RING = ('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1000"><path fill="none" stroke="#000" '
+        'd="M 0,500 A 500,500 0 1 1 1000,500 A 500,500 0 1 1 0,500 Z '
+        'M 30,500 A 470,470 0 1 0 970,500 A 470,470 0 1 0 30,500 Z"/></svg>')
+
+
+@pytest.mark.parametrize("gap", ["30", "20"])
+def test_a_container_narrower_than_two_gaps_everywhere_is_refused(tmp_path, gap):
+    """A ring 30 units wide at gap 30 (or 20): the elements were placed, every one dropped by
+    the verification, and the CLI died in its summary line (exit 1; with -q an empty SVG)."""
+    ring = tmp_path / "ring.svg"
+    ring.write_text(RING)
+    out = tmp_path / "o.svg"
+    res = CliRunner().invoke(app, ["pack", str(ring), str(APPLE), "-o", str(out), "--count", "5",
+                                   "--gap", gap, "--seed", "1", "-q"])
+    assert res.exit_code == 3, res.stderr
+    _check_one_error_line(res, "too narrow for a gap of", "widest point is 30 across", "use a gap below 15")
+    assert not out.exists()
+
+
+def test_a_single_element_without_neighbours_is_summarised(tmp_path):
+    """No neighbour, no median gap: the summary line said so with a TypeError (exit 1)."""
+    out = tmp_path / "one.svg"
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", str(out), "--count", "1",
+                                   "--no-pocket-fill", "--max-iterations", "200", "--seed", "1"])
+    assert res.exit_code == 0, res.stderr
+    assert "1 primary + 0 secondary elements" in res.stderr and "median gap - (asked" in res.stderr
+
+
+def test_counts_are_of_what_the_verification_kept():
+    from repulsionpak.pack import Packing
+    from repulsionpak.verify import Verification
+
+    class Model:
+        kind = ["primary"] * 5
+
+    p = Packing(None, 1.0, [], [], Model(), None, None, None)
+    assert p.n_primary == 5  # before the verification: the simulated elements
+    p.verification = Verification(True, 0, 0, 0, 0, 0.9, 0.5, None, None, dropped=[(i, "a.svg") for i in range(5)])
+    assert (p.n_primary, p.n_secondary) == (0, 0)  # all dropped: none
+
+
+def test_a_packing_whose_every_element_is_dropped_is_an_error(monkeypatch):
+    """The safety net behind the width check: a verification that drops everything ends the
+    run with an error naming the cause, not an empty packing that 'keeps every promise'."""
+    import dataclasses
+    import importlib
+
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.params import Params
+
+    pack_mod = importlib.import_module("repulsionpak.pack")  # the module, not the function
+    real = pack_mod.verify_and_repair
+
+    def drop_all(placed, *args, **kwargs):
+        _, v = real(placed, *args, **kwargs)
+        return [], dataclasses.replace(v, dropped=[(i, p.source) for i, p in enumerate(placed)])
+
+    monkeypatch.setattr(pack_mod, "verify_and_repair", drop_all)
+    params = dataclasses.replace(Params(), gap=20.0, seed=1)
+    params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=3),
+                                 sim=dataclasses.replace(params.sim, max_iterations=50),
+                                 secondary=dataclasses.replace(params.secondary, auto=False, fill_holes=False,
+                                                               fill_leftover=False))
+    with pytest.raises(errors.ParameterError, match="no element fits: the final verification dropped all 3"):
+        pack_mod.pack(load_container(CIRCLE), load_elements([APPLE]), params)

@@ -427,8 +427,10 @@ def _write_json_atomic(path: Path, data: dict) -> None:
 def _summary(rep: dict, output: Path) -> str:
     inv = rep["invariants"]
     ok = inv["ok"]
+    median = rep["gap_stats"]["median"]  # None with fewer than two elements
     return (f"{output}: {rep['n_primary']} primary + {rep['n_secondary']} secondary elements, "
-            f"area fraction {rep['area_fraction']:.3f}, median gap {rep['gap_stats']['median']:.3g} "
+            f"area fraction {rep['area_fraction']:.3f}, median gap "
+            f"{'-' if median is None else format(median, '.3g')} "
             f"(asked {rep['gap']:.3g}), {sum(rep['iterations'].values())} iterations in "
             f"{rep['seconds']['total']:.1f} s, seed {rep['seed']}"
             + ("" if ok else "  [invariants violated: see the report]")

@@ -48,13 +48,13 @@ class Packing:
     @property
     def n_primary(self) -> int:
         """Primary elements in the result (after the verification, which may drop some)."""
-        if self.placed:
+        if self.placed or self.verification is not None:
             return sum(1 for p in self.placed if p.kind == "primary")
         return sum(1 for k in self.model.kind if k == "primary")
 
     @property
     def n_secondary(self) -> int:
-        if self.placed:
+        if self.placed or self.verification is not None:
             return sum(1 for p in self.placed if p.kind == "secondary")
         return sum(1 for k in self.model.kind if k == "secondary")
 
@@ -153,6 +153,12 @@ def checked_gap(container: Container, elements: Sequence[Element], params: Param
         raise ParameterError(f"the edge margin ({margin:g}) leaves no room in the container: no point of it is "
                              f"more than {deepest:.4g} from its edge" + ("" if params.margin is not None else
                              " (the margin is half the gap by default: use a smaller gap)"))
+    if deepest + tol <= margin + 0.5 * gap:  # art under a gap across: every copy would be dropped
+        most = 2 * (deepest - margin) if params.margin is not None else deepest
+        raise ParameterError(
+            f"the container is too narrow for a gap of {gap:g}: its widest point is {2 * deepest:.4g} across "
+            f"(its largest inscribed circle), which leaves less than a gap for an element's art between the "
+            f"edge margins ({margin:g} on each side); use a gap below {most:.3g}")
     return gap
 
 
@@ -304,6 +310,12 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
             packing.seconds["holes"] = time.perf_counter() - t5
     packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0
+    if not packing.placed and packing.verification is not None and packing.verification.dropped:
+        raise ParameterError(
+            f"no element fits: the final verification dropped all {len(packing.verification.dropped)}, "
+            f"which could not keep the gap ({gap:g}) and the edge margin ({margin_of(params, gap):g}) in "
+            "this container even shrunk to half their size; use a smaller gap, a smaller margin or "
+            "fewer, smaller elements")
     return packing
 
 
