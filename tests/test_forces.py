@@ -600,12 +600,15 @@ def ring_element(n=12, r=10.0):
     return x, springs, ptr, nbr
 
 
-def relax(x, springs, ptr, nbr, moving=True, fraction=0.5, passes=1):
+def relax(x, springs, ptr, nbr, moving=True, fraction=0.5, passes=1, edge_rest=None, growth=1.0):
+    """The relaxation on one element; its length scale is the mean edge length of ``x`` as
+    given unless ``edge_rest`` (the rest lengths' mean) is."""
     n = len(x)
+    if edge_rest is None:
+        edge_rest = np.linalg.norm(x[springs[:, 0]] - x[springs[:, 1]], axis=1).mean()
     return relax_self_intersections(x, np.array([0, n], np.int32), np.array([n], np.int32),
-                                    np.array([moving]), np.array([0], np.int64),
-                                    np.array([len(springs)], np.int64), springs, ptr, nbr, passes, fraction,
-                                    np.arange(n, dtype=np.int64))
+                                    np.array([moving]), np.array([edge_rest]), np.array([growth]),
+                                    ptr, nbr, passes, fraction, np.arange(n, dtype=np.int64))
 
 
 def test_relax_separates_close_non_neighbours():
@@ -623,6 +626,22 @@ def test_relax_separates_close_non_neighbours():
     np.testing.assert_allclose((x[3] + x[9]) / 2, (before[3] + before[9]) / 2, atol=1e-12)  # symmetric
     others = np.setdiff1d(np.arange(len(x)), [3, 9])
     np.testing.assert_array_equal(x[others], before[others])
+
+
+def test_relax_length_scale_is_the_rest_length_at_the_current_growth():
+    """Stretching a mesh does not widen the distance its vertices are kept apart (a spiral
+    whose rest shape has vertices closer than that across a slit grew without bound)."""
+    x, springs, ptr, nbr = ring_element()
+    rest = np.linalg.norm(x[springs[:, 0]] - x[springs[:, 1]], axis=1).mean()
+    x *= 3.0  # stretched to three times its rest size, growth 1
+    x[3] = [0.0, 0.5]
+    x[9] = [0.0, -0.5]
+    assert relax(x, springs, ptr, nbr, edge_rest=rest) == 1
+    assert np.linalg.norm(x[3] - x[9]) == pytest.approx(0.5 * rest, rel=1e-12)  # not 0.5 · 3 · rest
+    x[3] = [0.0, 0.5]
+    x[9] = [0.0, -0.5]
+    assert relax(x, springs, ptr, nbr, edge_rest=rest, growth=2.0) == 1  # grown: its rest lengths doubled
+    assert np.linalg.norm(x[3] - x[9]) == pytest.approx(rest, rel=1e-12)
 
 
 def test_relax_leaves_spring_neighbours_alone():

@@ -199,7 +199,10 @@ class Simulator:
         self.relax_order = np.arange(N, dtype=np.int64)
         self.sp_ptr = element_ranges(m.spring_elem, M)
         self.tri_ptr = element_ranges(m.tri_elem, M)
-        self.sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M).astype(np.int64)
+        sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M)
+        # each element's mean edge rest length (before growth): the relaxation's length scale
+        self.edge_rest = (np.bincount(m.spring_elem[m.spring_is_edge], weights=m.rest0[m.spring_is_edge],
+                                      minlength=M) / np.maximum(sp_nedge, 1)).astype(np.float64)
         # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
         self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
                                       params.dt, params.k_growth, params.growth_headroom)
@@ -283,9 +286,9 @@ class Simulator:
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:
-            relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.sp_ptr,
-                                     self.sp_nedge, m.springs, m.vnbr_ptr, m.vnbr,
-                                     p.relax_passes, p.relax_fraction, self.relax_order)
+            relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.edge_rest,
+                                     self.growth, m.vnbr_ptr, m.vnbr, p.relax_passes, p.relax_fraction,
+                                     self.relax_order)
         total, moving = skin_areas(x, m.elem_vstart, m.elem_nskin, self.moving, self.areas)
         st.iteration += 1
         self.moving_area = moving / m.container_area
