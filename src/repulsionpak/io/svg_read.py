@@ -1087,6 +1087,22 @@ def _dasharray(raw) -> tuple[float, ...]:
     return tuple(vals * 2 if len(vals) % 2 else vals)
 
 
+_SIZE_ATTRS = {"Circle": ("r",), "Ellipse": ("rx", "ry"), "Rect": ("width", "height")}
+
+
+def _negative_size(kind: str, attrs: dict) -> str | None:
+    """The attribute of a circle, ellipse or rect whose value is negative (an error in SVG:
+    the shape is not rendered), if any."""
+    for name in _SIZE_ATTRS.get(kind, ()):
+        v = attrs.get(name)
+        if v is None:
+            continue
+        m = re.match(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)", str(v))
+        if m and float(m.group(1)) < 0:
+            return name
+    return None
+
+
 def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
     """Parse SVG bytes into shapes with user-unit matrices and styles (not flattened).
 
@@ -1125,6 +1141,18 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 path,
                 f'the root <svg> has {k}="{v}", so nothing is rendered; give it a positive size',
             )
+    vb = root_xml.get("viewBox")
+    if vb is not None and vb.strip():
+        parts = [v for v in re.split(r"[\s,]+", vb.strip()) if v]
+        try:
+            vals = [float(v) for v in parts]
+        except ValueError:
+            vals = []
+        if len(vals) != 4 or not all(math.isfinite(v) for v in vals):
+            raise InputError(path, f'the root <svg> has viewBox="{vb}", which is not four numbers; fix it or remove it')
+        if vals[2] <= 0 or vals[3] <= 0:
+            raise InputError(path, f'the root <svg> has viewBox="{vb}" with a {"zero" if min(vals[2:]) == 0 else "negative"} '
+                                   "width or height, so nothing is rendered; give it a positive size")
     clean = ET.tostring(root_xml, encoding="utf-8")
 
     doc = se.SVG.parse(io.BytesIO(clean), reify=False, on_error="ignore")
@@ -1164,6 +1192,10 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
         for child in node:
             if isinstance(child, se.Shape):
                 attrs = own(child)
+                bad = _negative_size(type(child).__name__, attrs)
+                if bad:  # an error in SVG: browsers draw nothing (svgelements took |r|)
+                    notes.add(f"<{type(child).__name__.lower()}> with a negative {bad} (not drawn, as in browsers)")
+                    continue
                 if "filter" in attrs:
                     notes.add("filter")
                 if "mask" in attrs:
