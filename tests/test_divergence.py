@@ -4,6 +4,8 @@ clear DivergedError — never a broken packing written as if it were good."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from shapely.geometry import box
@@ -95,3 +97,6 @@ def test_cli_reports_divergence_without_writing(tmp_path, monkeypatch):
     assert r.exit_code == 4
     assert "diverged" in r.output and "Traceback" not in r.output
     assert not out.exists()
+    # no --seed: the one drawn is named, so the run can be reproduced
+    seed = re.search(r"\(seed (\d+): rerun with --seed \1 to reproduce\)", r.output)
+    assert seed, r.output

@@ -21,7 +21,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from .errors import OutputError, ParameterError, RepulsionPakError
+from .errors import OutputError, ParameterError, RepulsionPakError, SimulationError
 
 EXIT_CODES = {
     0: "success",
@@ -343,9 +343,11 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
                            should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
                            resume=resumed, **snap_kw)
-    except BaseException:
+    except BaseException as exc:
         if viewer is not None:
             viewer.close()
+        if isinstance(exc, SimulationError):  # the seed reproduces the run (it may have been drawn at random)
+            raise type(exc)(f"{exc} (seed {params.seed}: rerun with --seed {params.seed} to reproduce)") from exc
         raise
     finally:
         warmup.stop(warmup.running())  # started by _warm_up_meanwhile; done before rendering
