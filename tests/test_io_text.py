@@ -132,3 +132,17 @@ def test_a_text_element_packs_and_its_copies_are_written_as_curves(tmp_path):
         holes = sum(len(g.interiors) for g in shapely.get_parts(copy))
         assert holes == sum(len(g.interiors) for g in shapely.get_parts(source)) >= 1
     assert "<text" not in out.read_text()
+
+
+def test_malformed_values_and_missing_glyphs(tmp_path):
+    """A malformed size or position is ignored (the inherited one used), and characters the
+    font lacks are named in a warning (matplotlib's own warning named no file)."""
+    p = _write(tmp_path, "t.svg", '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 40">'
+               '<text x="1.2.3" y="30" font-size="1.2.3px" font-family="DejaVu Sans">A</text></svg>')
+    x0, y0, _, y1 = art_area(load_element(p).paths).bounds
+    assert 0 <= x0 < 1 and y1 == pytest.approx(30, abs=0.01)  # x 0, on the baseline at 30
+    assert 30 - y0 == pytest.approx(0.729 * 16, rel=0.01)  # the default 16px
+    q = _write(tmp_path, "q.svg", '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 40">'
+               '<text x="5" y="30" font-family="DejaVu Sans">A\u65e5</text></svg>')
+    with pytest.warns(UserWarning, match="q.svg: characters the font lacks \\(\u65e5\\) are drawn as empty boxes"):
+        load_element(q)

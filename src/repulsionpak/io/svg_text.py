@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import logging
 import re
+import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -38,6 +39,7 @@ _SIZE_KEYWORDS = {"xx-small": 9.0, "x-small": 10.0, "small": 13.0, "medium": 16.
 _UNITS = {"": 1.0, "px": 1.0, "pt": 4.0 / 3.0, "pc": 16.0, "mm": 96.0 / 25.4, "cm": 96.0 / 2.54,
           "in": 96.0, "q": 96.0 / 101.6}
 _DEFAULT_SIZE = 16.0  # a browser's "medium"
+_NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?"
 
 
 def _local(tag) -> str:
@@ -62,7 +64,7 @@ def _shorthand(value: str) -> dict[str, str]:
     tokens = re.findall(r"'[^']*'|\"[^\"]*\"|[^\s]+", value)
     for i, tok in enumerate(tokens):
         size = tok.split("/", 1)[0]
-        if re.fullmatch(r"[\d.]+[a-zA-Z%]*", size) or size.lower() in _SIZE_KEYWORDS:
+        if re.fullmatch(_NUMBER + r"[a-zA-Z%]*", size, re.IGNORECASE) or size.lower() in _SIZE_KEYWORDS:
             out = {"font-size": size, "font-family": " ".join(tokens[i + 1:])}
             for t in tokens[:i]:
                 t = t.lower()
@@ -124,7 +126,7 @@ def _font_size(v: str, parent: float) -> float:
         return parent * 1.2
     if v == "smaller":
         return parent / 1.2
-    m = re.fullmatch(r"([+-]?[\d.]+(?:e[+-]?\d+)?)\s*([a-z%]*)", v)
+    m = re.fullmatch(rf"({_NUMBER})\s*([a-z%]*)", v)
     if not m:
         return parent
     num, unit = float(m.group(1)), m.group(2)
@@ -157,7 +159,7 @@ def _first_length(el: ET.Element, name: str) -> float | None:
     parts = [p for p in re.split(r"[\s,]+", v.strip()) if p]
     if not parts:
         return None
-    m = re.fullmatch(r"([+-]?[\d.]+(?:e[+-]?\d+)?)\s*([a-z]*)", parts[0].lower())
+    m = re.fullmatch(rf"({_NUMBER})\s*([a-z]*)", parts[0].lower())
     if not m:
         return None
     return float(m.group(1)) * _UNITS.get(m.group(2), 1.0)
@@ -173,6 +175,7 @@ class _Fonts:
         self._fp, self._findfont = FontProperties, findfont
         self._ttp = TextToPath()
         self.missing: set[str] = set()
+        self.missing_glyphs: set[str] = set()
         self.fallback = "DejaVu Serif"
         self._cache: dict = {}
         self._names = None
@@ -210,16 +213,23 @@ class _Fonts:
 
         fp = self.prop(props)
         scale = props.size / self._ttp.FONT_SCALE
-        tp = TextPath((0, 0), s, size=props.size, prop=fp)
+        with warnings.catch_warnings(record=True) as caught:  # "Glyph N (...) missing from font(s) ..."
+            warnings.simplefilter("always")
+            tp = TextPath((0, 0), s, size=props.size, prop=fp)
+            font = self._ttp._get_font(fp)
+            glyphs = self._ttp.get_glyphs_with_font(font, s, return_new_glyphs_only=False)[0]
+            glyph = font.load_char(ord(s[-1]), flags=LoadFlags.NO_HINTING) if glyphs else None
+        for w in caught:
+            m = re.match(r"Glyph (\d+) ", str(w.message))
+            if m:
+                self.missing_glyphs.add(chr(int(m.group(1))))
+            else:
+                warnings.warn(w.message, w.category, stacklevel=2)
         verts = np.array(tp.vertices, dtype=float)
         verts[:, 1] = -verts[:, 1]
-        font = self._ttp._get_font(fp)
-        glyphs = self._ttp.get_glyphs_with_font(font, s, return_new_glyphs_only=False)[0]
-        if not glyphs:
+        if glyph is None:
             return verts, np.asarray(tp.codes), 0.0
-        last_x = glyphs[-1][1]
-        glyph = font.load_char(ord(s[-1]), flags=LoadFlags.NO_HINTING)
-        return verts, np.asarray(tp.codes), (last_x + glyph.linearHoriAdvance / 65536.0) * scale
+        return verts, np.asarray(tp.codes), (glyphs[-1][1] + glyph.linearHoriAdvance / 65536.0) * scale
 
 
 def _path_data(verts: np.ndarray, codes: np.ndarray) -> str:
@@ -299,11 +309,15 @@ def _convert(root: ET.Element, texts: list[ET.Element], notes: set[str]) -> str 
                 if d:
                     ET.SubElement(target, ns + "path", {"d": d})
         holder[list(holder).index(text)] = group
-    if not fonts.missing:
+    said = []
+    if fonts.missing:
+        said.append(f"text in a font that is not installed ({', '.join(sorted(fonts.missing))}) is drawn in "
+                    f"the default serif font ({fonts.fallback}) instead")
+    if fonts.missing_glyphs:
+        said.append(f"characters the font lacks ({''.join(sorted(fonts.missing_glyphs))}) are drawn as empty boxes")
+    if not said:
         return None
-    return (f"text in a font that is not installed ({', '.join(sorted(fonts.missing))}) is drawn in "
-            f"the default serif font ({fonts.fallback}) instead; install the font or convert the "
-            "text to outlines to pack the lettering as designed")
+    return "; ".join(said) + "; install the font or convert the text to outlines to pack the lettering as designed"
 
 
 def _as_group(el: ET.Element, ns: str) -> ET.Element:
@@ -352,7 +366,11 @@ def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve) -> N
     if not s:
         return
     state["first"] = False
-    verts, codes, advance = fonts.run(s, props)
+    try:
+        verts, codes, advance = fonts.run(s, props)
+    except Exception:  # noqa: BLE001  (a glyph FreeType cannot load: the run is left out, said once)
+        notes.add("text the font machinery could not draw (left out)")
+        return
     chunk = pieces[-1]
     if chunk["start"] is None:
         chunk["start"] = state["x"]
