@@ -553,3 +553,36 @@ def test_translucent_groups_are_written_as_groups(tmp_path):
 
     for x, y in [(30, 30), (10, 10), (55, 55), (70, 70), (15, 75)]:  # overlap, red, green+blue, blue, black
         np.testing.assert_allclose(pixel(out, x, y), pixel(src, x, y), atol=2 / 255)
+
+
+@pytest.mark.parametrize("root", [
+    'width="1200" height="600" viewBox="0 0 600 600" preserveAspectRatio="xMaxYMid meet"',
+    'width="1200" height="600" viewBox="0 0 600 600" preserveAspectRatio="none"',
+    'width="1200" height="600" viewBox="0 0 600 600" transform="translate(100 20)"',
+])
+def test_the_output_overlays_its_container_file_on_the_page(tmp_path, root):
+    """Both files drawn at the same size: the output's container outline lies where the
+    input's does (preserveAspectRatio was dropped: the output moved 300 px left)."""
+    resvg_py = pytest.importorskip("resvg_py")
+    import io
+
+    import matplotlib.image as mpimg
+
+    src = tmp_path / "c.svg"
+    src.write_text(f'<svg xmlns="http://www.w3.org/2000/svg" {root}><path fill="#000" '
+                   'd="M300,50 C450,50 550,170 550,300 C550,450 420,550 300,550 C160,550 50,440 50,300 '
+                   'C50,160 150,50 300,50 Z"/></svg>')
+    c = load_container(src)
+    out = tmp_path / "o.svg"
+    write_packing_svg(out, c, [], 5.0)
+
+    def ink(path):
+        png = bytes(resvg_py.svg_to_bytes(svg_path=str(path), width=1200, height=600))
+        return mpimg.imread(io.BytesIO(png), format="png")[..., 3] > 0.5
+
+    a, b = ink(src), ink(out)
+    cols = lambda m: np.flatnonzero(m.any(axis=0))  # noqa: E731
+    assert a.sum() > 1000 and b.sum() > 1000
+    assert abs(cols(a)[0] - cols(b)[0]) <= 2 and abs(cols(a)[-1] - cols(b)[-1]) <= 2
+    rows = lambda m: np.flatnonzero(m.any(axis=1))  # noqa: E731
+    assert abs(rows(a)[0] - rows(b)[0]) <= 2 and abs(rows(a)[-1] - rows(b)[-1]) <= 2

@@ -1087,6 +1087,9 @@ def _dasharray(raw) -> tuple[float, ...]:
     return tuple(vals * 2 if len(vals) % 2 else vals)
 
 
+#: attributes of the root <svg> that map its user units to the page (kept for the output)
+ROOT_VIEW_ATTRS = ("width", "height", "viewBox", "preserveAspectRatio", "transform")
+
 _SIZE_ATTRS = {"Circle": ("r",), "Ellipse": ("rx", "ry"), "Rect": ("width", "height")}
 
 
@@ -1124,9 +1127,9 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
         warn(path, fonts_missing)
     hoist_clip_paths(root_xml)
     gradients = _gradient_colours(root_xml)
-    svg_root = {
+    svg_root = {  # what places the user units on the page: an output with these overlays the input
         k: root_xml.get(k)
-        for k in ("width", "height", "viewBox")
+        for k in ROOT_VIEW_ATTRS
         if root_xml.get(k) is not None
     }
     root_attrs = {k: v for k, v in root_xml.attrib.items()}

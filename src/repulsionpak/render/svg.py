@@ -41,6 +41,7 @@ import shapely
 
 from ..errors import OutputError
 from ..io.svg_write import atomic_write_bytes, format_number
+from ..io.svg_read import ROOT_VIEW_ATTRS
 from ..types import ArtPath, Container, PlacedArt, Style
 from .curves import decimals_for, path_data
 from .paint import CopyPaint, matrix_attr
@@ -232,7 +233,7 @@ def _view(container: Container) -> list[tuple[str, str]]:
         out.append(("height", format_number(vb[3])))
         out.append(("viewBox", " ".join(format_number(v) for v in vb)))
         return out
-    for key in ("width", "height", "viewBox"):
+    for key in ROOT_VIEW_ATTRS:  # the input's page mapping: the output overlays it
         if root.get(key) is not None:
             out.append((key, str(root[key])))
     return out
