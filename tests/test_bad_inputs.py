@@ -574,3 +574,19 @@ def test_a_packing_whose_every_element_is_dropped_is_an_error(monkeypatch):
                                                                fill_leftover=False))
     with pytest.raises(errors.ParameterError, match="no element fits: the final verification dropped all 3"):
         pack_mod.pack(load_container(CIRCLE), load_elements([APPLE]), params)
+
+
+@pytest.mark.parametrize("opt", ["-o", "--png"])
+def test_a_file_a_manifest_names_is_not_overwritten(tmp_path, opt):
+    """`-o logo.svg` beside a manifest naming logo.svg replaced the element with the
+    packing (exit 0); the next run then read the packing as the element."""
+    d = tmp_path / "in"
+    d.mkdir()
+    shutil.copy(APPLE, d / "logo.svg")
+    (d / "scene.toml").write_text('[[element]]\nfile = "logo.svg"\n')
+    before = (d / "logo.svg").read_bytes()
+    outs = ["-o", str(d / "logo.svg")] if opt == "-o" else ["-o", str(tmp_path / "o.svg"), "--png", str(d / "logo.svg")]
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(d / "scene.toml"), *outs, *TINY])
+    assert res.exit_code == 5, res.stderr
+    _check_one_error_line(res, "refusing to overwrite the input")
+    assert (d / "logo.svg").read_bytes() == before

@@ -76,7 +76,11 @@ def _fit_workers() -> int:
 
 
 def _check_outputs(outputs: list[Path | None], inputs: list[Path]) -> None:
-    """Refuse outputs that would overwrite an input or sit in a missing directory."""
+    """Refuse outputs that would overwrite an input (a file a manifest names included) or
+    sit in a missing directory."""
+    from .io.manifest import is_manifest, manifest_files
+
+    inputs = [*inputs, *(f for i in inputs if is_manifest(i) for f in manifest_files(i))]
     for out in outputs:
         if out is None:
             continue

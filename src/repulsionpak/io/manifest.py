@@ -132,6 +132,22 @@ def load_manifest(path, base: ElementControls | None = None, tolerance: float | 
     return out
 
 
+def manifest_files(path) -> list[Path]:
+    """The files and folders a manifest names, resolved against it (for the outputs'
+    check: none may overwrite them); empty when the manifest cannot be read (loading it
+    then says why)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return []
+    entries = data.get("element", [])
+    if not isinstance(entries, list):
+        return []
+    return [path.parent / e["file"] for e in entries
+            if isinstance(e, dict) and isinstance(e.get("file"), str) and e["file"]]
+
+
 def load_element_args(paths, controls: ElementControls | None = None, tolerance: float | None = None
                       ) -> list[Element]:
     """Element arguments as the CLI gets them: files, folders and manifests (``.toml``),
@@ -162,4 +178,4 @@ def load_element_args(paths, controls: ElementControls | None = None, tolerance:
     return out
 
 
-__all__ = ["load_manifest", "load_element_args", "is_manifest"]
+__all__ = ["load_manifest", "load_element_args", "is_manifest", "manifest_files"]
