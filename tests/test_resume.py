@@ -65,6 +65,10 @@ def test_checkpoint_file_round_trip_and_fingerprint(tmp_path):
     r = CliRunner().invoke(app, [*args[:-3], "--max-iterations", "500", "-q", "-o", str(tmp_path / "c.svg"),
                                  "--resume", str(ck)])
     assert r.exit_code == 2 and "other inputs or parameters" in r.output and not (tmp_path / "c.svg").exists()
+    # other controls (they were not in the fingerprint: a different packing, exit 0)
+    for extra in (["--rotation", "fixed"], ["--rigid"], ["--stiffness", "3"]):
+        r = CliRunner().invoke(app, [*args, *extra, "-o", str(tmp_path / "d.svg"), "--resume", str(ck)])
+        assert r.exit_code == 2 and "other inputs or parameters" in r.output, (extra, r.output)
     bad = tmp_path / "bad.npz"
     bad.write_bytes(b"not a zip")
     with pytest.raises(InputError, match="not a repulsionpak checkpoint"):

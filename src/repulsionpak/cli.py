@@ -304,8 +304,12 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     if checkpoint is not None or resume is not None:
         from .checkpoint import fingerprint, load_checkpoint, save_checkpoint
 
-        files = [container, *_expand(elements), *_expand(secondary or [])]
-        fp = fingerprint(files, params.to_dict())
+        from .io.manifest import is_manifest, manifest_files
+
+        args = [*elements, *(secondary or [])]
+        files = [container, *_expand(args), *_expand([f for a in args if is_manifest(a) for f in manifest_files(a)])]
+        # the controls (--rotation, --rigid, --stiffness, the manifests' settings) shape the run too
+        fp = fingerprint(files, dict(params.to_dict(), controls=[repr(e.controls) for e in [*elems, *secs]]))
         if resume is not None:
             resumed = load_checkpoint(resume, fp)
         if checkpoint is not None:
