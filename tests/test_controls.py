@@ -74,6 +74,8 @@ def test_manifest_reads_defaults_elements_and_pins(lib):
     ('[elements]\nfile = "disc.svg"\n', ["unknown key 'elements'", "did you mean 'element'"]),
     ('[[element]]\nfile = "disc.svg"\nrigid = 1\n', ["rigid must be true or false"]),
     ('[[element]\n', ["not valid TOML"]),
+    ('[[element]]\nfile = "disc.svg"\npins = [{x = nan, y = 2}]\n', ["pin 1: x must be a finite number"]),
+    ('[[element]]\nfile = "disc.svg"\npins = [{x = 1, y = 2, angle = inf}]\n', ["angle must be a finite number"]),
 ])
 def test_manifest_errors_name_file_and_key(lib, text, words):
     m = lib / "bad.toml"
@@ -106,6 +108,33 @@ def test_pins_outside_or_overlapping_are_refused(lib):
         els = [dataclasses.replace(star, controls=ElementControls(pins=pins, weight=0)), disc]
         with pytest.raises(ParameterError, match=words):
             pack(cont, els, _params(4, iters=10))
+
+
+def test_pins_a_little_more_than_the_gap_apart_are_accepted(lib):
+    """Pins are checked on their art, against the gap: two stars 1.17 gaps apart were
+    refused as overlapping (the check was on their skins, 0.6 gap wide each)."""
+    cont = load_container(lib / "circle.svg")
+    star = load_elements([lib / "star5.svg"])[0]
+    disc = load_elements([lib / "disc.svg"])[0]
+    art = art_area(star.paths)
+    gap = FAST.gap  # 20
+
+    def apart(dx):  # the art distance between two copies dx apart along x
+        return float(art.distance(shapely.affinity.translate(art, dx, 0)))
+
+    lo, hi = 0.0, 1000.0
+    for _ in range(60):  # the offset that leaves 1.1 gaps between the arts
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if apart(mid) < 1.1 * gap else (lo, mid)
+    for dx, ok in ((hi, True), (hi - 0.3 * gap, False)):
+        pins = (Pin(450, 500, 0, 1.0), Pin(450 + dx, 500, 0, 1.0))
+        els = [dataclasses.replace(star, controls=ElementControls(pins=pins, weight=0)), disc]
+        if ok:
+            packing = pack(cont, els, _params(4, iters=10))
+            assert sum(1 for p in packing.placed if p.kind == "primary") >= 2
+        else:
+            with pytest.raises(ParameterError, match=r"is [\d.]+ from the pin .* closer than the gap \(20\)"):
+                pack(cont, els, _params(4, iters=10))
 
 
 def test_weighted_assignment_honours_weights():

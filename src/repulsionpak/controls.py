@@ -200,19 +200,27 @@ def prepare_controlled(container, elements, params, rng, gap):
     region = container.region
     margin = margin_of(params, gap)
     inner = shapely.buffer(region, -(1.0 - 1e-6) * margin) if margin > 0 else region
-    for k, ((i, p), sk) in enumerate(zip(pins, pin_skins)):
-        where = f"{elements[i].source}: pin ({p.x:g}, {p.y:g})"
+    arts = []
+    for k, (i, p) in enumerate(pins):
         o = outlines[i]
         art = shapely.affinity.rotate(shapely.affinity.scale(
             shapely.affinity.translate(o.geometry, -o.center[0], -o.center[1]), p.scale, p.scale,
             origin=(0, 0)), pin_ang[k], origin=(0, 0), use_radians=True)
-        art = shapely.affinity.translate(art, *pin_pos[k])
+        arts.append(shapely.affinity.translate(art, *pin_pos[k]))
+    for k, ((i, p), art) in enumerate(zip(pins, arts)):
+        where = f"{elements[i].source}: pin ({p.x:g}, {p.y:g})"
         if not shapely.covers(inner, art):
             raise ParameterError(f"{where} lies (partly) outside the container or closer than the "
                                  f"edge margin ({margin:g}) to its edge; move it inwards or make it smaller")
-        for (j, q), other in zip(pins[k + 1:], pin_skins[k + 1:]):
-            if sk.intersects(other):
-                raise ParameterError(f"{where} overlaps the pin ({q.x:g}, {q.y:g}) of {elements[j].source}")
+        for (j, q), other in zip(pins[k + 1:], arts[k + 1:]):
+            # the art a gap apart, as the packing keeps it (their skins, 0.6 gap wide each,
+            # may overlap: pinned meshes never move; the check was on them, and refused pins
+            # whose art stood 1.17 gaps apart)
+            d = float(art.distance(other))
+            if d < gap:
+                raise ParameterError(
+                    f"{where} {'overlaps' if d == 0 else f'is {d:.3g} from'} the pin ({q.x:g}, {q.y:g}) of "
+                    f"{elements[j].source}{'' if d == 0 else f', closer than the gap ({gap:g})'}; move them apart")
     free = region
     if pin_skins:
         free = shapely.difference(region, shapely.buffer(shapely.union_all(pin_skins), 0.5 * gap))

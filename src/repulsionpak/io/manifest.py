@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 from collections.abc import Sequence
 from pathlib import Path
@@ -75,6 +76,9 @@ def _pins(path, where: str, raw) -> tuple[Pin, ...]:
             if k not in p:
                 raise InputError(path, f"{w}: missing {k}")
         vals = {k: _value(path, w, k, p[k], (int, float)) for k in PIN_KEYS if k in p}
+        for k, v in vals.items():
+            if not math.isfinite(v):
+                raise InputError(path, f"{w}: {k} must be a finite number, got {v!r}")
         if "scale" in vals and not vals["scale"] > 0:
             raise InputError(path, f"{w}: scale must be > 0, got {vals['scale']:g}")
         out.append(Pin(**vals))
