@@ -181,3 +181,39 @@ def test_a_signal_before_the_simulation_aborts_at_once():
                 os.kill(os.getpid(), sig)
                 for _ in range(1000):
                     pass
+
+
+def test_the_packing_does_not_depend_on_the_blas_threads(tmp_path):
+    """The same seed on machines with other core counts: OpenBLAS splits a product or a
+    solve differently with more threads, and the last bits amplified into another packing
+    (`batch`, whose Dask workers run with OPENBLAS_NUM_THREADS=1, wrote other packings than
+    `pack` on two cores). Every run now uses one BLAS thread while packing and measuring."""
+    import os
+    import subprocess
+    import sys
+
+    E = Path(examples.__file__).parent
+    args = [sys.executable, "-m", "repulsionpak.cli", "pack", str(E / "containers" / "heart.svg"),
+            str(E / "elements"), "--seed", "1", "--gap", "6", "--count", "12", "--max-iterations", "1500", "-q"]
+    outs = []
+    for n in ("1", "4"):
+        out = tmp_path / f"blas{n}.svg"
+        env = dict(os.environ, OPENBLAS_NUM_THREADS=n, NUMBA_NUM_THREADS="1")
+        r = subprocess.run([*args, "-o", str(out)], env=env, capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr
+        outs.append(out.read_bytes())
+    assert outs[0] == outs[1]
+
+
+def test_one_blas_thread_inside_the_block():
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    import numpy as np
+
+    from repulsionpak.blas import one_blas_thread
+
+    np.ones((2, 2)) @ np.ones((2, 2))  # BLAS loaded
+    blas = [i for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas"]
+    if not blas:
+        pytest.skip("numpy without a BLAS threadpoolctl knows")
+    with one_blas_thread():
+        assert all(i["num_threads"] == 1 for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas")

@@ -54,6 +54,7 @@ import shapely
 from shapely.geometry import Polygon, box
 
 from . import metrics as _metrics
+from .blas import with_one_blas_thread
 from .errors import ParameterError
 from .geometry.edt import distance_transform
 from .geometry.outline import _polygonal
@@ -482,6 +483,7 @@ def _q_at(res: dict, r0: float) -> float | None:
     return float(np.interp(r0, r, q))
 
 
+@with_one_blas_thread
 def evaluate(
     container: Container,
     placed: list[PlacedArt],

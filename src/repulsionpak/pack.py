@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
+from .blas import with_one_blas_thread
 from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
 from .params import Params
@@ -198,6 +199,7 @@ def prepare(container: Container, elements: Sequence[Element], params: Params,
     return templates, placement, gap
 
 
+@with_one_blas_thread
 def pack(container: Container, elements: Sequence[Element], params: Params = Params(),
          secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
          should_stop: Callable[[], bool] | None = None,
