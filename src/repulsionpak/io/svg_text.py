@@ -201,7 +201,8 @@ class _Fonts:
             # (Chrome's and resvg's "Times New Roman"), not to matplotlib's sans-serif
             use = installed + [f for f in families if f.lower() in _GENERIC] or ["serif"]
             fp = self._fp(family=use, weight=props.weight, style=props.style, size=self._ttp.FONT_SCALE)
-            self.fallback = get_font(self._findfont(fp, fallback_to_default=True)).family_name
+            if named and not installed:  # the font the warning names
+                self.fallback = get_font(self._findfont(fp, fallback_to_default=True)).family_name
             self._cache[key] = fp
         return self._cache[key]
 
