@@ -96,3 +96,26 @@ def test_pack_sizes_secondaries_to_their_pockets():
     scales = sorted({packing.templates[int(packing.model.template_index[i])].scale for i in sec})
     assert len(scales) >= 2 and scales[-1] / scales[0] >= SIZE_STEP ** 2 * 0.999
     assert packing.verification.ok
+
+
+def test_max_count_bounds_every_secondary_copy():
+    """`secondary.max_count` is an upper bound on the secondaries, the leftover and hole
+    fills' copies included (max_count 1 gave 116 copies), and 0 means none (it seeded one)."""
+    import dataclasses
+
+    from repulsionpak import examples
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.pack import pack
+    from repulsionpak.params import Params
+
+    cont = load_container(examples.container_file("circle"))
+    els = load_elements(examples.element_files()[:4])
+    for cap in (0, 1, 5):
+        p = dataclasses.replace(Params(), gap=8.0, seed=1)
+        p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=6),
+                                sim=dataclasses.replace(p.sim, max_iterations=300),
+                                secondary=dataclasses.replace(p.secondary, max_count=cap))
+        packing = pack(cont, els, p)
+        assert packing.n_secondary <= cap
+        assert packing.n_primary == 6
+    assert packing.n_secondary == 5  # the room was there

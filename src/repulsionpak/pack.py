@@ -252,6 +252,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       iterations={"primary": res.iterations, "secondary": 0},
                       seconds={"preprocess": t1 - t0, "primary": t2 - t1, "secondary": 0.0},
                       stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction)
+    user_cap = params.secondary.max_count  # a bound on every secondary copy, the fills' too
     if not secondary and params.secondary.auto:
         secondary = elements  # the pockets get small copies of the primaries (sec. 9)
         cap = 10 * len(placement.template_index)
@@ -301,14 +302,14 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         library = HoleLibrary.of(secondary)
         if library is not None and sec.fill_leftover:  # what the verification left (holes.py)
             t5 = time.perf_counter()
-            packing.placed = packing.placed + fill_pockets(
+            packing.placed = packing.placed + _within(user_cap, packing.placed, fill_pockets(
                 packing.placed, library, container.region, gap, margin_of(params, gap), rng,
-                sec.hole_min_radius * gap, params.render)
+                sec.hole_min_radius * gap, params.render))
             packing.seconds["leftover"] = time.perf_counter() - t5
         if library is not None and sec.fill_holes:  # the holes of the art are pockets too (holes.py)
             t5 = time.perf_counter()
-            packing.placed = packing.placed + fill_holes(
-                packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render)
+            packing.placed = packing.placed + _within(user_cap, packing.placed, fill_holes(
+                packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render))
             packing.seconds["holes"] = time.perf_counter() - t5
     packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0
@@ -319,6 +320,13 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
             "this container even shrunk to half their size; use a smaller gap, a smaller margin or "
             "fewer, smaller elements")
     return packing
+
+
+def _within(cap: int | None, placed: list[PlacedArt], new: list[PlacedArt]) -> list[PlacedArt]:
+    """The first of ``new`` copies that keep the secondaries at most ``cap`` (all: no cap)."""
+    if cap is None:
+        return new
+    return new[:max(0, cap - sum(1 for p in placed if p.kind == "secondary"))]
 
 
 __all__ = ["Packing", "pack", "prepare", "default_gap"]

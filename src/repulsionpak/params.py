@@ -317,7 +317,10 @@ class Params:
             (sec.hole_min_radius > 0, "secondary.hole_min_radius must be > 0"),
             (0 <= sec.hole_depth <= 10, "secondary.hole_depth must be in [0, 10]"),
             (1e-7 <= self.render.curve_tolerance <= 0.05, "render.curve_tolerance must be in [1e-7, 0.05]"),
-            (0 < self.render.max_gap_share <= 0.5, "render.max_gap_share must be in (0, 0.5]"),
+            # a looser fit eats into the gap, and the checks' flattening of it (a tenth of the
+            # tolerance) drifts from what evaluate measures on the file: 0.5 let 14 of 159
+            # copies end under 0.9 gap while the report said every promise held
+            (0 < self.render.max_gap_share <= 0.05, "render.max_gap_share must be in (0, 0.05]"),
             (1 <= self.render.samples <= 64, "render.samples must be in [1, 64]"),
             (0 <= self.render.smoothing <= 1, "render.smoothing must be in [0, 1]"),
             (0.05 <= self.render.angle_tolerance <= 45, "render.angle_tolerance must be in [0.05, 45] degrees"),

@@ -83,11 +83,11 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
     ny, nx = dist.shape
     out = []
     for k in range(len(d)):
+        if params.max_count is not None and len(out) >= params.max_count:
+            break  # (checked first: max_count = 0 still seeded one)
         if blocked[iy[k], ix[k]]:
             continue
         out.append(k)
-        if params.max_count is not None and len(out) >= params.max_count:
-            break
         r = max(d_sep, float(d[k])) / h
         y0, y1 = max(0, int(iy[k] - r)), min(ny, int(iy[k] + r) + 1)
         x0, x1 = max(0, int(ix[k] - r)), min(nx, int(ix[k] + r) + 1)
