@@ -602,3 +602,36 @@ def test_a_curve_fit_looser_than_a_twentieth_of_the_gap_is_refused(tmp_path):
                                    "--config", str(cfg), *TINY])
     assert res.exit_code == 3
     _check_one_error_line(res, "render.max_gap_share must be in (0, 0.05]")
+
+
+def test_small_option_and_reading_messages(tmp_path):
+    """Errors name their option, carry the usual prefix, and say what is wrong."""
+    r = CliRunner().invoke(app, ["study", "--runs", "1", "--k-edge", "-5", "-o", str(tmp_path / "s.png")])
+    assert r.exit_code == 3
+    _check_one_error_line(r, "--k-edge must be a number >= 0, got -5")  # was "force constants must be >= 0"
+    r = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", str(tmp_path / "o.svg"),
+                                 "--movie-every", "10", *TINY])
+    assert r.exit_code == 3  # was ignored
+    _check_one_error_line(r, "--movie-every needs --movie")
+    empty = tmp_path / "empty_container.svg"
+    empty.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10"><g id="container"/>'
+                     '<g id="elements"/></svg>')
+    r = CliRunner().invoke(app, ["evaluate", str(empty)])
+    assert r.exit_code == 2
+    _check_one_error_line(r, 'its <g id="container"> draws nothing')  # was "has no <g id=...>"
+
+
+def test_a_packing_that_breaks_a_promise_is_written_with_exit_6(tmp_path, monkeypatch):
+    from repulsionpak import packing_output
+
+    real = packing_output.invariants
+
+    def broken(packing, metrics):
+        return dict(real(packing, metrics), ok=False, overlap_ok=False)
+
+    monkeypatch.setattr(packing_output, "invariants", broken)
+    out = tmp_path / "o.svg"
+    r = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", str(out), *TINY])
+    assert r.exit_code == 6 and out.exists()
+    line = _check_one_error_line(r, "the packing breaks a promise")
+    assert line.startswith("repulsionpak: error: ")  # it lacked the prefix

@@ -261,6 +261,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
     _check_outputs([output, report, png, checkpoint, pdf, movie], inputs + ([resume] if resume else []))
     recorder = None
+    if movie is None and movie_every is not None:
+        raise ParameterError("--movie-every needs --movie OUT.gif|OUT.mp4")
     if movie is not None:
         from .render.movie import MovieRecorder, check_movie_output
 
@@ -541,7 +543,7 @@ def pack(
         if rep["partial"]:
             raise typer.Exit(130)
         if not rep["invariants"]["ok"]:
-            typer.echo(f"error: {output}: the packing breaks a promise (see the report's "
+            typer.echo(f"repulsionpak: error: {output}: the packing breaks a promise (see the report's "
                        "'invariants'); it was written for inspection", err=True)
             raise typer.Exit(6)
 
@@ -791,6 +793,9 @@ def study(
             raise ParameterError(f"--gap must be a positive number, got {g:g}")
         elems = load_elements(efiles)
         ks = k_edge or [10.0, 250.0, 1000.0]
+        for k in ks:
+            if not k >= 0:
+                raise ParameterError(f"--k-edge must be a number >= 0, got {k:g}")
 
         def on_run(k, i, r):
             if not quiet:

@@ -147,7 +147,8 @@ class SimParams:
         "moving meshes' area fraction over the window, divided by that area fraction, falls below "
         "this (the paper samples once per second with ε = 0.01; we sample every iteration).")
     min_iterations: int = _doc(300, "iterations", "Never stop before this many iterations.")
-    max_iterations: int = _doc(20000, "iterations", "Hard bound on the number of iterations.")
+    max_iterations: int = _doc(20000, "iterations", "Bound on the iterations of each phase before it "
+                               "settles (the settle_iterations follow).")
     settle_iterations: int = _doc(
         300, "iterations", "Extra iterations without growth after stopping, to resolve the last overlaps.")
 

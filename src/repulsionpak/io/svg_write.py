@@ -207,9 +207,13 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
                 continue
             groups.setdefault(id(grp), (grp, []))[1].append(sh)
         if container_attrs is None:
+            there = doc.xml is not None and any(
+                isinstance(el.tag, str) and el.tag.rsplit("}", 1)[-1] == "g" and el.get("id") == "container"
+                for el in doc.xml.iter())
             raise InputError(
                 p,
-                'has no <g id="container">; it is not a packing written by repulsionpak',
+                'its <g id="container"> draws nothing; the container outline is needed to measure the packing'
+                if there else 'has no <g id="container">; it is not a packing written by repulsionpak',
             )
 
         everything = (
