@@ -650,6 +650,7 @@ def format_table(result: dict) -> str:
         ("gap requested", _fmt(g.get("requested"))),
         ("gap median", _fmt(g.get("median"))),
         ("gap p10 / p90", f"{_fmt(g.get('p10'))} / {_fmt(g.get('p90'))}"),
+        ("gap min", _fmt(g.get("min"))),
         ("deformation mean / max", f"{_fmt(d.get('mean'))} / {_fmt(d.get('max'))}"),
     ]
     if "outside_area" in result:
@@ -657,7 +658,9 @@ def format_table(result: dict) -> str:
     e = result.get("edge") or {}
     if e:
         rows.append(("edge distance min", _fmt(e.get("min"))))
-        rows.append((f"closer than {_fmt(e.get('margin'))} to edge", _fmt(e.get("n_below_margin"))))
+        margin = e.get("margin")
+        rows.append((f"closer than 0.98 × {_fmt(margin)} to edge" if margin is not None else "closer than the margin",
+                     _fmt(e.get("n_below_margin"))))
     dd = result.get("distortion") or {}
     if dd.get("median") is not None:
         rows.append(("distortion median / p95", f"{_fmt(dd.get('median'))} / {_fmt(dd.get('p95'))}"))
