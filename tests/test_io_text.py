@@ -146,3 +146,21 @@ def test_malformed_values_and_missing_glyphs(tmp_path):
                '<text x="5" y="30" font-family="DejaVu Sans">A\u65e5</text></svg>')
     with pytest.warns(UserWarning, match="q.svg: characters the font lacks \\(\u65e5\\) are drawn as empty boxes"):
         load_element(q)
+
+
+def test_a_run_the_font_machinery_cannot_draw_is_left_out_with_a_note(tmp_path, monkeypatch):
+    from repulsionpak.io import svg_text
+
+    real = svg_text._Fonts.run
+
+    def run(self, s, props):
+        if s == "B":
+            raise RuntimeError("FreeType could not load the glyph")
+        return real(self, s, props)
+
+    monkeypatch.setattr(svg_text._Fonts, "run", run)
+    p = _write(tmp_path, "t.svg", '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 40">'
+               '<text x="5" y="30" font-family="DejaVu Sans">A<tspan>B</tspan></text></svg>')
+    with pytest.warns(UserWarning, match="text the font machinery could not draw"):
+        e = load_element(p)
+    assert art_area(e.paths).area > 20  # the A is drawn

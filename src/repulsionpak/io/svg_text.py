@@ -347,7 +347,7 @@ def _layout(el, target, props: _Props, ns, fonts: _Fonts, pieces, state, notes, 
     state["y"] += _first_length(el, "dy") or 0.0
     if _local(el.tag) == "textPath":
         notes.add("text along a path (drawn on a straight line)")
-    _emit(el.text, target, props, fonts, pieces, state, preserve)
+    _emit(el.text, target, props, fonts, pieces, state, preserve, notes)
     for child in el:
         name = _local(child.tag)
         if name in _TEXT_LIKE:
@@ -355,10 +355,10 @@ def _layout(el, target, props: _Props, ns, fonts: _Fonts, pieces, state, notes, 
             target.append(sub)
             keep = preserve if child.get(_XML_SPACE) is None else child.get(_XML_SPACE) == "preserve"
             _layout(child, sub, _Props(props, child), ns, fonts, pieces, state, notes, keep)
-        _emit(child.tail, target, props, fonts, pieces, state, preserve)
+        _emit(child.tail, target, props, fonts, pieces, state, preserve, notes)
 
 
-def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve) -> None:
+def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve, notes) -> None:
     if not s:
         return
     s = _collapse(s, preserve)
