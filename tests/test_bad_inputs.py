@@ -635,3 +635,21 @@ def test_a_packing_that_breaks_a_promise_is_written_with_exit_6(tmp_path, monkey
     assert r.exit_code == 6 and out.exists()
     line = _check_one_error_line(r, "the packing breaks a promise")
     assert line.startswith("repulsionpak: error: ")  # it lacked the prefix
+
+
+@pytest.mark.parametrize("vb", ["0 0 -100 100", "0 0 100", "0 0 abc 100"])
+def test_an_invalid_root_viewbox_is_ignored_as_browsers_do(tmp_path, vb):
+    """SVG: a negative size or a malformed list invalidates the viewBox, which browsers then
+    ignore (a zero size disables rendering: refused, in the bad-input corpus)."""
+    p = tmp_path / "c.svg"
+    p.write_text(f'<svg xmlns="http://www.w3.org/2000/svg" width="200" height="100" viewBox="{vb}">'
+                 '<rect x="10" y="10" width="100" height="50"/></svg>')
+    with pytest.warns(UserWarning, match=r"invalid root viewBox=.*ignored, as browsers do"):
+        c = load_container(p)
+    assert c.bounds == pytest.approx((10, 10, 110, 60))  # user units = px: no viewBox scaling
+    out = tmp_path / "o.svg"
+    from repulsionpak.io import write_packing_svg
+    write_packing_svg(out, c, [], 2.0)
+    import xml.etree.ElementTree as ET
+    root = ET.parse(out).getroot()
+    assert root.get("viewBox") is None and root.get("width") == "200"  # the output does not carry it

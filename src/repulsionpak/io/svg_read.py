@@ -1145,17 +1145,19 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 f'the root <svg> has {k}="{v}", so nothing is rendered; give it a positive size',
             )
     vb = root_xml.get("viewBox")
-    if vb is not None and vb.strip():
-        parts = [v for v in re.split(r"[\s,]+", vb.strip()) if v]
+    if vb is not None and vb.strip():  # as SVG has it: zero disables rendering, a negative size or
+        parts = [v for v in re.split(r"[\s,]+", vb.strip()) if v]  # a malformed list invalidates the attribute
         try:
             vals = [float(v) for v in parts]
         except ValueError:
             vals = []
-        if len(vals) != 4 or not all(math.isfinite(v) for v in vals):
-            raise InputError(path, f'the root <svg> has viewBox="{vb}", which is not four numbers; fix it or remove it')
-        if vals[2] <= 0 or vals[3] <= 0:
-            raise InputError(path, f'the root <svg> has viewBox="{vb}" with a {"zero" if min(vals[2:]) == 0 else "negative"} '
-                                   "width or height, so nothing is rendered; give it a positive size")
+        if len(vals) == 4 and all(math.isfinite(v) for v in vals) and min(vals[2:]) == 0:
+            raise InputError(path, f'the root <svg> has viewBox="{vb}" with a zero width or height, so nothing '
+                                   "is rendered; give it a positive size")
+        if len(vals) != 4 or not all(math.isfinite(v) for v in vals) or min(vals[2:]) < 0:
+            notes.add(f'invalid root viewBox="{vb}" (ignored, as browsers do)')
+            del root_xml.attrib["viewBox"]
+            svg_root.pop("viewBox", None)
     clean = ET.tostring(root_xml, encoding="utf-8")
 
     doc = se.SVG.parse(io.BytesIO(clean), reify=False, on_error="ignore")
