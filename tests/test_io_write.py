@@ -563,10 +563,8 @@ def test_translucent_groups_are_written_as_groups(tmp_path):
 def test_the_output_overlays_its_container_file_on_the_page(tmp_path, root):
     """Both files drawn at the same size: the output's container outline lies where the
     input's does (preserveAspectRatio was dropped: the output moved 300 px left)."""
-    resvg_py = pytest.importorskip("resvg_py")
-    import io
-
-    import matplotlib.image as mpimg
+    pytest.importorskip("resvg_py")
+    from render_checks import resvg_mask
 
     src = tmp_path / "c.svg"
     src.write_text(f'<svg xmlns="http://www.w3.org/2000/svg" {root}><path fill="#000" '
@@ -576,11 +574,7 @@ def test_the_output_overlays_its_container_file_on_the_page(tmp_path, root):
     out = tmp_path / "o.svg"
     write_packing_svg(out, c, [], 5.0)
 
-    def ink(path):
-        png = bytes(resvg_py.svg_to_bytes(svg_path=str(path), width=1200, height=600))
-        return mpimg.imread(io.BytesIO(png), format="png")[..., 3] > 0.5
-
-    a, b = ink(src), ink(out)
+    a, b = resvg_mask(src, 1200, 600), resvg_mask(out, 1200, 600)
     cols = lambda m: np.flatnonzero(m.any(axis=0))  # noqa: E731
     assert a.sum() > 1000 and b.sum() > 1000
     assert abs(cols(a)[0] - cols(b)[0]) <= 2 and abs(cols(a)[-1] - cols(b)[-1]) <= 2

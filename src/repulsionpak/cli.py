@@ -78,9 +78,9 @@ def _fit_workers() -> int:
 def _check_outputs(outputs: list[Path | None], inputs: list[Path]) -> None:
     """Refuse outputs that would overwrite an input (a file a manifest names included) or
     sit in a missing directory."""
-    from .io.manifest import is_manifest, manifest_files
+    from .io.manifest import with_manifest_files
 
-    inputs = [*inputs, *(f for i in inputs if is_manifest(i) for f in manifest_files(i))]
+    inputs = with_manifest_files(inputs)
     for out in outputs:
         if out is None:
             continue
@@ -306,10 +306,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     if checkpoint is not None or resume is not None:
         from .checkpoint import fingerprint, load_checkpoint, save_checkpoint
 
-        from .io.manifest import is_manifest, manifest_files
+        from .io.manifest import with_manifest_files
 
-        args = [*elements, *(secondary or [])]
-        files = [container, *_expand(args), *_expand([f for a in args if is_manifest(a) for f in manifest_files(a)])]
+        files = [container, *_expand(with_manifest_files([*elements, *(secondary or [])]))]
         # the controls (--rotation, --rigid, --stiffness, the manifests' settings) shape the run too
         fp = fingerprint(files, dict(params.to_dict(), controls=[repr(e.controls) for e in [*elems, *secs]]))
         if resume is not None:

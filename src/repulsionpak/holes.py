@@ -165,9 +165,9 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
 
 def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: np.random.Generator,
                min_radius: float, depth: int = 2, render: RenderParams = RenderParams(),
-               trials: int = 6) -> list[PlacedArt]:
+               trials: int = 6, limit: int | None = None) -> list[PlacedArt]:
     """Copies of ``library`` elements in the holes of ``placed`` (see the module
-    docstring); returns the new copies only. ``min_radius``: the smallest inscribed
+    docstring), at most ``limit``; returns the new copies only. ``min_radius``: the smallest inscribed
     circle of a hole's free part that gets a copy (container units). Copies keep
     1.005 × the gap from their hosts: the writer rounds their curves by at most a fifth
     of their tolerance, itself at most 0.02 gap."""
@@ -177,7 +177,7 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
     out: list[PlacedArt] = []
     queue = [(g, 0) for g in geoms]
     added: list = []
-    while queue:
+    while queue and (limit is None or len(out) < limit):
         host, level = queue.pop(0)
         if level >= depth:
             continue
@@ -199,6 +199,8 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
                     part = max(part.geoms, key=lambda q: q.area)
                 if part.is_empty or not isinstance(part, shapely.Polygon):
                     continue
+                if limit is not None and len(out) >= limit:
+                    break
                 got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
                 if got is None:
                     continue
@@ -212,7 +214,7 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
 
 def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,
                  rng: np.random.Generator, min_radius: float, render: RenderParams = RenderParams(),
-                 trials: int = 6) -> list[PlacedArt]:
+                 trials: int = 6, limit: int | None = None) -> list[PlacedArt]:
     """Undeformed copies in what is left of the negative space after the verification:
     the container shrunk by the edge margin, minus every element's art dilated by the
     gap, split into its connected pockets; each pocket whose largest inscribed circle is
@@ -224,7 +226,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     pocket, and 64 copies left Q_s(gap/2)/Q_s(0) at 0.604.)
     These pockets are the room an element left when the verification had to drop it, or
     that the simulated pocket fill did not reach; every copy is a gap from all art and
-    the margin from the edge by construction. Returns the new copies only."""
+    the margin from the edge by construction. Returns the new copies only, at most ``limit``."""
     keep = 1.005 * gap
     eps = 0.01 * gap
     # a buffer with 4 segments per quarter circle is inscribed in the true one (its chords
@@ -241,7 +243,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     out: list[PlacedArt] = []
     for pocket in parts:
         todo = [pocket]  # the pocket, then every piece a copy leaves of it, largest first
-        while todo:
+        while todo and (limit is None or len(out) < limit):
             part = todo.pop(0)
             got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
             if got is None:

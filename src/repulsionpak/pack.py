@@ -302,14 +302,15 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         library = HoleLibrary.of(secondary)
         if library is not None and sec.fill_leftover:  # what the verification left (holes.py)
             t5 = time.perf_counter()
-            packing.placed = packing.placed + _within(user_cap, packing.placed, fill_pockets(
+            packing.placed = packing.placed + fill_pockets(
                 packing.placed, library, container.region, gap, margin_of(params, gap), rng,
-                sec.hole_min_radius * gap, params.render))
+                sec.hole_min_radius * gap, params.render, limit=_room(user_cap, packing.placed))
             packing.seconds["leftover"] = time.perf_counter() - t5
         if library is not None and sec.fill_holes:  # the holes of the art are pockets too (holes.py)
             t5 = time.perf_counter()
-            packing.placed = packing.placed + _within(user_cap, packing.placed, fill_holes(
-                packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render))
+            packing.placed = packing.placed + fill_holes(
+                packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render,
+                limit=_room(user_cap, packing.placed))
             packing.seconds["holes"] = time.perf_counter() - t5
     packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0
@@ -322,11 +323,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     return packing
 
 
-def _within(cap: int | None, placed: list[PlacedArt], new: list[PlacedArt]) -> list[PlacedArt]:
-    """The first of ``new`` copies that keep the secondaries at most ``cap`` (all: no cap)."""
-    if cap is None:
-        return new
-    return new[:max(0, cap - sum(1 for p in placed if p.kind == "secondary"))]
+def _room(cap: int | None, placed: list[PlacedArt]) -> int | None:
+    """How many more secondary copies ``cap`` allows beside ``placed`` (None: no cap)."""
+    return None if cap is None else max(0, cap - sum(1 for p in placed if p.kind == "secondary"))
 
 
 __all__ = ["Packing", "pack", "prepare", "default_gap"]

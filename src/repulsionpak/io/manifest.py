@@ -152,6 +152,12 @@ def manifest_files(path) -> list[Path]:
             if isinstance(e, dict) and isinstance(e.get("file"), str) and e["file"]]
 
 
+def with_manifest_files(paths) -> list[Path]:
+    """``paths`` followed by the files and folders the manifests among them name."""
+    paths = [Path(p) for p in paths]
+    return [*paths, *(f for p in paths if is_manifest(p) for f in manifest_files(p))]
+
+
 def load_element_args(paths, controls: ElementControls | None = None, tolerance: float | None = None
                       ) -> list[Element]:
     """Element arguments as the CLI gets them: files, folders and manifests (``.toml``),
@@ -182,4 +188,4 @@ def load_element_args(paths, controls: ElementControls | None = None, tolerance:
     return out
 
 
-__all__ = ["load_manifest", "load_element_args", "is_manifest", "manifest_files"]
+__all__ = ["load_manifest", "load_element_args", "is_manifest", "manifest_files", "with_manifest_files"]

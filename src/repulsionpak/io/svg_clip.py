@@ -46,6 +46,7 @@ import shapely
 
 from ..errors import InputError
 from ..geometry.outline import art_area
+from .svg_xml import local_name as _local
 from ..types import ArtPath, ShapeSource, Style
 
 __all__ = [
@@ -108,12 +109,6 @@ class ClipDef:
     #: referencing element's user space, after the bounding-box mapping:
     #: user <- transform <- bbox <- child.
     matrix: np.ndarray = field(default_factory=lambda: np.eye(3))
-
-
-def _local(tag) -> str:
-    if not isinstance(tag, str):
-        return ""
-    return tag.rsplit("}", 1)[-1] if tag.startswith("{") else tag
 
 
 def hoist_clip_paths(root: ET.Element) -> int:

@@ -51,6 +51,8 @@ from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
 from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
 from .svg_text import text_to_paths
+from .svg_xml import inline_declarations as _inline_declarations
+from .svg_xml import local_name as _local
 
 __all__ = [
     "MAX_FILE_BYTES",
@@ -405,10 +407,6 @@ def warn_self_crossing(path, n: int, region, what: str = "container") -> None:
 # --------------------------------------------------------------------------- XML hardening
 
 
-def _local(tag) -> str:
-    if not isinstance(tag, str):
-        return ""
-    return tag.rsplit("}", 1)[-1] if tag.startswith("{") else tag
 
 
 _DOCTYPE = re.compile(rb"<!DOCTYPE\b[^\[>]*\[(?P<subset>.*?)\]\s*>", re.DOTALL)
@@ -607,22 +605,6 @@ def _check_attributes(path, root: ET.Element) -> None:
 
 _NON_RENDERED = {"symbol", "mask", "marker"}
 _CONTAINERS_OK = {"defs", "clipPath", "pattern"}
-
-
-_IMPORTANT = re.compile(r"\s*!\s*important\s*$", re.IGNORECASE)
-
-
-def _inline_declarations(style: str | None) -> list[tuple[str, str, bool]]:
-    """``(property, value, important)`` of a ``style`` attribute, in order."""
-    out = []
-    for part in (style or "").split(";"):
-        name, sep, value = part.partition(":")
-        name = name.strip().lower()
-        if not sep or not name:
-            continue
-        important = bool(_IMPORTANT.search(value))
-        out.append((name, _IMPORTANT.sub("", value).strip(), important))
-    return out
 
 
 def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:

@@ -28,6 +28,9 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from .svg_xml import inline_declarations
+from .svg_xml import local_name as _local
+
 __all__ = ["text_to_paths"]
 
 _TEXT_LIKE = {"tspan", "a", "textPath"}
@@ -40,19 +43,6 @@ _UNITS = {"": 1.0, "px": 1.0, "pt": 4.0 / 3.0, "pc": 16.0, "mm": 96.0 / 25.4, "c
           "in": 96.0, "q": 96.0 / 101.6}
 _DEFAULT_SIZE = 16.0  # a browser's "medium"
 _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?"
-
-
-def _local(tag) -> str:
-    return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else ""
-
-
-def _style_decls(el: ET.Element) -> dict[str, str]:
-    out = {}
-    for decl in (el.get("style") or "").split(";"):
-        if ":" in decl:
-            k, v = decl.split(":", 1)
-            out[k.strip().lower()] = v.strip()
-    return out
 
 
 def _split_families(text: str) -> list[str]:
@@ -86,7 +76,7 @@ class _Props:
                          "letter-spacing", "word-spacing", "writing-mode"):
                 if el.get(name) is not None:
                     own[name] = el.get(name).strip()
-            decls = _style_decls(el)
+            decls = {k: v for k, v, _ in inline_declarations(el.get("style"))}
             if "font" in decls:
                 own.update(_shorthand(decls["font"]))
             own.update({k: v for k, v in decls.items() if k.startswith(("font-", "text-anchor", "letter-",

@@ -46,6 +46,7 @@ from .svg_read import (
     rings_to_region,
     shape_bounds,
 )
+from .svg_xml import local_name
 
 __all__ = [
     "atomic_write_bytes",
@@ -208,7 +209,7 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
             groups.setdefault(id(grp), (grp, []))[1].append(sh)
         if container_attrs is None:
             there = doc.xml is not None and any(
-                isinstance(el.tag, str) and el.tag.rsplit("}", 1)[-1] == "g" and el.get("id") == "container"
+                local_name(el.tag) == "g" and el.get("id") == "container"
                 for el in doc.xml.iter())
             raise InputError(
                 p,

@@ -199,10 +199,10 @@ class Simulator:
         self.relax_order = np.arange(N, dtype=np.int64)
         self.sp_ptr = element_ranges(m.spring_elem, M)
         self.tri_ptr = element_ranges(m.tri_elem, M)
-        sp_nedge = np.bincount(m.spring_elem[m.spring_is_edge], minlength=M)
         # each element's mean edge rest length (before growth): the relaxation's length scale
-        self.edge_rest = (np.bincount(m.spring_elem[m.spring_is_edge], weights=m.rest0[m.spring_is_edge],
-                                      minlength=M) / np.maximum(sp_nedge, 1)).astype(np.float64)
+        edge_elem = m.spring_elem[m.spring_is_edge]
+        self.edge_rest = (np.bincount(edge_elem, weights=m.rest0[m.spring_is_edge], minlength=M)
+                          / np.maximum(np.bincount(edge_elem, minlength=M), 1))
         # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
         self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
                                       params.dt, params.k_growth, params.growth_headroom)
