@@ -128,6 +128,74 @@ def test_use_of_a_symbol_fits_its_viewbox_into_the_use_viewport(tmp_path, use, b
     np.testing.assert_allclose([*pts.min(axis=0), *pts.max(axis=0)], bounds, atol=1e-9)
 
 
+def _bounds(el) -> list[float]:
+    pts = np.vstack([s for p in el.paths for s in p.subpaths])
+    return [*pts.min(axis=0), *pts.max(axis=0)]
+
+
+@pytest.mark.parametrize("overflow, bounds", [
+    ("", (10, 10, 30, 30)),  # the default: the viewport clips (x 30 is the viewport's edge)
+    ('overflow="hidden"', (10, 10, 30, 30)),
+    ('style="overflow: visible"', (10, 10, 40, 30)),
+])
+def test_nested_svg_and_symbol_viewports_clip_their_content(tmp_path, overflow, bounds):
+    """Browsers clip a nested <svg> or a <symbol> to its viewport (overflow hidden by
+    default): what sticks out is neither packed nor written."""
+    nested = (f'<svg x="10" y="10" width="20" height="20" viewBox="0 0 10 10" {overflow}>'
+              '<rect width="15" height="10"/></svg>')
+    el = load_element(_write(tmp_path, "nested.svg", _svg(nested)))
+    np.testing.assert_allclose(_bounds(el), bounds, atol=1e-9)
+    symbol = (f'<symbol id="s" viewBox="0 0 10 10" {overflow}><rect width="15" height="10"/></symbol>'
+              '<use href="#s" x="5" y="5" width="20" height="20" transform="translate(5 5)"/>')
+    el = load_element(_write(tmp_path, "symbol.svg", _svg(symbol)))
+    np.testing.assert_allclose(_bounds(el), bounds, atol=1e-9)
+
+
+def test_shapes_inside_elements_browsers_do_not_draw_are_left_out(tmp_path):
+    """Inkscape's flowed text (<flowRoot>: its <flowRegion> rect is a frame, not art),
+    <metadata>, gradients, unknown elements and other namespaces draw nothing in browsers;
+    their ids stay referable by <use>."""
+    body = ('<circle cx="50" cy="50" r="20"/>'
+            '<flowRoot><flowRegion><rect id="frame" width="90" height="90"/></flowRegion>'
+            '<flowPara>hello</flowPara></flowRoot>'
+            '<metadata><rect width="5" height="5"/></metadata>'
+            '<linearGradient id="lg"><rect width="5" height="5"/></linearGradient>'
+            '<foo><rect width="5" height="5"/></foo>'
+            '<ink:layer xmlns:ink="http://example.com/ink"><rect width="5" height="5"/></ink:layer>'
+            '<g><foo><rect width="5" height="5"/></foo></g>'
+            '<use href="#frame" x="200"/>')
+    with pytest.warns(UserWarning, match=r"flowRoot.*not drawn") as rec:
+        el = load_element(_write(tmp_path, "inkscape.svg", _svg(body)))
+    assert any("<foo>" in str(w.message) and "<metadata>" in str(w.message) for w in rec)
+    regions = sorted(tuple(round(v, 6) for v in _region(p).bounds) for p in el.paths)
+    assert regions == [(30, 30, 70, 70), (200, 0, 290, 90)]  # the circle and the <use> of the frame
+
+
+def test_a_line_is_never_filled(tmp_path):
+    """<line> has no inside: without a stroke it draws nothing (it was written as a filled
+    open path, which the deformation turned into a visible sliver)."""
+    body = ('<rect width="10" height="10"/><line x1="20" y1="0" x2="60" y2="40"/>'
+            '<line x1="20" y1="50" x2="60" y2="90" stroke="red" stroke-width="4"/>')
+    el = _quiet(load_element, _write(tmp_path, "lines.svg", _svg(body)))
+    styles = [(p.style.fill, p.style.stroke) for p in el.paths]
+    assert styles == [("#000000", None), (None, "#ff0000")]
+
+
+def test_css_custom_properties(tmp_path):
+    """var(--x, fallback) as browsers resolve it: inherited, overridden, nested, in style
+    sheets and style attributes; an undefined one is ignored with a note (was black)."""
+    body = ('<style>circle { fill: var(--c, #27a); --c: #a27 }</style>'
+            '<g style="--main: #00ff00"><rect width="9" height="9" style="fill: var(--main)"/>'
+            '<rect x="10" width="9" height="9" style="fill: var(--nope, var(--acc))"/></g>'
+            '<rect x="20" width="9" height="9" style="fill: var(--main); stroke: var(--undefined)"/>'
+            '<circle cx="50" cy="50" r="5"/>')
+    with pytest.warns(UserWarning, match=r"stroke: var\(--undefined\) with an undefined variable"):
+        el = load_element(_write(tmp_path, "vars.svg", _svg(body, 'viewBox="0 0 100 100" '
+                                                           'style="--main: #123456; --acc: var(--main)"')))
+    assert [(p.style.fill, p.style.stroke) for p in el.paths] == [
+        ("#00ff00", None), ("#123456", None), ("#123456", None), ("#aa2277", None)]
+
+
 def test_use_of_a_symbol_without_viewbox_is_only_moved(tmp_path):
     body = '<symbol id="s"><rect width="10" height="20"/></symbol><use xlink:href="#s" x="7" y="3" width="99" height="99"/>'
     el = load_element(_write(tmp_path, "sym.svg", _svg(body)))

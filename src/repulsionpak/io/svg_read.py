@@ -605,6 +605,14 @@ def _check_attributes(path, root: ET.Element) -> None:
 
 _NON_RENDERED = {"symbol", "mask", "marker"}
 _CONTAINERS_OK = {"defs", "clipPath", "pattern"}
+#: elements whose children are drawn where they stand (browsers draw no shape inside any
+#: other element: not in <metadata>, a gradient, an unknown or another namespace's element,
+#: nor Inkscape's flowed text, <flowRoot>, which no browser draws)
+_GROUPING = {"svg", "g", "a", "switch"}
+#: elements drawn where they stand, or read from the tree elsewhere (text, style sheets)
+_DRAWN = _GROUPING | {"use", "path", "rect", "circle", "ellipse", "line", "polyline", "polygon",
+                      "text", "image", "style", "foreignObject"} | _NON_RENDERED | _CONTAINERS_OK
+_GRAPHICS = {"use", "path", "rect", "circle", "ellipse", "line", "polyline", "polygon", "text", "image"}
 
 
 def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:
@@ -621,7 +629,9 @@ def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:
     ``@font-face``) are ignored."""
     sheets = [el for el in root.iter() if _local(el.tag) == "style"]
     inline_marked = [el for el in root.iter() if "!" in (el.get("style") or "")]
-    if not sheets and not inline_marked:
+    custom = any("var(" in (el.get("style") or "") for el in root.iter()) or any(
+        "var(" in "".join(sh.itertext()) for sh in sheets)
+    if not sheets and not inline_marked and not custom:
         return
     matcher = None
     if sheets:
@@ -674,6 +684,59 @@ def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:
         final.update({n: v for n, v, imp in own if imp})
         if final:
             el.set("style", ";".join(f"{n}:{v}" for n, v in final.items()))
+    if custom:
+        _substitute_variables(root, notes)
+
+
+_VAR = re.compile(r"var\(\s*(--[\w-]+)\s*(?:,((?:[^()]|\([^()]*\))*))?\)")
+
+
+def _substitute_variables(root: ET.Element, notes: set[str]) -> None:
+    """CSS custom properties: each element's ``style`` (the cascade resolved) with every
+    ``var(--name, fallback)`` replaced by the value the element inherits or sets for
+    ``--name`` (else the fallback). A declaration whose variable is defined nowhere is
+    dropped with a note (svgelements took the text for a colour: black)."""
+
+    def substitute(value: str, env: dict) -> str | None:
+        for _ in range(32):  # nested var() and variables defined by others; a cycle gives up
+            m = _VAR.search(value)
+            if m is None:
+                return value
+            rep = env.get(m[1].lower())
+            if rep is None:
+                if m[2] is None:
+                    return None
+                rep = m[2].strip()
+            value = value[:m.start()] + rep + value[m.end():]
+        return None
+
+    stack = [(root, {})]
+    while stack:
+        el, env = stack.pop()
+        decls = _inline_declarations(el.get("style"))
+        if any(n.startswith("--") for n, _, _ in decls):
+            env = dict(env)
+            for n, v, _ in decls:
+                if n.startswith("--"):
+                    r = substitute(v, env)
+                    if r is None:
+                        env.pop(n, None)
+                    else:
+                        env[n] = r
+        if any(n.startswith("--") or "var(" in v for n, v, _ in decls):
+            kept = []
+            for n, v, imp in decls:
+                if n.startswith("--"):
+                    continue
+                if "var(" in v:
+                    r = substitute(v, env)
+                    if r is None:
+                        notes.add(f"CSS {n}: {v} with an undefined variable (ignored)")
+                        continue
+                    v = r
+                kept.append(f"{n}:{v}" + (" !important" if imp else ""))
+            el.set("style", ";".join(kept))
+        stack.extend((c, env) for c in el if isinstance(c.tag, str))
 
 
 def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
@@ -695,6 +758,14 @@ def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
         name = _local(el.tag)
         if name in _NON_RENDERED and not inside_defs(el):
             to_move.append(el)
+        elif (el is not root and isinstance(el.tag, str) and parent.get(el) is not None
+              and _local(parent[el].tag) in _GROUPING and not inside_defs(el)
+              and (name not in _DRAWN or (el.tag.startswith("{") and not el.tag.startswith(f"{{{SVG_NS}}}")))):
+            # never drawn: kept (its ids may be referenced) where nothing is drawn
+            if any(isinstance(d.tag, str) and _local(d.tag) in _GRAPHICS for d in el.iter()):
+                notes.add("Inkscape flowed text <flowRoot> (not drawn, as in browsers: convert it to text)"
+                          if name == "flowRoot" else f"shapes inside <{name}> (not drawn, as in browsers)")
+                to_move.append(el)
         elif name == "foreignObject":
             to_drop.append(el)
         elif name == "use" and (_href(el) or "#").strip()[:1] != "#":
@@ -755,6 +826,39 @@ def _reference_size(root: ET.Element) -> tuple[float, float]:
         return 100.0, 100.0
 
 
+def _clips_its_viewport(el: ET.Element) -> bool:
+    """Whether a nested ``<svg>`` or a ``<symbol>`` clips its content to its viewport:
+    ``overflow`` (attribute or style) hidden, scroll or clip, the default for both."""
+    value = el.get("overflow")
+    for name, v, _ in _inline_declarations(el.get("style")):
+        if name == "overflow":
+            value = v
+    return (value or "hidden").strip().lower() not in ("visible", "auto")
+
+
+def _wrap_in_viewport(root: ET.Element, parent: ET.Element, el: ET.Element, transform: str | None,
+                      box: tuple[float, float, float, float] | None) -> ET.Element:
+    """Put ``el`` inside a new ``<g>`` (in its place) that carries ``transform`` and, when
+    ``box`` is given, a clip path to that rectangle (x, y, width, height, in the new
+    group's user space): the viewport of a nested ``<svg>`` or a ``<symbol>``'s ``<use>``."""
+    svg = el.tag.startswith("{")
+    g = ET.Element(f"{{{SVG_NS}}}g" if svg else "g")
+    if transform:
+        g.set("transform", transform)
+    if box is not None:
+        ids = {e.get("id") for e in root.iter() if isinstance(e.tag, str)}
+        n = itertools.count(1)
+        cid = next(f"repulsionpak-viewport-{k}" for k in n if f"repulsionpak-viewport-{k}" not in ids)
+        clip = ET.SubElement(root, f"{{{SVG_NS}}}clipPath" if svg else "clipPath", {"id": cid})
+        ET.SubElement(clip, f"{{{SVG_NS}}}rect" if svg else "rect",
+                      {k: repr(float(v)) for k, v in zip(("x", "y", "width", "height"), box)})
+        g.set("clip-path", f"url(#{cid})")
+    parent.insert(list(parent).index(el), g)
+    parent.remove(el)
+    g.append(el)
+    return g
+
+
 def _symbol_viewports(root: ET.Element) -> None:
     """Scale ``<use>`` of a ``<symbol>`` that has a viewBox into the use's viewport.
 
@@ -788,14 +892,13 @@ def _symbol_viewports(root: ET.Element) -> None:
             continue
         tf = se.Viewbox.viewbox_transform(x, y, w, h, vbx, vby, vbw, vbh, sym.get("preserveAspectRatio"))
         own = use.get("transform")
-        g = ET.Element(f"{{{SVG_NS}}}g" if use.tag.startswith("{") else "g")
-        g.set("transform", f"{own} {tf}" if own else tf)
         for k in ("x", "y", "width", "height", "transform"):
             use.attrib.pop(k, None)
-        p = parent[use]
-        p.insert(list(p).index(use), g)
-        p.remove(use)
-        g.append(use)
+        if _clips_its_viewport(sym):  # the viewport clips, in the use's own coordinates
+            outer = _wrap_in_viewport(root, parent[use], use, own, (x, y, w, h))
+            _wrap_in_viewport(root, outer, use, tf, None)
+        else:
+            _wrap_in_viewport(root, parent[use], use, f"{own} {tf}" if own else tf, None)
 
 
 def _nested_svgs_to_groups(root: ET.Element) -> None:
@@ -807,6 +910,7 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
     import svgelements as se
 
     ref_w, ref_h = _reference_size(root)
+    parent = {c: p for p in root.iter() for c in p}
     for el in [e for e in root.iter() if e is not root and _local(e.tag) == "svg"]:
         x = _length(el.get("x", "0"), ref_w)
         y = _length(el.get("y", "0"), ref_h)
@@ -826,7 +930,12 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
         for k in ("x", "y", "width", "height", "viewBox", "preserveAspectRatio"):
             el.attrib.pop(k, None)
         own_tf = el.get("transform")
-        el.set("transform", f"{own_tf} {tf}" if own_tf else tf)
+        clip = _clips_its_viewport(el) and all(math.isfinite(v) for v in (x, y, w, h)) and w > 0 and h > 0
+        if clip and el in parent:  # the viewport clips, in the svg's own (transformed) coordinates
+            _wrap_in_viewport(root, parent[el], el, own_tf, (x, y, w, h))
+            el.set("transform", tf)
+        else:
+            el.set("transform", f"{own_tf} {tf}" if own_tf else tf)
         el.tag = f"{{{SVG_NS}}}g" if el.tag.startswith("{") else "g"
 
 
@@ -1193,6 +1302,8 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
                 det_scale = _det_scale(mat)
                 op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
                 style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
+                if isinstance(child, se.SimpleLine):  # a line has no inside: never filled
+                    style = dataclasses.replace(style, fill=None)
                 if layers:
                     style = dataclasses.replace(style, layers=layers)
                 segs = list(child.segments(transformed=False))
