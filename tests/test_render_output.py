@@ -224,6 +224,25 @@ def test_ids_are_unique_per_copy_and_references_resolve(tmp_path):
     assert any(i.startswith("body-e1") for i in ids) and any(i.startswith("body-e2") for i in ids)
 
 
+def test_ids_of_use_clones_are_written_once(tmp_path):
+    """The shapes a <use> clones carry the id of what they clone: the output writes each
+    id once (two copies of it were invalid XML ids, which Inkscape renamed)."""
+    el_file = _write(tmp_path, "e.svg", '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 60 20">'
+                     '<path id="tri" d="M0 0 L20 0 L0 10 Z"/><use href="#tri" x="30"/></svg>')
+    el = load_element(el_file)
+    t = build_template(outline_of(el), 1.0, 2.0)
+    pas = [PlacedArt(el.source, "primary", tuple(render_copy(t, t.verts + shift, 2.0)[0]))
+           for shift in ((100.0, 100.0), (300.0, 300.0))]
+    cont = load_container(_write(tmp_path, "c.svg", '<svg xmlns="http://www.w3.org/2000/svg" '
+                                 'viewBox="0 0 800 800"><rect id="box" width="400" height="800"/>'
+                                 '<use href="#box" x="400"/></svg>'))
+    root = ET.fromstring(packing_svg_string(cont, pas, 2.0))
+    ids = [e.get("id") for e in root.iter() if e.get("id")]
+    assert len(ids) == len(set(ids))
+    assert {"box", "tri-e1", "tri-e2"} <= set(ids)
+    assert len(root.findall(".//{http://www.w3.org/2000/svg}path")) >= 4 + 1  # every shape is written
+
+
 # --------------------------------------------------------------------------- renderers, PDF
 
 

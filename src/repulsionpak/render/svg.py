@@ -125,9 +125,22 @@ def _attrs(pairs) -> str:
     return "".join(f" {k}={quoteattr(str(v))}" for k, v in pairs)
 
 
+def _unique(ident: str, ids: set | None) -> str | None:
+    """``ident`` the first time the document uses it, else None (the shapes a ``<use>``
+    clones carry the id of what they clone: written once, XML ids stay unique)."""
+    if ids is None:
+        return ident
+    if ident in ids:
+        return None
+    ids.add(ident)
+    return ident
+
+
 def _art_path_xml(art: ArtPath, stroke_scale: float, indent: str,
-                  paint: CopyPaint | None = None, suffix: str = "", decimals: int = 6) -> str | None:
-    """One ``<path>``: the art's curves when it has them, else its polylines."""
+                  paint: CopyPaint | None = None, suffix: str = "", decimals: int = 6,
+                  ids: set | None = None) -> str | None:
+    """One ``<path>``: the art's curves when it has them, else its polylines. ``ids``: the
+    ids written so far (a repeated one is left out)."""
     src = art.source
     if src is not None and src.curves:
         d = path_data(src.curves, decimals=decimals)
@@ -140,7 +153,7 @@ def _art_path_xml(art: ArtPath, stroke_scale: float, indent: str,
         fill_url = paint.paint(src.fill_paint, src.matrix, src.local_bbox)
         stroke_url = paint.paint(src.stroke_paint, src.matrix, src.local_bbox)
     attrs = []
-    if src is not None and src.id and suffix:
+    if src is not None and src.id and suffix and _unique(src.id + suffix, ids):
         attrs.append(("id", src.id + suffix))
     style = art.style
     if style.layers:  # the enclosing <g opacity> carry the groups' share (see _layered)
@@ -170,13 +183,14 @@ def _layered(items: list[tuple[tuple, str]], indent: str) -> list[str]:
     return out
 
 
-def _container_shape_xml(art: ArtPath, indent: str) -> str | None:
+def _container_shape_xml(art: ArtPath, indent: str, ids: set | None = None) -> str | None:
     """A container shape as drawn: its own tag, attributes and composed transform."""
     src = art.source
     if src is None or not src.tag:
         return _art_path_xml(art, 1.0, indent)
     attrs = []
-    if src.id and src.id not in _RESERVED_IDS and not src.id.startswith("debug-"):
+    if (src.id and src.id not in _RESERVED_IDS and not src.id.startswith("debug-")
+            and _unique(src.id, ids)):
         attrs.append(("id", src.id))
     attrs += list(src.attrs)
     m = np.asarray(src.matrix, dtype=float)
@@ -272,6 +286,7 @@ def packing_svg_string(
     )
 
     # container: its shapes as drawn
+    ids: set[str] = set()  # the shapes' ids written so far
     lines.append(f'  <g id="container"{_attrs([("data-source", container.source)])}>')
     x0, y0, x1, y1 = container.bounds
     diag = math.hypot(x1 - x0, y1 - y0) or 1.0
@@ -280,7 +295,7 @@ def packing_svg_string(
         lines.append("    <defs>" + "".join(servers[k] for k in sorted(servers)) + "</defs>")
     for art in container.paths:
         _check_finite(path, art.subpaths, "the container")
-        line = _container_shape_xml(art, "    ")
+        line = _container_shape_xml(art, "    ", ids)
         if line:
             lines.append(line)
     rings, closed = _region_rings(container.region)
@@ -320,7 +335,7 @@ def packing_svg_string(
             if art.source is not None:
                 _check_finite(path, [c.ctrl.reshape(-1, 2) for c in art.source.curves],
                               f"element {pa.source}")
-            line = _art_path_xml(art, pa.stroke_scale, "      ", paint, suffix, decimals)
+            line = _art_path_xml(art, pa.stroke_scale, "      ", paint, suffix, decimals, ids)
             if line:
                 body.append((art.style.layers, line))
         defs = paint.defs()
