@@ -225,6 +225,48 @@ def test_cli_unwritable_output(tmp_path, where):
     assert not (tmp_path / "no").exists()
 
 
+@pytest.mark.parametrize("second", ["--png", "--report", "--pdf"])
+def test_cli_two_outputs_with_one_name_are_refused(tmp_path, second):
+    """-o o.svg --png o.svg wrote the SVG, then the picture over it (exit 0)."""
+    out = tmp_path / "o.svg"
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", str(out), second, str(out), *TINY])
+    assert res.exit_code == 5, res.stderr
+    _check_one_error_line(res, "named for two outputs")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_cli_picture_as_the_output_svg_is_refused(tmp_path):
+    """-o x.png wrote SVG text into a .png; `demo -o d.png` wrote the SVG, then its
+    picture over it."""
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", str(tmp_path / "x.png"), *TINY])
+    assert res.exit_code == 3, res.stderr
+    _check_one_error_line(res, "the output is an SVG", "--png x.png")
+    res = CliRunner().invoke(app, ["demo", "-o", str(tmp_path / "d.png"), "-q"])
+    assert res.exit_code == 3, res.stderr
+    _check_one_error_line(res, "the output is an SVG")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX permissions")
+def test_cli_output_in_a_directory_that_cannot_be_written_is_refused_before_the_run(tmp_path):
+    """An output nobody can create was found only after the whole packing (exit 5, and the
+    SVG written but not the report)."""
+    if os.geteuid() != 0:
+        locked = tmp_path / "locked"
+        locked.mkdir()
+        locked.chmod(0o500)
+    elif Path("/sys/kernel").is_dir():
+        locked = Path("/sys/kernel")  # not even root creates files in sysfs
+    else:
+        pytest.skip("root, and no sysfs: no directory it cannot write in")
+    out = tmp_path / "o.svg"
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", str(out),
+                                   "--report", str(locked / "r.json"), *TINY])
+    assert res.exit_code == 5, res.stderr
+    _check_one_error_line(res, "cannot write in", str(locked))
+    assert not out.exists()
+
+
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_cli_bad_secondary_and_empty_element_directory(tmp_path):
     out = tmp_path / "o.svg"

@@ -75,22 +75,39 @@ def _fit_workers() -> int:
     return max(1, min(4, n))
 
 
+#: suffixes of raster pictures: not an output SVG (its picture is --png)
+_RASTER = (".png", ".jpg", ".jpeg", ".gif", ".webp", ".bmp", ".tif", ".tiff")
+
+
 def _check_outputs(outputs: list[Path | None], inputs: list[Path]) -> None:
-    """Refuse outputs that would overwrite an input (a file a manifest names included) or
-    sit in a missing directory."""
+    """Refuse, before any work, outputs that would overwrite an input (a file a manifest
+    names included) or another output, or that cannot be written (a missing directory, one
+    without write permission)."""
+    import tempfile
+
     from .io.manifest import with_manifest_files
 
     inputs = with_manifest_files(inputs)
+    seen: list[Path] = []
     for out in outputs:
         if out is None:
             continue
         for inp in inputs:
             if _same_file(out, inp) or (inp.is_dir() and _same_file(out.parent, inp) and out.suffix in (".svg", ".path")):
                 raise OutputError(f"{out}: refusing to overwrite the input {inp}; choose another output path")
+        if any(_same_file(out, other) for other in seen):
+            raise OutputError(f"{out}: named for two outputs (e.g. -o and --png); give each its own file")
+        seen.append(out)
         if not out.parent.exists():
             raise OutputError(f"{out}: the directory {out.parent} does not exist")
         if out.is_dir():
             raise OutputError(f"{out}: is a directory, expected a file name")
+        try:  # outputs are written atomically: a temporary file beside them, then renamed
+            fd, probe = tempfile.mkstemp(dir=out.parent, prefix=".repulsionpak-", suffix=".tmp")
+            os.close(fd)
+            os.unlink(probe)
+        except OSError as e:
+            raise OutputError(f"{out}: cannot write in {out.parent} ({e.strerror or e})") from None
 
 
 class _Progress:
@@ -258,6 +275,10 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     from .packing_output import invariants, packing_svg_text
 
     t_start = time.perf_counter()
+    if output.suffix.lower() in _RASTER:
+        raise ParameterError(f"-o {output}: the output is an SVG (or a PDF: .pdf); "
+                             f"write the picture with --png {output.name}" if png is None else
+                             f"-o {output}: the output is an SVG (or a PDF: .pdf), not a picture")
     inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
     _check_outputs([output, report, png, checkpoint, pdf, movie], inputs + ([resume] if resume else []))
     recorder = None
