@@ -176,6 +176,18 @@ def test_same_seed_same_positions_different_seed_differs():
     assert a.state.area_history[-1] > a.state.area_history[0]
 
 
+def test_a_run_without_a_seed_records_the_seed_it_drew():
+    """The library drew from fresh entropy and returned seed None: a packing nobody could
+    make again (the CLI drew and recorded one; now pack() does)."""
+    import dataclasses
+
+    a = pack(CONTAINER, library(), dataclasses.replace(scene_params(seed=1, max_iterations=60, settle=5),
+                                                       seed=None))
+    assert isinstance(a.params.seed, int) and 0 <= a.params.seed < 2**31
+    b = pack(CONTAINER, library(), a.params)
+    assert np.array_equal(a.state.x, b.state.x)
+
+
 # --------------------------------------------------------------------------------------
 # more seeds
 

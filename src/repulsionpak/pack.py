@@ -207,10 +207,11 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
          resume: dict | None = None, snapshot_every: int = 25) -> Packing:
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
-    ``params.seed`` fixes every random choice. ``on_snapshot`` receives progress
-    snapshots (every ``snapshot_every`` iterations, and at the end of each phase);
-    ``should_stop()`` (or Ctrl-C) ends the current phase early and the result is marked
-    partial.
+    ``params.seed`` fixes every random choice; without one a seed is drawn at random and
+    recorded in the result's ``params`` (a packing can always be made again).
+    ``on_snapshot`` receives progress snapshots (every ``snapshot_every`` iterations, and
+    at the end of each phase); ``should_stop()`` (or Ctrl-C) ends the current phase early
+    and the result is marked partial.
 
     ``on_checkpoint(states)`` receives ``{"primary": ..., "secondary": ...}`` simulator
     states every ``checkpoint_every`` iterations and when a phase ends (see
@@ -221,6 +222,10 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     from . import warmup  # here, not at import: `python -m repulsionpak.warmup` runs it as __main__
 
     params = params.validate()
+    if params.seed is None:  # drawn here, so that the packing records the seed that made it
+        import secrets  # noqa: PLC0415
+
+        params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     for e in secondary:
         if getattr(e, "controls", None) is not None and e.controls.pins:
             raise ParameterError(f"{e.source}: pins are for primary elements; give the pinned "
