@@ -217,3 +217,16 @@ def test_one_blas_thread_inside_the_block():
         pytest.skip("numpy without a BLAS threadpoolctl knows")
     with one_blas_thread():
         assert all(i["num_threads"] == 1 for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas")
+
+
+def test_summary_says_when_a_phase_stopped_at_max_iterations():
+    """--max-iterations 50 ran 350 iterations a phase (the settling ones follow) and the
+    summary did not say that the runs were cut short."""
+    from repulsionpak.cli import _summary
+
+    rep = {"invariants": {"ok": True}, "gap_stats": {"median": 4.9}, "n_primary": 5, "n_secondary": 0,
+           "area_fraction": 0.5, "gap": 5.0, "iterations": {"primary": 350}, "seconds": {"total": 1.0},
+           "seed": 1, "partial": False, "stopped_by": {"primary": "max_iterations"}}
+    assert "stopped at max_iterations" in _summary(rep, Path("o.svg"))
+    rep["stopped_by"] = {"primary": "converged", "secondary": "converged"}
+    assert "stopped at" not in _summary(rep, Path("o.svg"))

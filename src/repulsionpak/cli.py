@@ -466,6 +466,8 @@ def _summary(rep: dict, output: Path) -> str:
             f"(asked {rep['gap']:.3g}), {sum(rep['iterations'].values())} iterations in "
             f"{rep['seconds']['total']:.1f} s, seed {rep['seed']}"
             + ("" if ok else "  [invariants violated: see the report]")
+            + ("  [stopped at max_iterations before it converged]"
+               if "max_iterations" in (rep.get("stopped_by") or {}).values() and not rep["partial"] else "")
             + ("  [PARTIAL: interrupted]" if rep["partial"] else ""))
 
 
@@ -482,7 +484,7 @@ SecondaryOpt = Annotated[Optional[list[Path]], typer.Option("--secondary", help=
 GapOpt = Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")]
 ConfigOpt = Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")]
 CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")]
-MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on simulation iterations per phase.")]
+MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on the growing iterations of each phase; the settling ones (sim.settle_iterations, default 300) follow.")]
 QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
 MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
 RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE] or limited:DEG (see docs/controls.md).")]
