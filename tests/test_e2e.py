@@ -230,3 +230,35 @@ def test_summary_says_when_a_phase_stopped_at_max_iterations():
     assert "stopped at max_iterations" in _summary(rep, Path("o.svg"))
     rep["stopped_by"] = {"primary": "converged", "secondary": "converged"}
     assert "stopped at" not in _summary(rep, Path("o.svg"))
+
+
+@pytest.mark.parametrize("signame", ["SIGINT", "SIGTERM"])
+def test_a_signal_after_the_simulation_still_writes_the_packing(tmp_path, monkeypatch, signame):
+    """Ctrl-C between the end of the simulation and the writing lost the finished packing
+    (and SIGTERM there exited 143); now the SVG and the report are written, the outputs
+    still to come are left out and named, and the exit code is 130."""
+    import os
+    import signal
+
+    from repulsionpak import packing_output
+
+    real = packing_output.invariants
+
+    def signalled(*args, **kwargs):  # the signal arrives while the packing is measured
+        os.kill(os.getpid(), getattr(signal, signame))
+        for _ in range(1000):  # the handler runs between bytecodes
+            pass
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(packing_output, "invariants", signalled)
+    E = Path(examples.__file__).parent
+    out, rep, png = tmp_path / "o.svg", tmp_path / "o.json", tmp_path / "o.png"
+    r = CliRunner().invoke(app, ["pack", str(E / "containers" / "circle.svg"), str(E / "elements" / "apple.svg"),
+                                 "-o", str(out), "--report", str(rep), "--png", str(png), "--count", "3",
+                                 "--max-iterations", "100", "--gap", "10", "--seed", "1", "-q"])
+    assert r.exit_code == 130, r.output
+    assert f"not written: {png}" in r.stderr
+    data = json.loads(rep.read_text())
+    assert data["not_written"] == [str(png)] and data["stopped_by"]["outputs"] == "interrupted"
+    assert not data["partial"] and data["n_primary"] == 3
+    assert 'data-partial="true"' not in out.read_text() and not png.exists()

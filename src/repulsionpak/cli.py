@@ -268,11 +268,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     frames' longer side. ``live`` (``{"port": N, "open_browser": bool, "paused": bool}``)
     serves the run in the browser and writes the outputs only at Ctrl-C (see
     :mod:`repulsionpak.live`)."""
-    from .evaluate import evaluate
-    from .io import load_container, render_png
-    from .io.svg_write import atomic_write_bytes
-    from .pack import margin_of, pack
-    from .packing_output import invariants, packing_svg_text
+    from .io import load_container
+    from .pack import pack
 
     t_start = time.perf_counter()
     if output.suffix.lower() in _RASTER:
@@ -381,6 +378,26 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         raise
     finally:
         warmup.stop(warmup.running())  # started by _warm_up_meanwhile; done before rendering
+    # the packing is made: from here a first signal ends the run once the SVG and the
+    # report are written (the outputs still to come are left out); a second one aborts
+    with _StopFlag() as late:
+        late.polled = True
+        return _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start, container,
+                              elements, secondary, output, report, png, pdf, recorder, progress,
+                              debug_layers)
+
+
+def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start, container, elements,
+                   secondary, output, report, png, pdf, recorder, progress, debug_layers) -> dict:
+    """Evaluate ``packing`` and write its outputs (the second half of :func:`run_pack`).
+    After a signal (``late.stop``) only the SVG and the report are still written; the
+    report then lists the outputs left out (``not_written``)."""
+    from .evaluate import evaluate
+    from .io import render_png
+    from .io.svg_write import atomic_write_bytes
+    from .pack import margin_of
+    from .packing_output import invariants, packing_svg_text
+
     if viewer is not None:
         viewer.drop_removed(packing)
     t_eval = time.perf_counter()
@@ -404,17 +421,39 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         atomic_write_bytes(output, pdf_bytes(text, output))
     else:
         atomic_write_bytes(output, text.encode("utf-8"))
+    not_written: list[str] = []
     if pdf is not None:
-        atomic_write_bytes(pdf, pdf_bytes(text, pdf))
+        if late.stop:
+            not_written.append(str(pdf))
+        else:
+            atomic_write_bytes(pdf, pdf_bytes(text, pdf))
     if png is not None:
-        render_png(png, cont, packing.placed)
+        if late.stop:
+            not_written.append(str(png))
+        else:
+            render_png(png, cont, packing.placed)
     seconds = dict(packing.seconds)
     seconds["render"] = seconds.get("render", 0.0) + (time.perf_counter() - t_eval)
     movie_info = None
-    if recorder is not None:
-        with _FrameProgress(progress) as prog:
-            movie_info = recorder.write(packing, progress=prog)
-        seconds["movie"] = movie_info.render_seconds + recorder.capture_seconds
+    if recorder is not None and not late.stop:
+        try:
+            with _FrameProgress(progress) as prog:
+                def frame_done(done: int, total: int) -> None:
+                    if late.stop:  # the film is written atomically: nothing is left behind
+                        raise KeyboardInterrupt
+                    prog(done, total)
+
+                movie_info = recorder.write(packing, progress=frame_done)
+        except Exception:  # noqa: BLE001  (the encoder, sent the same Ctrl-C, may fail first)
+            if not late.stop:
+                raise
+        except KeyboardInterrupt:
+            if not late.stop:
+                raise
+        if movie_info is not None:
+            seconds["movie"] = movie_info.render_seconds + recorder.capture_seconds
+    if recorder is not None and movie_info is None:
+        not_written.append(str(recorder.path))
     seconds["total"] = time.perf_counter() - t_start
     rep = {
         "n_primary": packing.n_primary, "n_secondary": packing.n_secondary,
@@ -424,7 +463,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         "gap": g, "gap_stats": metrics["gap"], "seed": params.seed,
         "outside_area": metrics["outside_area"], "edge": metrics["edge"],
         "distortion": metrics["distortion"],
-        "partial": packing.partial, "stopped_by": packing.stopped_by, "invariants": checks,
+        "partial": packing.partial,
+        "stopped_by": dict(packing.stopped_by, **({"outputs": "interrupted"} if not_written else {})),
+        "invariants": checks,
         "inputs": {"container": str(container), "elements": [str(e) for e in elements],
                    "secondary": [str(s) for s in secondary or []]},
         "params": params.to_dict(),
@@ -433,6 +474,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         rep["movie"] = {"file": movie_info.path, "frames": movie_info.frames, "fps": movie_info.fps,
                         "seconds": movie_info.seconds, "bytes": movie_info.bytes,
                         "every": movie_info.stride}
+    if not_written:
+        rep["not_written"] = not_written
     if report is not None:
         _write_json_atomic(report, rep)
     return rep
@@ -469,6 +512,17 @@ def _summary(rep: dict, output: Path) -> str:
             + ("  [stopped at max_iterations before it converged]"
                if "max_iterations" in (rep.get("stopped_by") or {}).values() and not rep["partial"] else "")
             + ("  [PARTIAL: interrupted]" if rep["partial"] else ""))
+
+
+def _exit_if_interrupted(rep: dict, output: Path) -> None:
+    """Exit 130 after a Ctrl-C or SIGTERM: the packing was stopped early (written, marked
+    partial), or it was complete and outputs after the SVG and the report were left out."""
+    if rep.get("not_written"):
+        typer.echo(f"repulsionpak: interrupted: {output} is written; not written: "
+                   f"{', '.join(rep['not_written'])}", err=True)
+        raise typer.Exit(130)
+    if rep["partial"]:
+        raise typer.Exit(130)
 
 
 def _movie_line(m: dict) -> str:
@@ -562,8 +616,7 @@ def pack(
             typer.echo(_summary(rep, output), err=True)
             if "movie" in rep:
                 typer.echo(_movie_line(rep["movie"]), err=True)
-        if rep["partial"]:
-            raise typer.Exit(130)
+        _exit_if_interrupted(rep, output)
         if not rep["invariants"]["ok"]:
             typer.echo(f"repulsionpak: error: {output}: the packing breaks a promise (see the report's "
                        "'invariants'); it was written for inspection", err=True)
@@ -773,9 +826,11 @@ def demo(
                        movie=movie, movie_every=movie_every, movie_size=movie_size)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
-            typer.echo(f"picture: {png}", err=True)
+            if "not_written" not in rep:
+                typer.echo(f"picture: {png}", err=True)
             if "movie" in rep:
                 typer.echo(_movie_line(rep["movie"]), err=True)
+        _exit_if_interrupted(rep, output)
 
 
 @app.command()
