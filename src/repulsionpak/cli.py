@@ -534,7 +534,7 @@ DebugOpt = Annotated[bool, typer.Option("--debug", help="Show Python tracebacks 
 # options shared by `pack` and `batch`
 ContainerArg = Annotated[Path, typer.Argument(help="Container: SVG or .path file; every closed path is a region.")]
 ElementsArg = Annotated[list[Path], typer.Argument(help="Element files (SVG or .path) or directories of them.")]
-SecondaryOpt = Annotated[Optional[list[Path]], typer.Option("--secondary", help="Secondary element files or directories.")]
+SecondaryOpt = Annotated[Optional[list[Path]], typer.Option("--secondary", help="A secondary element file or directory; repeat the option for more.")]
 GapOpt = Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")]
 ConfigOpt = Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")]
 CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")]
@@ -633,7 +633,7 @@ def evaluate(
         help="Edge margin to check (default: the one the packing was made with, else half the gap).")] = None,
     grid: Annotated[int, typer.Option(help="Pixels along the longer side of the SCP raster.")] = 1000,
     elements: Annotated[Optional[list[Path]], typer.Option(
-        "--elements", help="Source element files or directories (matched by data-source): "
+        "--elements", help="A source element file or directory (matched by data-source; repeat the option for more): "
                            "adds each element's distortion from its source.")] = None,
     debug: DebugOpt = False,
 ) -> None:
@@ -810,7 +810,7 @@ def demo(
     movie: MovieOpt = None,
     movie_every: MovieEveryOpt = None,
     movie_size: MovieSizeOpt = 600,
-    quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
+    quiet: Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")] = False,
     debug: DebugOpt = False,
 ) -> None:
     """Pack the example library shipped with repulsionpak (SVG + PNG; 5–8 s on two cores, the first run about 12 s: it also compiles the simulation kernels)."""
@@ -845,7 +845,7 @@ def study(
     json_out: Annotated[Optional[Path], typer.Option("--json", help="Also write all results as JSON.")] = None,
     workers: Annotated[Optional[int], typer.Option(help="Worker processes of the local Dask cluster (default: one per core).")] = None,
     scheduler: Annotated[Optional[str], typer.Option(help="Run on this Dask scheduler (tcp://HOST:PORT) instead of a local cluster.")] = None,
-    quiet: Annotated[bool, typer.Option("-q", "--quiet")] = False,
+    quiet: Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")] = False,
     debug: DebugOpt = False,
 ) -> None:
     """The paper's deformation study (Fig. 10): SCP of packings with weak to stiff springs,

@@ -214,7 +214,8 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
             raise InputError(
                 p,
                 'its <g id="container"> draws nothing; the container outline is needed to measure the packing'
-                if there else 'has no <g id="container">; it is not a packing written by repulsionpak',
+                if there else ('has no <g id="container">; it is not a packing written by repulsionpak (an '
+                             'element file? `evaluate --elements` takes one file: repeat it for more)'),
             )
 
         everything = (
