@@ -343,3 +343,39 @@ def test_large_meshes_keep_up_with_their_growth():
     now = _mesh_lag(Params().sim.growth_headroom)
     assert len(now) == 2 and min(now) > 0.95
     assert max(paper) < 0.9
+
+
+# --------------------------------------------------------------------------------------
+# the library's arguments
+
+
+def test_pack_names_the_argument_of_the_wrong_kind():
+    """pack(container, "a.svg"), params=None or a dict, a single Element...: they failed
+    deep inside (AttributeError, TypeError from numpy or the controls)."""
+    el = library()
+    p = scene_params(seed=1, max_iterations=10, settle=0)
+    for args, fragment in [((CONTAINER, el, None), "params must be a Params"),
+                           ((CONTAINER, el, {"gap": 5}), "params must be a Params"),
+                           (("circle.svg", el, p), "the container must be a Container"),
+                           ((CONTAINER, el[0], p), "elements must be a list of Element"),
+                           ((CONTAINER, ["a.svg"], p), "got a str in it")]:
+        with pytest.raises(ParameterError, match=fragment):
+            pack(*args)
+
+
+def test_params_numbers_become_plain_python_numbers_or_are_refused():
+    """numpy scalars (a gap from np.float32 made the report's JSON fail), an int for a
+    float: converted as TOML would; a float for an int (count=3.0, max_iterations=10.5), a
+    string, a dict for a section: refused by validate(), as a TOML file is."""
+    import json
+
+    p = Params(gap=np.float32(12), seed=np.int64(3), sim=SimParams(k_edge=np.int64(40))).validate()
+    assert type(p.gap) is float and type(p.seed) is int and type(p.sim.k_edge) is float
+    json.dumps(p.to_dict())
+    assert Params(gap=12.0, seed=1).validate() == Params(gap=12.0, seed=1)
+    for bad, fragment in [(dict(gap="12"), "gap must be a float"), (dict(seed=1.5), "seed must be an int"),
+                          (dict(sim=SimParams(max_iterations=10.5)), "sim.max_iterations must be an int"),
+                          (dict(placement=PlacementParams(count=3.0)), "placement.count must be an int"),
+                          (dict(sim={"k_edge": 5}), "params.sim must be a SimParams")]:
+        with pytest.raises(ParameterError, match=fragment):
+            Params(**bad).validate()

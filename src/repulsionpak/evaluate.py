@@ -45,6 +45,7 @@ per gap, i.e. 1/(gap in pixels) of Q_s(0)), ``estimator="raw"`` the paper's naiv
 from __future__ import annotations
 
 import math
+import numbers
 import os
 from pathlib import Path
 from typing import Any, Iterable, Sequence
@@ -519,7 +520,15 @@ def evaluate(
     ``frame`` starts the fit from that rotation; ``workers`` threads fit several copies at
     once (the values do not depend on it).
     """
-    if gap is None or not np.isfinite(gap) or gap <= 0:
+    if not isinstance(container, Container):
+        raise ParameterError(f"evaluate(): the container must be a Container, got {type(container).__name__}")
+    if hasattr(placed, "placed") and hasattr(placed, "gap"):  # a Packing
+        raise ParameterError("evaluate(): give the packing's placed art, packing.placed, not the Packing")
+    placed = list(placed) if hasattr(placed, "__iter__") and not isinstance(placed, (str, bytes)) else None
+    if placed is None or not all(isinstance(p, PlacedArt) for p in placed):
+        raise ParameterError("evaluate(): placed must be a list of PlacedArt (a packing's .placed, or "
+                             "read_packing_svg(path)[1])")
+    if isinstance(gap, bool) or not isinstance(gap, numbers.Real) or not np.isfinite(gap) or gap <= 0:
         raise ParameterError(f"gap must be a positive number, got {gap!r}")
     gap = float(gap)
     region = _polygonal(container.region)

@@ -199,6 +199,27 @@ def prepare(container: Container, elements: Sequence[Element], params: Params,
     return templates, placement, gap
 
 
+def _check_arguments(container, elements, secondary, params) -> None:
+    """ParameterError naming the argument of :func:`pack` of the wrong kind (they failed
+    deep inside with an AttributeError or a TypeError)."""
+    from pathlib import Path  # noqa: PLC0415
+
+    if not isinstance(container, Container):
+        raise ParameterError(f"pack(): the container must be a Container (load_container(path) reads one), "
+                             f"got {type(container).__name__}")
+    for name, seq in (("elements", elements), ("secondary", secondary)):
+        if isinstance(seq, (str, bytes, Path, Element)) or not hasattr(seq, "__iter__"):
+            raise ParameterError(f"pack(): {name} must be a list of Element (load_elements(paths) reads "
+                                 f"them), got {type(seq).__name__}")
+        for e in seq:
+            if not isinstance(e, Element):
+                raise ParameterError(f"pack(): {name} must be a list of Element (load_elements(paths) reads "
+                                     f"them), got a {type(e).__name__} in it")
+    if not isinstance(params, Params):
+        raise ParameterError(f"pack(): params must be a Params (params_from_dict(d) builds one from a dict), "
+                             f"got {type(params).__name__}")
+
+
 @with_one_blas_thread
 def pack(container: Container, elements: Sequence[Element], params: Params = Params(),
          secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
@@ -221,6 +242,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     """
     from . import warmup  # here, not at import: `python -m repulsionpak.warmup` runs it as __main__
 
+    secondary = () if secondary is None else secondary
+    _check_arguments(container, elements, secondary, params)
     params = params.validate()
     if params.seed is None:  # drawn here, so that the packing records the seed that made it
         import secrets  # noqa: PLC0415

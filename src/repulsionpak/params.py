@@ -240,6 +240,40 @@ class VerifyParams:
         "primaries reached 0.151 with 1.25).")
 
 
+def _typed_value(value, tp, where: str, nullable: bool = False):
+    """``value`` as the plain Python type the field's annotation ``tp`` names (a bool, an
+    int, a float; others unchanged), or ParameterError."""
+    import numbers  # noqa: PLC0415
+
+    args = typing.get_args(tp)
+    base = next((a for a in args if a is not type(None)), tp) if args else tp
+    if value is None:
+        if nullable or type(None) in args:
+            return None
+        raise ParameterError(f"{where} must be set, got None")
+    is_bool = isinstance(value, bool) or type(value).__name__ == "bool_"  # numpy's too
+    if base is bool:
+        if is_bool:
+            return bool(value)
+    elif base is int:
+        if not is_bool:
+            try:
+                return operator.index(value)
+            except TypeError:
+                pass
+    elif base is float:
+        if isinstance(value, numbers.Real) and not is_bool:
+            return float(value)
+    else:
+        return value
+    raise ParameterError(f"{where} must be {'an' if base is int else 'a'} {base.__name__}, "
+                         f"got {value!r} ({type(value).__name__})")
+
+
+def _same(a, b) -> bool:
+    return type(a) is type(b) and (a == b or a != a)  # NaN stays NaN (refused later)
+
+
 @dataclass(frozen=True)
 class Params:
     """All parameters of a packing run."""
@@ -256,8 +290,39 @@ class Params:
     render: RenderParams = field(default_factory=RenderParams)
     verify: VerifyParams = field(default_factory=VerifyParams)
 
+    def _typed(self) -> "Params":
+        """These parameters with every number a plain Python one (see :meth:`validate`);
+        self when nothing changes."""
+        changes: dict = {}
+        hints = typing.get_type_hints(Params)
+        for f in fields(Params):
+            v = getattr(self, f.name)
+            if f.name in _SECTIONS:
+                cls = _SECTIONS[f.name]
+                if not isinstance(v, cls):
+                    raise ParameterError(
+                        f"params.{f.name} must be a {cls.__name__}, got {type(v).__name__} "
+                        "(params_from_dict builds Params from nested dicts, as a TOML file has them)")
+                sub_hints = typing.get_type_hints(cls)
+                sub = {g.name: _typed_value(getattr(v, g.name), sub_hints[g.name], f"{f.name}.{g.name}",
+                                            g.default is None)
+                       for g in fields(cls)}
+                sub = {k: x for k, x in sub.items() if not _same(x, getattr(v, k))}
+                if sub:
+                    changes[f.name] = dataclasses.replace(v, **sub)
+            else:
+                t = _typed_value(v, hints[f.name], f.name, f.default is None)
+                if not _same(t, v):
+                    changes[f.name] = t
+        return dataclasses.replace(self, **changes) if changes else self
+
     def validate(self) -> "Params":
-        """Raise :class:`ParameterError` on values that cannot work; return self."""
+        """Raise :class:`ParameterError` on values that cannot work; return the parameters
+        with their numbers as plain Python ``float``/``int`` (numpy scalars, an ``int``
+        for a float: what TOML would give), self when they were already."""
+        typed = self._typed()
+        if typed is not self:
+            return typed.validate()
         if self.gap is not None and not (math.isfinite(self.gap) and self.gap > 0):
             raise ParameterError(f"gap must be a positive number, got {self.gap!r}")
         if self.margin is not None and not (math.isfinite(self.margin) and self.margin >= 0):
