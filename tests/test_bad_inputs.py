@@ -695,3 +695,20 @@ def test_an_invalid_root_viewbox_is_ignored_as_browsers_do(tmp_path, vb):
     import xml.etree.ElementTree as ET
     root = ET.parse(out).getroot()
     assert root.get("viewBox") is None and root.get("width") == "200"  # the output does not carry it
+
+
+@pytest.mark.parametrize("options, code, fragments", [
+    (["--stiffness", "0"], 3, ["--stiffness: stiffness must be > 0"]),
+    (["--rotation", "limited:-5"], 3, ["--rotation: max_rotation must be between 0 and 180"]),
+    (["--seed", str(2**64)], 3, ["--seed must be < 2**64"]),
+    (["--config", "."], 3, [": is a directory, expected a TOML file"]),
+])
+def test_cli_errors_name_the_option(tmp_path, monkeypatch, options, code, fragments):
+    """The messages named a manifest key (max_rotation), nothing (--stiffness 0, a huge
+    --seed), or the output check ("refusing to overwrite the input .", exit 5) for a
+    config directory."""
+    monkeypatch.chdir(tmp_path)
+    res = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", "o.svg", *TINY, *options])
+    assert res.exit_code == code, res.stderr
+    _check_one_error_line(res, *fragments)
+    assert not (tmp_path / "o.svg").exists()

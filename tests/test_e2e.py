@@ -261,4 +261,5 @@ def test_a_signal_after_the_simulation_still_writes_the_packing(tmp_path, monkey
     data = json.loads(rep.read_text())
     assert data["not_written"] == [str(png)] and data["stopped_by"]["outputs"] == "interrupted"
     assert not data["partial"] and data["n_primary"] == 3
+    assert (data["params"]["gap"], data["params"]["margin"]) == (10.0, 5.0)  # resolved (margin was null)
     assert 'data-partial="true"' not in out.read_text() and not png.exists()

@@ -225,7 +225,7 @@ def test_pack_validates_params_first():
     ({"sim": SimParams(dt=0.0)}, "dt"),
     ({"sim": SimParams(dt=0.8)}, "dt"),
     ({"sim": SimParams(soft=0.0)}, "soft"),
-    ({"sim": SimParams(k_edge=-1.0)}, "force constants"),
+    ({"sim": SimParams(k_edge=-1.0)}, "sim.k_edge must be >= 0"),
     ({"sim": SimParams(velocity_cap=0.0)}, "velocity_cap"),
     ({"sim": SimParams(stop_window=1)}, "stop_window"),
     ({"sim": SimParams(max_iterations=0)}, "max_iterations"),

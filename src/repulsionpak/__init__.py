@@ -3,7 +3,7 @@
 An implementation of RepulsionPak (Saputra, Kaplan, Asente, Graphics Interface 2018):
 fill a container shape with deformable copies of vector elements, SVG in, SVG out.
 
->>> from repulsionpak import load_container, load_elements, pack, Params
+>>> from repulsionpak import load_container, load_elements, pack, Params, write_packing_svg
 >>> packing = pack(load_container("heart.svg"), load_elements(["animals/"]), Params(gap=5.2, seed=1))
 >>> write_packing_svg("out.svg", packing.container, packing.placed, packing.gap)
 """

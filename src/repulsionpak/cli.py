@@ -21,7 +21,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from .errors import OutputError, ParameterError, RepulsionPakError, SimulationError
+from .errors import ConfigError, OutputError, ParameterError, RepulsionPakError, SimulationError
 
 EXIT_CODES = {
     0: "success",
@@ -229,6 +229,8 @@ def resolve_params(config: Path | None = None, gap: float | None = None, seed: i
     for option, value, low in (("--count", count, 1), ("--max-iterations", max_iterations, 1), ("--seed", seed, 0)):
         if value is not None and value < low:  # name the option, not the config key
             raise ParameterError(f"{option} must be >= {low}, got {value}")
+    if seed is not None and seed >= 2**64:
+        raise ParameterError(f"--seed must be < 2**64, got {seed}")
     if count is not None:
         params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
     if max_iterations is not None:
@@ -276,6 +278,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         raise ParameterError(f"-o {output}: the output is an SVG (or a PDF: .pdf); "
                              f"write the picture with --png {output.name}" if png is None else
                              f"-o {output}: the output is an SVG (or a PDF: .pdf), not a picture")
+    if config is not None and config.is_dir():  # (not an element directory for the outputs' check)
+        raise ConfigError(f"{config}: is a directory, expected a TOML file")
     inputs = [container, *elements, *(secondary or [])] + ([config] if config else [])
     _check_outputs([output, report, png, checkpoint, pdf, movie], inputs + ([resume] if resume else []))
     recorder = None
@@ -468,7 +472,7 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
         "invariants": checks,
         "inputs": {"container": str(container), "elements": [str(e) for e in elements],
                    "secondary": [str(s) for s in secondary or []]},
-        "params": params.to_dict(),
+        "params": dict(params.to_dict(), gap=g, margin=margin_of(params, g)),  # as resolved for the run
     }
     if movie_info is not None:
         rep["movie"] = {"file": movie_info.path, "frames": movie_info.frames, "fps": movie_info.fps,
@@ -662,6 +666,11 @@ def evaluate(
                 typer.echo("compiling the distortion kernels, first run only…", err=True)
         results = [(p, evaluate_file(p, gap=gap, grid=grid, sources=sources, workers=_fit_workers(), margin=margin))
                    for p in packings]
+        for p, r in results if sources is not None else ():
+            values = (r.get("distortion") or {}).get("values") or []
+            if values and all(v is None for v in values):
+                typer.echo(f"repulsionpak: warning: {p}: none of its copies comes from the --elements given "
+                           "(matched by file name, the copies' data-source): distortion unknown", err=True)
         if json_out:
             data = results[0][1] if len(results) == 1 else {str(p): r for p, r in results}
             typer.echo(json.dumps(data, indent=2))

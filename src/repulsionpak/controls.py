@@ -122,7 +122,11 @@ def cli_controls(rotation: str | None = None, rigid: bool = False,
             kw["angle" if name == "fixed" else "max_rotation"] = value
     if stiffness is not None:
         kw["stiffness"] = float(stiffness)
-    return ElementControls(**kw)
+    try:
+        return ElementControls(**kw)
+    except ParameterError as e:  # name the option, not the manifest key
+        option = "--stiffness" if "stiffness" in str(e) else "--rotation"
+        raise ParameterError(f"{option}: {e}") from None
 
 
 def controls_of(elements: Sequence) -> list[ElementControls]:

@@ -497,7 +497,7 @@ def evaluate(
     margin: float | None = None,
     workers: int = 1,
 ) -> dict:
-    """All metrics of a packing as a JSON-serialisable dict (DESIGN.md "Evaluate JSON").
+    """All metrics of a packing as a JSON-serialisable dict (as ``repulsionpak evaluate --json`` prints it).
 
     Keys: ``area_fraction``, ``overlap_area``, ``n_primary``, ``n_secondary``,
     ``n_elements``, ``n_outside`` / ``outside`` (elements whose art lies more than

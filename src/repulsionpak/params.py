@@ -359,8 +359,8 @@ class Params:
             (s.dt > 0 and s.dt <= 0.5, "sim.dt must be in (0, 0.5]"),
             (s.velocity_cap > 0, "sim.velocity_cap must be > 0"),
             (s.growth_headroom >= 0, "sim.growth_headroom must be >= 0"),
-            (min(s.k_repulsion, s.k_edge, s.k_overlap, s.k_boundary, s.k_shape) >= 0,
-             "force constants must be >= 0"),
+            *[(getattr(s, k) >= 0, f"sim.{k} must be >= 0 (a force constant), got {getattr(s, k)!r}")
+              for k in ("k_repulsion", "k_edge", "k_overlap", "k_boundary", "k_shape")],
             (s.k_growth >= 0, "sim.k_growth must be >= 0"),
             (s.bend_limit >= 0 and s.bend_limit_convex >= 0, "sim.bend_limit and bend_limit_convex must be >= 0"),
             (s.soft > 0, "sim.soft must be > 0"),
@@ -394,7 +394,7 @@ class Params:
             (0 < self.verify.min_scale <= 1, "verify.min_scale must be in (0, 1]"),
             (self.verify.straighten >= 0, "verify.straighten must be >= 0"),
             (self.verify.grow_to == 0 or self.verify.grow_to >= self.verify.min_gap,
-             "verify.grow_to must be 0 or >= verify.min_gap"),
+             f"verify.grow_to ({self.verify.grow_to!r}) must be 0 or >= verify.min_gap ({self.verify.min_gap!r})"),
             (self.verify.max_grow >= 1, "verify.max_grow must be >= 1"),
         ]
         for ok, msg in checks:

@@ -15,7 +15,7 @@ from ..io.svg_write import atomic_write_bytes
 from .jobs import Job, _fmt_value
 from .tasks import JobResult
 
-#: Columns of ``results.csv`` before the one column per ``--set`` name (DESIGN.md).
+#: Columns of ``results.csv`` before the one column per ``--set`` name (README, "Many packings").
 CSV_COLUMNS = ("seed", "file", "area_fraction", "gap_median", "scp_half_gap", "overlap_area",
                "iterations", "seconds", "error")
 

@@ -1,8 +1,8 @@
 """Read back the packing SVG, and the atomic file writer every output uses.
 
 The writer itself lives in :mod:`repulsionpak.render.svg` (``write_packing_svg`` and
-``packing_svg_string`` are still importable from here). Structure (see DESIGN.md,
-"Contracts")::
+``packing_svg_string`` are still importable from here). Structure (the output
+contract)::
 
     <svg xmlns=... width=.. height=.. viewBox=.. data-gap="5.2" [data-partial="true"] data-*=...>
       <metadata>{"partial": false, ...}</metadata>

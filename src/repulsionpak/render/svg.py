@@ -1,6 +1,6 @@
 """Write the packing SVG: the container as drawn, every copy's art as smooth curves.
 
-Structure (see DESIGN.md, "Contracts")::
+Structure (the output contract; docs/evaluation.md describes how it is read)::
 
     <svg xmlns=... width=.. height=.. viewBox=.. data-gap="5.2" [data-partial="true"] data-*=...>
       <metadata>{"partial": false, ...}</metadata>
