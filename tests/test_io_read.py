@@ -151,6 +151,25 @@ def test_nested_svg_and_symbol_viewports_clip_their_content(tmp_path, overflow, 
     np.testing.assert_allclose(_bounds(el), bounds, atol=1e-9)
 
 
+@pytest.mark.parametrize("root, size", [
+    ('width="200" height="100" viewBox="0 0 100 100" preserveAspectRatio="none"', (2 ** 0.5, 2 ** -0.5)),
+    ('viewBox="0 0 100 100" transform="scale(3 1)"', (3 ** 0.5, 3 ** -0.5)),
+    ('viewBox="0 0 100 100" transform="rotate(90)"', (1, 1)),
+    ('width="300" height="300" viewBox="0 0 100 100"', (1, 1)),  # uniform: user units, as before
+])
+def test_an_element_is_read_as_drawn_by_its_root(tmp_path, root, size):
+    """A root transform or a non-uniform viewBox mapping stretches or turns the art in a
+    browser: the element keeps that shape (a stretched circle packed as a circle, a turned
+    one upright with --rotation fixed), at its user-unit size (its area is kept)."""
+    body = '<rect x="10" y="20" width="40" height="20"/>'
+    el = load_element(_write(tmp_path, "e.svg", _svg(body, root)))
+    x0, y0, x1, y1 = _bounds(el)
+    if "rotate" in root:
+        assert (x1 - x0, y1 - y0) == (pytest.approx(20), pytest.approx(40))
+    else:
+        assert (x1 - x0, y1 - y0) == (pytest.approx(40 * size[0]), pytest.approx(20 * size[1]))
+
+
 def test_shapes_inside_elements_browsers_do_not_draw_are_left_out(tmp_path):
     """Inkscape's flowed text (<flowRoot>: its <flowRegion> rect is a frame, not art),
     <metadata>, gradients, unknown elements and other namespaces draw nothing in browsers;

@@ -1197,8 +1197,12 @@ def _negative_size(kind: str, attrs: dict) -> str | None:
     return None
 
 
-def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
+def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> SvgDocument:
     """Parse SVG bytes into shapes with user-unit matrices and styles (not flattened).
+
+    ``as_drawn`` (elements): the shapes as the file shows them — turned, mirrored or
+    stretched as a root ``transform`` or a non-uniform viewBox mapping
+    (``preserveAspectRatio="none"``) draws them, at their user-unit size.
 
     Invisible shapes are kept (check ``shape.style.visible``); text is drawn as glyph
     outlines (:mod:`.svg_text`); images, filters and masks are reported with one warning
@@ -1274,6 +1278,10 @@ def parse_svg_shapes(path: str | Path, data: bytes) -> SvgDocument:
         )
     inv_viewport = ~viewport
     vp_scale = math.sqrt(abs(viewport.determinant))
+    if as_drawn:  # what the root's transform and a non-uniform viewBox do to the shape
+        a, b, c, d = (v / vp_scale for v in (viewport.a, viewport.b, viewport.c, viewport.d))
+        if max(abs(a - 1), abs(b), abs(c), abs(d - 1)) > 1e-12:
+            inv_viewport = inv_viewport * se.Matrix(a, b, c, d, 0, 0)
 
     shapes: list[SvgShape] = []
 
@@ -1628,7 +1636,7 @@ def shape_clipper(path, doc: SvgDocument, tol: float, budget: PointBudget):
 
 
 def _svg_element(path: Path, data: bytes, tolerance: float | None) -> Element:
-    doc = parse_svg_shapes(path, data)
+    doc = parse_svg_shapes(path, data, as_drawn=True)
     shapes = [s for s in doc.shapes if s.style.visible]
     tol = flattening_tolerance(shapes, tolerance)
     budget = PointBudget(path)
