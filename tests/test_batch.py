@@ -117,6 +117,10 @@ def test_cli_option_errors_exit_3(tmp_path):
         assert msg in res.output
     with pytest.raises(OutputError, match="input directory"):
         run_batch(CONTAINER, [EX / "elements"], EX / "elements", "1")
+    # element files given one by one: their folder would read the packings back as elements
+    with pytest.raises(OutputError, match="holds the element apple.svg"):
+        run_batch(CONTAINER, [EX / "elements" / "apple.svg"], EX / "elements", "1")
+    assert sorted(p.suffix for p in (EX / "elements").iterdir()) == [".svg"] * len(list((EX / "elements").iterdir()))
 
 
 # --------------------------------------------------------------------------- a real LocalCluster

@@ -81,7 +81,7 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
     from ..pack import default_gap
 
     t0 = time.perf_counter()
-    check_outdir(outdir, [container, *elements, *secondary])
+    check_outdir(outdir, [container, *elements, *secondary], [*elements, *secondary])
     seed_list = parse_seeds(seeds)
     settings = [parse_set(s) for s in sets]
     make_jobs(base, seed_list, settings)  # all parameter errors before any work

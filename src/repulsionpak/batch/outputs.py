@@ -94,12 +94,19 @@ def write_summary(outdir: Path, jobs: Sequence[Job], results: Sequence[JobResult
 
 
 
-def check_outdir(outdir: Path, inputs: Sequence[Path]) -> None:
+def check_outdir(outdir: Path, inputs: Sequence[Path], elements: Sequence[Path] = ()) -> None:
     """Refuse an output directory that is a file or that holds the inputs' own SVGs
-    (an element directory would read the packings back as elements next time)."""
+    (an element directory would read the packings back as elements next time; so would
+    the folder of an element file given on its own, ``elements``)."""
     outdir = Path(outdir)
     if outdir.exists() and not outdir.is_dir():
         raise OutputError(f"{outdir}: exists and is not a directory; -o names the output directory")
+    for inp in map(Path, elements):
+        with contextlib.suppress(OSError):
+            if (inp.is_file() and inp.suffix.lower() in (".svg", ".svgz", ".path")
+                    and inp.parent.resolve() == outdir.resolve()):
+                raise OutputError(f"{outdir}: holds the element {inp.name}; the packings written there would "
+                                  "be read as elements by a run given that folder: choose another output directory")
     for inp in map(Path, inputs):
         with contextlib.suppress(OSError):
             if inp.is_dir() and inp.resolve() == outdir.resolve():
