@@ -187,8 +187,22 @@ def test_clipped_container(tmp_path):
     c = load_container(_write(tmp_path, "cont.svg", body))
     assert c.area == pytest.approx(math.pi * 40**2, rel=5e-3)
     np.testing.assert_allclose(c.bounds, (10, 10, 90, 90), atol=0.05)
-    # the outline written to the output is the clipped one
-    assert art_area([ArtPath(c.paths[0].subpaths, c.paths[0].closed, Style())]).area == pytest.approx(c.area)
+    # drawn as browsers draw it: the rectangle's stroke lies outside the disc, nothing shows
+    assert c.paths == ()
+
+
+def test_a_clipped_container_is_drawn_without_a_stroke_along_the_cut(tmp_path):
+    """A stroked disc clipped to its upper part: the fill is cut, the stroke is the arc's
+    stroke only (the clipped outline, stroked, drew a line along the cut)."""
+    body = ('<clipPath id="top"><rect width="100" height="50"/></clipPath>'
+            '<circle cx="50" cy="50" r="40" fill="#def" stroke="#000" stroke-width="2" clip-path="url(#top)"/>')
+    c = load_container(_write(tmp_path, "cont.svg", body))
+    assert c.area == pytest.approx(math.pi * 40**2 / 2, rel=5e-3)
+    fill, stroke = c.paths
+    assert (fill.style.fill, fill.style.stroke, stroke.style.fill, stroke.style.stroke) == ("#ddeeff", None, "#000000", None)
+    ring = art_area([stroke])
+    assert ring.area == pytest.approx(math.pi * 40 * 2, rel=0.02)  # half the ring (length pi r), width 2
+    assert ring.intersection(shapely.box(12, 45, 88, 50)).area < 1e-9  # nothing along y = 50
 
 
 def test_clip_art_unit():

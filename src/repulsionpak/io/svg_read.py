@@ -33,7 +33,7 @@ import re
 import warnings
 import xml.etree.ElementTree as ET
 import zlib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -1771,27 +1771,26 @@ def container_from_shapes(
             continue
         geom = rings_to_region(rings, sh.style.fill_rule, path)
         n_crossing += count_self_crossing(rings)
+        drawn = [ArtPath(tuple(rings), tuple(True for _ in rings), sh.style, source=shape_source(path, sh))]
         region_clip = clip(sh) if clip is not None else None
         if region_clip is not None:
             geom = polygon_parts(shapely.intersection(geom, region_clip))
-            rings = polygon_rings(geom)
-            if not rings:
+            if not polygon_rings(geom):
                 n_clipped_away += 1
                 continue
-            style = replace(sh.style, fill_rule="evenodd")
-        else:
-            style = sh.style
+            # drawn as browsers draw it: the clipped fill, and the clipped stroke as a filled
+            # area (the clipped outline, stroked, drew a line along the cut)
+            drawn = clip_art(drawn[0], region_clip)
         (holes if sh.hole else outer).append(geom)
         if not sh.style.visible and not sh.hole:
             unpainted.append(geom)
-        arts.append(ArtPath(tuple(rings), tuple(True for _ in rings), style,
-                            source=None if region_clip is not None else shape_source(path, sh)))
+        arts.extend(drawn)
     if n_open:
         warn(
             path,
             f"ignored {n_open} open subpath(s) of the container (first point != last point); close them with Z to use them",
         )
-    if not arts:
+    if not outer and not holes:  # (the drawn paths may be none: a clip can hide what paints)
         if n_clipped_away:
             raise InputError(
                 path,
