@@ -1135,3 +1135,18 @@ def test_a_drawing_under_the_limit_is_kept_as_drawn(tmp_path):
     n = svg_read.MAX_LINE_SEGMENTS // 2
     el = load_element(_write(tmp_path, "d.svg", _svg(f'<polygon points="{_dense_polygon(n)}"/>')))
     assert len(el.paths[0].subpaths[0]) == n
+
+
+def test_a_stretched_container_says_so(tmp_path):
+    """A container drawn stretched by its root (preserveAspectRatio="none", a root
+    scale(2 1)) is packed in its user units, and its output, drawn the same way, shows the
+    copies stretched: a warning says so (a uniform mapping, a turn or a mirror says nothing)."""
+    body = '<circle cx="50" cy="50" r="40"/>'
+    for root in ('width="200" height="100" viewBox="0 0 100 100" preserveAspectRatio="none"',
+                 'viewBox="0 0 100 100" transform="scale(2 1)"'):
+        with pytest.warns(UserWarning, match=r"stretches the drawing \(2:1\)"):
+            load_container(_write(tmp_path, "c.svg", _svg(body, root)))
+    for root in ('width="300" height="300" viewBox="0 0 100 100"', 'viewBox="0 0 100 100" transform="rotate(30) scale(-1 1)"'):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            load_container(_write(tmp_path, "c.svg", _svg(body, root)))

@@ -1009,6 +1009,10 @@ class SvgDocument:
     #: the ``<clipPath>`` definitions (:class:`~.svg_clip.ClipDef` by id), if any shape is clipped
     clip_defs: dict = field(default_factory=dict)
     xml: object = None  # the (sanitised) ElementTree root, for paint servers
+    #: the root's transform and viewBox mapping stretch or shear what the file draws
+    #: (``preserveAspectRatio="none"``, a root ``transform="scale(2 1)"``): (sx, sy) its
+    #: principal scales, None when they only scale uniformly, turn or mirror it
+    stretch: tuple[float, float] | None = None
 
 
 def _matrix_to_np(m) -> np.ndarray:
@@ -1385,7 +1389,9 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     defs = clip_defs(doc, inv_viewport, notes) if any(s.clips for s in shapes) else {}
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
-    return SvgDocument(shapes, svg_root, root_attrs, metadata_text, defs, xml=root_xml)
+    sv = np.linalg.svd(_matrix_to_np(viewport)[:2, :2], compute_uv=False)
+    stretch = (float(sv[0]), float(sv[1])) if sv[0] > sv[1] * (1 + 1e-9) else None
+    return SvgDocument(shapes, svg_root, root_attrs, metadata_text, defs, xml=root_xml, stretch=stretch)
 
 
 # --------------------------------------------------------------------------- flattening
@@ -1846,6 +1852,11 @@ def warn_unpainted(path, unpainted: list, outer: list, region) -> None:
 
 def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Container:
     doc = parse_svg_shapes(path, data)
+    if doc.stretch is not None:
+        warn(path, f"the root's transform or preserveAspectRatio stretches the drawing "
+                   f"({doc.stretch[0] / doc.stretch[1]:.3g}:1); the packing is made in its user units, so the "
+                   "output, drawn the same way, shows the copies stretched too: give the root a uniform "
+                   "mapping (or apply the stretch to the shapes themselves)")
     # a container is geometry, not appearance: fill, stroke and opacity do not matter;
     # display:none (never parsed) and visibility:hidden shapes are left out
     shapes = [s for s in doc.shapes if not s.hidden]
