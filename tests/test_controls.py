@@ -210,6 +210,9 @@ def test_rigid_pinned_logo_weight_zero_through_the_cli(lib, tmp_path):
     assert len(rs) >= 3
     dist = [_fit(src["glyph-R.svg"], p)[1] for p in rs if p.kind == "primary"]
     assert max(dist) < 0.02  # rigid: below the promise
+    # the pocket-fill copies too: the self-intersection relaxation no longer bends rigid
+    # bodies after their projection (two small R's reached 0.045 here, ~1 % rms on their meshes)
+    assert max(_fit(src["glyph-R.svg"], p)[1] for p in rs) < 0.01
     discs = [p for p in placed if p.source == "disc.svg" and p.kind == "primary"]
     assert discs and max(_fit(src["disc.svg"], p)[1] for p in discs) > max(dist)  # the soft ones bend
     # the others keep the gap from the pin (the verification held)

@@ -175,6 +175,7 @@ class Simulator:
         N, M = m.n_vertices, m.n_elements
         moving = ~m.frozen
         self.moving = moving.copy()
+        self.relaxed = self._relaxed()
         vmask = moving[m.vert_elem]
         self.active_all = np.flatnonzero(vmask).astype(np.int64)
         self.active_skin = np.flatnonzero(vmask & m.is_skin).astype(np.int64)
@@ -286,7 +287,7 @@ class Simulator:
         grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:
-            relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.moving, self.edge_rest,
+            relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.relaxed, self.edge_rest,
                                      self.growth, m.vnbr_ptr, m.vnbr, p.relax_passes, p.relax_fraction,
                                      self.relax_order)
         total, moving = skin_areas(x, m.elem_vstart, m.elem_nskin, self.moving, self.areas)
@@ -305,11 +306,20 @@ class Simulator:
             corner_candidates(self.model.corners, t.order, t.start, *t.params,
                               self.corner_ptr, self.corner_tris)
 
+    def _relaxed(self) -> np.ndarray:
+        """The elements whose skins the self-intersection relaxation may move: not rigid
+        bodies, which keep exactly the similarity of their rest shape the controls give
+        them (a rest skin does not self-intersect; relaxed, a rigid letter's narrow
+        notches were pushed apart after every projection and its copies bent by ~1 %)."""
+        rigid = self.model.rigid
+        return self.moving if rigid is None else self.moving & ~rigid
+
     def set_moving(self, elem: int, moving: bool) -> None:
         """Pin (``moving=False``) or release element ``elem`` between iterations: a pinned
         element neither moves nor grows but still repels (the live view's pin)."""
         m = self.model
         self.moving[elem] = bool(moving) and not m.frozen[elem]
+        self.relaxed = self._relaxed()
         vmask = self.moving[m.vert_elem]
         self.active_all = np.flatnonzero(vmask).astype(np.int64)
         self.active_skin = np.flatnonzero(vmask & m.is_skin).astype(np.int64)
