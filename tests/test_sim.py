@@ -379,3 +379,12 @@ def test_params_numbers_become_plain_python_numbers_or_are_refused():
                           (dict(sim={"k_edge": 5}), "params.sim must be a SimParams")]:
         with pytest.raises(ParameterError, match=fragment):
             Params(**bad).validate()
+
+
+def test_pack_names_the_stages_after_the_simulations():
+    """Mapping the art and verifying take seconds on large scenes without a snapshot: a
+    terminal showed the last simulation snapshot, frozen, all that time."""
+    stages: list[str] = []
+    pack(CONTAINER, library(), scene_params(seed=1, max_iterations=60, settle=5), on_stage=stages.append)
+    assert stages[:2] == ["mapping the art", "verifying"]
+    assert set(stages) <= {"mapping the art", "verifying", "filling pockets", "filling holes"}

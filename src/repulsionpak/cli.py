@@ -113,8 +113,9 @@ def _check_outputs(outputs: list[Path | None], inputs: list[Path]) -> None:
 class _Progress:
     """Live progress on a terminal (rich), silent when stderr is not a TTY."""
 
-    def __init__(self, enabled: bool):
+    def __init__(self, enabled: bool, counters: bool = True):
         self.enabled = enabled and sys.stderr.isatty()
+        self.counters = counters  # the simulation's iteration, area and element count
         self._live = None
         self._task = None
 
@@ -122,9 +123,9 @@ class _Progress:
         if self.enabled:
             from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-            self._live = Progress(TextColumn("[bold]{task.fields[phase]}"), BarColumn(),
-                                  TextColumn("it {task.fields[it]:>6}  area {task.fields[area]:.3f}  "
-                                             "elements {task.fields[n]}"),
+            counters = [TextColumn("it {task.fields[it]:>6}  area {task.fields[area]:.3f}  "
+                                   "elements {task.fields[n]}")] if self.counters else []
+            self._live = Progress(TextColumn("[bold]{task.fields[phase]}"), BarColumn(), *counters,
                                   TimeElapsedColumn(), transient=True,
                                   console=__import__("rich.console").console.Console(stderr=True))
             self._live.__enter__()
@@ -135,6 +136,12 @@ class _Progress:
         if self._live is not None:
             self._live.update(self._task, phase=snap.phase, it=snap.iteration,
                               area=snap.area_fraction, n=snap.n_elements)
+
+    def stage(self, name: str) -> None:
+        """A stage without snapshots (the art's map, the verification, writing ...): its
+        name replaces the phase's, the clock goes on."""
+        if self._live is not None:
+            self._live.update(self._task, phase=name)
 
     def __exit__(self, *exc):
         if self._live is not None:
@@ -373,7 +380,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
             packing = pack(cont, elems, params, secondary=secs, on_snapshot=on_snapshot,
                            should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
-                           resume=resumed, **snap_kw)
+                           resume=resumed, on_stage=prog.stage, **snap_kw)
     except BaseException as exc:
         if viewer is not None:
             viewer.close()
@@ -405,37 +412,42 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
     if viewer is not None:
         viewer.drop_removed(packing)
     t_eval = time.perf_counter()
-    # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
-    metrics = evaluate(cont, packing.placed, g, with_scp=False, margin=margin_of(params, g),
-                       sources=[*elems, *secs] if report is not None else None, workers=_fit_workers())
-    checks = invariants(packing, metrics)
-    text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
-    if viewer is not None:  # serve the result until Ctrl-C, then write it
-        viewer.finish(packing, metrics, text)
-        served = time.perf_counter()
-        if not packing.partial:
-            with _StopFlag() as again:
-                viewer.wait(again)
-        viewer.close()
-        served = time.perf_counter() - served  # not part of the run's times in the report
-        t_start, t_eval = t_start + served, t_eval + served
-    if output.suffix.lower() == ".pdf" or pdf is not None:
-        from .render.pdf import pdf_bytes
-    if output.suffix.lower() == ".pdf":
-        atomic_write_bytes(output, pdf_bytes(text, output))
-    else:
-        atomic_write_bytes(output, text.encode("utf-8"))
-    not_written: list[str] = []
-    if pdf is not None:
-        if late.stop:
-            not_written.append(str(pdf))
+    # the stages after the packing take seconds on large scenes: say which one runs
+    with _Progress(progress and viewer is None, counters=False) as stages:
+        stages.stage("measuring")
+        # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
+        metrics = evaluate(cont, packing.placed, g, with_scp=False, margin=margin_of(params, g),
+                           sources=[*elems, *secs] if report is not None else None, workers=_fit_workers())
+        checks = invariants(packing, metrics)
+        stages.stage("writing")
+        text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
+        if viewer is not None:  # serve the result until Ctrl-C, then write it
+            viewer.finish(packing, metrics, text)
+            served = time.perf_counter()
+            if not packing.partial:
+                with _StopFlag() as again:
+                    viewer.wait(again)
+            viewer.close()
+            served = time.perf_counter() - served  # not part of the run's times in the report
+            t_start, t_eval = t_start + served, t_eval + served
+        if output.suffix.lower() == ".pdf" or pdf is not None:
+            from .render.pdf import pdf_bytes
+        if output.suffix.lower() == ".pdf":
+            atomic_write_bytes(output, pdf_bytes(text, output))
         else:
-            atomic_write_bytes(pdf, pdf_bytes(text, pdf))
-    if png is not None:
-        if late.stop:
-            not_written.append(str(png))
-        else:
-            render_png(png, cont, packing.placed)
+            atomic_write_bytes(output, text.encode("utf-8"))
+        not_written: list[str] = []
+        if pdf is not None:
+            if late.stop:
+                not_written.append(str(pdf))
+            else:
+                atomic_write_bytes(pdf, pdf_bytes(text, pdf))
+        if png is not None:
+            if late.stop:
+                not_written.append(str(png))
+            else:
+                stages.stage("drawing the picture")
+                render_png(png, cont, packing.placed)
     seconds = dict(packing.seconds)
     seconds["render"] = seconds.get("render", 0.0) + (time.perf_counter() - t_eval)
     movie_info = None

@@ -225,7 +225,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
          secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
          should_stop: Callable[[], bool] | None = None,
          on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 500,
-         resume: dict | None = None, snapshot_every: int = 25) -> Packing:
+         resume: dict | None = None, snapshot_every: int = 25,
+         on_stage: Callable[[str], None] | None = None) -> Packing:
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
     ``params.seed`` fixes every random choice; without one a seed is drawn at random and
@@ -238,7 +239,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     states every ``checkpoint_every`` iterations and when a phase ends (see
     :mod:`repulsionpak.checkpoint`); passing such a dict back as ``resume`` (with the same
     inputs and parameters) continues the run and ends with the same packing as an
-    uninterrupted one.
+    uninterrupted one. ``on_stage(name)`` is told when a stage after the simulations
+    begins ("mapping the art", "verifying", "filling pockets", "filling holes"): they take
+    seconds on large scenes, with no snapshot.
     """
     from . import warmup  # here, not at import: `python -m repulsionpak.warmup` runs it as __main__
 
@@ -298,6 +301,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"),
                       snapshot_every=snapshot_every)
     t3 = time.perf_counter()
+    stage = on_stage or (lambda name: None)
+    stage("mapping the art")
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
     if packing.model.pinned is not None:
@@ -316,6 +321,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     # a stop asked for during the verification ends its repair rounds; one asked for
     # during the simulation does not (the partial packing is repaired in full)
     stop_repair = None if should_stop is None or should_stop() else should_stop
+    stage("verifying")
     packing.placed, packing.verification = verify_and_repair(
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
         min_scale=v.min_scale, repair=v.repair, straightened=straightened,
@@ -330,12 +336,14 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         library = HoleLibrary.of(secondary)
         if library is not None and sec.fill_leftover:  # what the verification left (holes.py)
             t5 = time.perf_counter()
+            stage("filling pockets")
             packing.placed = packing.placed + fill_pockets(
                 packing.placed, library, container.region, gap, margin_of(params, gap), rng,
                 sec.hole_min_radius * gap, params.render, limit=_room(user_cap, packing.placed))
             packing.seconds["leftover"] = time.perf_counter() - t5
         if library is not None and sec.fill_holes:  # the holes of the art are pockets too (holes.py)
             t5 = time.perf_counter()
+            stage("filling holes")
             packing.placed = packing.placed + fill_holes(
                 packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render,
                 limit=_room(user_cap, packing.placed))
