@@ -263,3 +263,28 @@ def test_a_signal_after_the_simulation_still_writes_the_packing(tmp_path, monkey
     assert not data["partial"] and data["n_primary"] == 3
     assert (data["params"]["gap"], data["params"]["margin"]) == (10.0, 5.0)  # resolved (margin was null)
     assert 'data-partial="true"' not in out.read_text() and not png.exists()
+
+
+def test_a_signal_while_the_art_is_mapped_aborts_at_once(tmp_path, monkeypatch):
+    """There is nothing partial to write while the art is mapped: the first SIGTERM ends
+    the run there (it was ignored: art of 1,000 subpaths mapped for half an hour under
+    `timeout`, which sends one SIGTERM)."""
+    import os
+    import signal
+    import time
+
+    pack_module = importlib.import_module("repulsionpak.pack")  # (the package's `pack` is the function)
+
+    def slow_map(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(0.2)  # the handler runs here
+        raise AssertionError("the signal did not stop the run")
+
+    monkeypatch.setattr(pack_module, "placed_art", slow_map)
+    E = Path(examples.__file__).parent
+    out = tmp_path / "o.svg"
+    r = CliRunner().invoke(app, ["pack", str(E / "containers" / "circle.svg"), str(E / "elements" / "apple.svg"),
+                                 "-o", str(out), "--count", "3", "--max-iterations", "100", "--gap", "10",
+                                 "--seed", "1", "-q"])
+    assert r.exit_code == 130, r.output
+    assert "interrupted" in r.stderr and not out.exists()

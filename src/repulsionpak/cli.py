@@ -205,6 +205,14 @@ class _StopFlag:
         self.polled = True
         return self.stop
 
+    def at_stage(self, name: str) -> None:
+        """While the art is mapped there is no partial result to stop at (it is what any
+        packing needs written): a signal then aborts at once, as before the simulation (a
+        first SIGTERM was ignored for minutes on art of 1,000 subpaths). The verification
+        polls again: a signal there ends its repair rounds."""
+        if name == "mapping the art":
+            self.polled = False
+
     def __exit__(self, *exc):
         for sig, old in self._old.items():
             signal.signal(sig, old)
@@ -380,7 +388,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
             packing = pack(cont, elems, params, secondary=secs, on_snapshot=on_snapshot,
                            should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
-                           resume=resumed, on_stage=prog.stage, **snap_kw)
+                           resume=resumed, on_stage=lambda name: (prog.stage(name), stop.at_stage(name)),
+                           **snap_kw)
     except BaseException as exc:
         if viewer is not None:
             viewer.close()
