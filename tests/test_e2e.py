@@ -288,3 +288,14 @@ def test_a_signal_while_the_art_is_mapped_aborts_at_once(tmp_path, monkeypatch):
                                  "--seed", "1", "-q"])
     assert r.exit_code == 130, r.output
     assert "interrupted" in r.stderr and not out.exists()
+
+
+def test_the_thread_cap_also_caps_the_report_fits(monkeypatch):
+    """REPULSIONPAK_THREADS=1 kept the simulation on one thread, but a report's distortion
+    fits still ran on up to 4 (113 % CPU with the variable set)."""
+    from repulsionpak.cli import _fit_workers
+
+    monkeypatch.setenv("REPULSIONPAK_THREADS", "1")
+    assert _fit_workers() == 1
+    monkeypatch.delenv("REPULSIONPAK_THREADS")
+    assert 1 <= _fit_workers() <= 4

@@ -67,11 +67,16 @@ def _same_file(a: Path, b: Path) -> bool:
 
 
 def _fit_workers() -> int:
-    """Threads for the distortion fits of a report (this process's cores, at most 4)."""
+    """Threads for the distortion fits of a report (this process's cores, at most 4, and
+    at most ``$REPULSIONPAK_THREADS``, which caps the simulation's threads too)."""
     try:
         n = len(os.sched_getaffinity(0))
     except AttributeError:  # not on every platform
         n = os.cpu_count() or 1
+    if os.environ.get("REPULSIONPAK_THREADS", "").strip():
+        from .sim.runner import auto_threads
+
+        n = min(n, auto_threads())
     return max(1, min(4, n))
 
 
