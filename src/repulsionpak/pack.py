@@ -239,9 +239,10 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     states every ``checkpoint_every`` iterations and when a phase ends (see
     :mod:`repulsionpak.checkpoint`); passing such a dict back as ``resume`` (with the same
     inputs and parameters) continues the run and ends with the same packing as an
-    uninterrupted one. ``on_stage(name)`` is told when a stage after the simulations
-    begins ("mapping the art", "verifying", "filling pockets", "filling holes"): they take
-    seconds on large scenes, with no snapshot.
+    uninterrupted one. ``on_stage(name)`` is told when a stage without snapshots begins
+    ("meshing and placing" before the simulation, "placing secondary copies" before the
+    secondary one; "mapping the art", "verifying", "filling pockets", "filling holes" after
+    them): they take seconds on large scenes.
     """
     from . import warmup  # here, not at import: `python -m repulsionpak.warmup` runs it as __main__
 
@@ -259,7 +260,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     if snapshot_every < 1:
         raise ParameterError(f"snapshot_every must be >= 1, got {snapshot_every}")
     rng = np.random.default_rng(params.seed)
+    stage = on_stage or (lambda name: None)
     t0 = time.perf_counter()
+    stage("meshing and placing")  # (seconds on large scenes, before any snapshot)
     ctrl = None
     if any_controls(elements):  # designer controls (controls.py); none: the paper's way
         gap = checked_gap(container, elements, params)
@@ -295,13 +298,13 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
 
         primary_state = dict(sim.snapshot_state(), done=True, area=res.area_fraction)  # frozen from now on
+        stage("placing secondary copies")
         add_secondary(packing, secondary, rng, on_snapshot=on_snapshot, should_stop=should_stop,
                       on_checkpoint=(None if on_checkpoint is None else
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"),
                       snapshot_every=snapshot_every)
     t3 = time.perf_counter()
-    stage = on_stage or (lambda name: None)
     stage("mapping the art")
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
     placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
