@@ -240,34 +240,47 @@ class VerifyParams:
         "primaries reached 0.151 with 1.25).")
 
 
-def _typed_value(value, tp, where: str, nullable: bool = False):
-    """``value`` as the plain Python type the field's annotation ``tp`` names (a bool, an
-    int, a float; others unchanged), or ParameterError."""
+#: what :func:`_plain` returns for a value of another type
+_MISMATCH = object()
+
+
+def _annotated(tp) -> tuple[type, bool]:
+    """(the type a field's annotation names, whether it admits None)."""
+    args = typing.get_args(tp)
+    return (next((a for a in args if a is not type(None)), tp) if args else tp), type(None) in args
+
+
+def _plain(value, base: type):
+    """``value`` as the plain Python ``base`` (bool, int or float; numpy scalars too), or
+    :data:`_MISMATCH`. A float too large for one raises OverflowError."""
     import numbers  # noqa: PLC0415
 
-    args = typing.get_args(tp)
-    base = next((a for a in args if a is not type(None)), tp) if args else tp
-    if value is None:
-        if nullable or type(None) in args:
-            return None
-        raise ParameterError(f"{where} must be set, got None")
     is_bool = isinstance(value, bool) or type(value).__name__ == "bool_"  # numpy's too
     if base is bool:
-        if is_bool:
-            return bool(value)
-    elif base is int:
-        if not is_bool:
-            try:
-                return operator.index(value)
-            except TypeError:
-                pass
-    elif base is float:
-        if isinstance(value, numbers.Real) and not is_bool:
-            return float(value)
-    else:
-        return value
-    raise ParameterError(f"{where} must be {'an' if base is int else 'a'} {base.__name__}, "
-                         f"got {value!r} ({type(value).__name__})")
+        return bool(value) if is_bool else _MISMATCH
+    if base is int and not is_bool:
+        try:
+            return operator.index(value)
+        except TypeError:
+            return _MISMATCH
+    if base is float and isinstance(value, numbers.Real) and not is_bool:
+        return float(value)
+    return _MISMATCH
+
+
+def _typed_value(value, tp, where: str, nullable: bool = False):
+    """``value`` as the plain Python type the field's annotation ``tp`` names (a bool, an
+    int, a float), or ParameterError."""
+    base, optional = _annotated(tp)
+    if value is None:
+        if nullable or optional:
+            return None
+        raise ParameterError(f"{where} must be set, got None")
+    v = _plain(value, base)
+    if v is _MISMATCH:
+        raise ParameterError(f"{where} must be {'an' if base is int else 'a'} {base.__name__}, "
+                             f"got {value!r} ({type(value).__name__})")
+    return v
 
 
 def _same(a, b) -> bool:
@@ -416,27 +429,19 @@ _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
 
 def _check_type(value, tp, where: str, source: str):
     """Coerce ``value`` to the annotated type ``tp`` or raise ConfigError."""
-    args = typing.get_args(tp)
-    optional = type(None) in args
-    base = next((a for a in args if a is not type(None)), tp) if args else tp
+    base, optional = _annotated(tp)
     if value is None:
         if optional:
             return None
         raise ConfigError(f"{source}: {where} must not be empty")
-    if base is bool:
-        if isinstance(value, bool):
-            return value
-    elif base is int:
-        if isinstance(value, int) and not isinstance(value, bool):
-            return value
-    elif base is float:
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            try:
-                return float(value)
-            except OverflowError:
-                raise ConfigError(f"{source}: {where} is too large ({str(value)[:20]}...)") from None
-    name = getattr(base, "__name__", str(base))
-    raise ConfigError(f"{source}: {where} must be a {name}, got {value!r} ({type(value).__name__})")
+    try:
+        v = _plain(value, base)
+    except OverflowError:
+        raise ConfigError(f"{source}: {where} is too large ({str(value)[:20]}...)") from None
+    if v is _MISMATCH:
+        name = getattr(base, "__name__", str(base))
+        raise ConfigError(f"{source}: {where} must be a {name}, got {value!r} ({type(value).__name__})")
+    return v
 
 
 def _unknown(key: str, valid: list[str], where: str, source: str) -> ConfigError:

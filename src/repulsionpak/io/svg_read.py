@@ -609,10 +609,9 @@ _CONTAINERS_OK = {"defs", "clipPath", "pattern"}
 #: other element: not in <metadata>, a gradient, an unknown or another namespace's element,
 #: nor Inkscape's flowed text, <flowRoot>, which no browser draws)
 _GROUPING = {"svg", "g", "a", "switch"}
-#: elements drawn where they stand, or read from the tree elsewhere (text, style sheets)
-_DRAWN = _GROUPING | {"use", "path", "rect", "circle", "ellipse", "line", "polyline", "polygon",
-                      "text", "image", "style", "foreignObject"} | _NON_RENDERED | _CONTAINERS_OK
 _GRAPHICS = {"use", "path", "rect", "circle", "ellipse", "line", "polyline", "polygon", "text", "image"}
+#: elements drawn where they stand, or read from the tree elsewhere (text, style sheets)
+_DRAWN = _GROUPING | _GRAPHICS | {"style", "foreignObject"} | _NON_RENDERED | _CONTAINERS_OK
 
 
 def _apply_stylesheets(root: ET.Element, notes: set[str]) -> None:
@@ -836,19 +835,27 @@ def _clips_its_viewport(el: ET.Element) -> bool:
     return (value or "hidden").strip().lower() not in ("visible", "auto")
 
 
+def _document_ids(root: ET.Element) -> set:
+    """The ids the document uses (for :func:`_wrap_in_viewport`, which adds its own)."""
+    return {e.get("id") for e in root.iter() if isinstance(e.tag, str) and e.get("id")}
+
+
 def _wrap_in_viewport(root: ET.Element, parent: ET.Element, el: ET.Element, transform: str | None,
-                      box: tuple[float, float, float, float] | None) -> ET.Element:
+                      box: tuple[float, float, float, float] | None, ids: set | None = None) -> ET.Element:
     """Put ``el`` inside a new ``<g>`` (in its place) that carries ``transform`` and, when
     ``box`` is given, a clip path to that rectangle (x, y, width, height, in the new
-    group's user space): the viewport of a nested ``<svg>`` or a ``<symbol>``'s ``<use>``."""
+    group's user space): the viewport of a nested ``<svg>`` or a ``<symbol>``'s ``<use>``.
+    ``ids``: the document's ids (:func:`_document_ids`), which the clip path's joins."""
     svg = el.tag.startswith("{")
     g = ET.Element(f"{{{SVG_NS}}}g" if svg else "g")
     if transform:
         g.set("transform", transform)
     if box is not None:
-        ids = {e.get("id") for e in root.iter() if isinstance(e.tag, str)}
-        n = itertools.count(1)
-        cid = next(f"repulsionpak-viewport-{k}" for k in n if f"repulsionpak-viewport-{k}" not in ids)
+        k = len(ids) + 1
+        while f"repulsionpak-viewport-{k}" in ids:
+            k += 1
+        cid = f"repulsionpak-viewport-{k}"
+        ids.add(cid)
         clip = ET.SubElement(root, f"{{{SVG_NS}}}clipPath" if svg else "clipPath", {"id": cid})
         ET.SubElement(clip, f"{{{SVG_NS}}}rect" if svg else "rect",
                       {k: repr(float(v)) for k, v in zip(("x", "y", "width", "height"), box)})
@@ -875,6 +882,7 @@ def _symbol_viewports(root: ET.Element) -> None:
         return
     ref_w, ref_h = _reference_size(root)
     parent = {c: p for p in root.iter() for c in p}
+    ids = _document_ids(root)
     for use in [e for e in root.iter() if _local(e.tag) == "use"]:
         ref = _href(use)
         sym = symbols.get(ref[1:]) if ref and ref.startswith("#") else None
@@ -895,7 +903,7 @@ def _symbol_viewports(root: ET.Element) -> None:
         for k in ("x", "y", "width", "height", "transform"):
             use.attrib.pop(k, None)
         if _clips_its_viewport(sym):  # the viewport clips, in the use's own coordinates
-            outer = _wrap_in_viewport(root, parent[use], use, own, (x, y, w, h))
+            outer = _wrap_in_viewport(root, parent[use], use, own, (x, y, w, h), ids)
             _wrap_in_viewport(root, outer, use, tf, None)
         else:
             _wrap_in_viewport(root, parent[use], use, f"{own} {tf}" if own else tf, None)
@@ -911,7 +919,9 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
 
     ref_w, ref_h = _reference_size(root)
     parent = {c: p for p in root.iter() for c in p}
-    for el in [e for e in root.iter() if e is not root and _local(e.tag) == "svg"]:
+    nested = [e for e in root.iter() if e is not root and _local(e.tag) == "svg"]
+    ids = _document_ids(root) if nested else set()
+    for el in nested:
         x = _length(el.get("x", "0"), ref_w)
         y = _length(el.get("y", "0"), ref_h)
         w = _length(el.get("width", "100%"), ref_w)
@@ -932,7 +942,7 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
         own_tf = el.get("transform")
         clip = _clips_its_viewport(el) and all(math.isfinite(v) for v in (x, y, w, h)) and w > 0 and h > 0
         if clip and el in parent:  # the viewport clips, in the svg's own (transformed) coordinates
-            _wrap_in_viewport(root, parent[el], el, own_tf, (x, y, w, h))
+            _wrap_in_viewport(root, parent[el], el, own_tf, (x, y, w, h), ids)
             el.set("transform", tf)
         else:
             el.set("transform", f"{own_tf} {tf}" if own_tf else tf)
