@@ -213,3 +213,22 @@ def test_elements_vary_in_size():
     assert 90 <= extent("fish") <= 110
     assert extent("mouse") < 0.7 * extent("fish")
     assert extent("snake") > 1.2 * extent("fish")
+
+
+def test_default_gap_follows_the_width_of_long_thin_containers():
+    from repulsionpak.io import load_container
+    from repulsionpak.pack import default_gap
+    from repulsionpak.types import Container
+
+    # the examples keep 1 % of their larger side
+    for path in examples.container_files():
+        c = load_container(path)
+        minx, miny, maxx, maxy = c.bounds
+        assert default_gap(c) == pytest.approx(0.01 * max(maxx - minx, maxy - miny), rel=1e-3)
+    # a 20:1 strip 100 high: 1 % of its length would be a fifth of its height (3
+    # elements fitted); the gap is 4 % of its height instead
+    strip = Container(source="strip", region=shapely.box(0, 0, 2000, 100))
+    assert default_gap(strip) == pytest.approx(4.0, rel=1e-3)
+    # a thin ring 30 wide and 1000 across: 1.2, not 10
+    ring = Container(source="ring", region=Point(0, 0).buffer(500, 256).difference(Point(0, 0).buffer(470, 256)))
+    assert default_gap(ring) == pytest.approx(1.2, rel=1e-2)

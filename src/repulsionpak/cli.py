@@ -565,7 +565,7 @@ DebugOpt = Annotated[bool, typer.Option("--debug", help="Show Python tracebacks 
 ContainerArg = Annotated[Path, typer.Argument(help="Container: SVG or .path file; every closed path is a region.")]
 ElementsArg = Annotated[list[Path], typer.Argument(help="Element files (SVG or .path) or directories of them.")]
 SecondaryOpt = Annotated[Optional[list[Path]], typer.Option("--secondary", help="A secondary element file or directory; repeat the option for more.")]
-GapOpt = Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size).")]
+GapOpt = Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size, at most 4% of its width).")]
 ConfigOpt = Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")]
 CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")]
 MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on the growing iterations of each phase; the settling ones (sim.settle_iterations, default 300) follow.")]

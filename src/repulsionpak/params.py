@@ -292,7 +292,7 @@ class Params:
     """All parameters of a packing run."""
 
     gap: float = _doc(None, "container units", "d_gap, the desired distance between neighbouring "
-                      "elements' art in the final packing. None: 1% of the container's larger side.")
+                      "elements' art in the final packing. None: 1% of the container's larger side, at most 4% of the widest circle inside it.")
     seed: int | None = _doc(None, "-", "Random seed; the same seed gives the same packing.")
     margin: float | None = _doc(None, "container units", "Smallest distance between any art and "
                                 "the container's edge. None: half the gap.")
