@@ -1150,3 +1150,19 @@ def test_a_stretched_container_says_so(tmp_path):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             load_container(_write(tmp_path, "c.svg", _svg(body, root)))
+
+
+@pytest.mark.parametrize("cap, area", [("round", math.pi), ("square", 4.0), ("butt", 0.0)])
+def test_zero_length_subpaths_are_dots_with_round_and_square_caps(tmp_path, cap, area):
+    # browsers paint `M18 3 L18 3` and `M4 3 z` stroked with round (square) caps as a disc
+    # (a square) of the stroke's width, and nothing for a lone moveto or butt caps
+    body = (f'<g fill="none" stroke="#000" stroke-width="2" stroke-linecap="{cap}">'
+            '<path d="M50 50 h20"/><path d="M18 3 L18 3"/><path d="M4 3 z"/><path d="M80 80"/></g>')
+    el = _quiet(load_element, _write(tmp_path, "dots.svg", _svg(body)))
+    dots = [p for p in el.paths if np.ptp(np.concatenate(p.subpaths)[:, 0]) < 1]
+    assert len(dots) == (2 if area else 0)
+    for p in dots:
+        assert art_area([p]).area == pytest.approx(area, rel=0.03)
+    # the line keeps its own caps: 20 x 2, plus a disc (a square) of diameter 2 at its ends
+    line = [p for p in el.paths if np.ptp(np.concatenate(p.subpaths)[:, 0]) > 10]
+    assert art_area(line).area == pytest.approx(40 + area, rel=0.03)

@@ -1116,6 +1116,33 @@ def _stroke_width(shape) -> float:
     return sw if math.isfinite(sw) and sw >= 0 else 0.0
 
 
+def _dots(segments: list, style: Style) -> list:
+    """SVG paints a zero-length subpath of a stroke with round or square caps as a dot (a
+    disc, or a square along the x axis): such a subpath (``M18 3 L18 3``, ``M4 3 z``; a
+    lone ``M`` is not drawn) becomes a line along x, 1% of the stroke width long, which
+    the stroke geometry and the writer draw like the browser's dot (they were left out)."""
+    if style.stroke is None or not style.stroke_width > 0 or style.stroke_linecap not in ("round", "square"):
+        return segments
+    import svgelements as se
+
+    def zero_length(seg) -> bool:
+        pts = [getattr(seg, a, None) for a in ("start", "control", "control1", "control2", "end")]
+        pts = [complex(*q) for q in pts if q is not None]
+        return len(pts) >= 2 and all(q == pts[0] for q in pts)
+
+    out, run = [], []
+    for seg in segments + [None]:
+        if seg is None or isinstance(seg, se.Move):
+            if len(run) > 1 and run[0].end is not None and all(zero_length(q) for q in run[1:]):
+                x, y = run[0].end
+                run = [run[0], se.Line(se.Point(x, y), se.Point(x + 0.01 * style.stroke_width, y))]
+            out.extend(run)
+            run = []
+        if seg is not None:
+            run.append(seg)
+    return out
+
+
 def _det_scale(mat: np.ndarray) -> float:
     """The length scale of the (3, 3) affine ``mat``: sqrt(|det|) of its linear part."""
     return math.sqrt(abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0]))
@@ -1328,7 +1355,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
                     style = dataclasses.replace(style, fill=None)
                 if layers:
                     style = dataclasses.replace(style, layers=layers)
-                segs = list(child.segments(transformed=False))
+                segs = _dots(list(child.segments(transformed=False)), style)
                 own_clips = clip_refs(child.values.get("clip-path"), mat, notes)
                 vis = str(child.values.get("visibility", "visible")).strip().lower()
                 shapes.append(
