@@ -761,29 +761,128 @@ def _strip_of_triangles(n: int = 12):
     return x, np.array(tris, np.int64)
 
 
-def test_corner_force_pushes_the_triangle_holding_the_corner_and_only_it():
-    from repulsionpak.sim.forces import corner_candidates, corner_force
+def _corner_lists(corners, g, tri_elem, frozen, by_cells, cand_size=2):
+    """corner_candidates on grid ``g`` (corners binned into its triangle cells), with a
+    buffer grown as the kernel asks: (active corners, pointers, candidates)."""
+    from repulsionpak.sim.forces import corner_candidates
+    from repulsionpak.sim.grid import bin_points
+
+    t = g.tris
+    key = np.zeros(len(corners), np.int64)
+    start = np.zeros(t.gx * t.gy + 1, np.int64)
+    order = np.zeros(len(corners), np.int64)
+    bin_points(corners[:, 0].copy(), corners[:, 1].copy(), *t.params, start, order, key)
+    live = np.flatnonzero(~frozen[tri_elem]).astype(np.int64)
+    cell_mark = np.zeros(t.gx * t.gy, np.int64)
+    corner_mark = np.zeros(len(corners), np.int64)
+    active = np.zeros(len(corners), np.int64)
+    ptr = np.zeros(len(corners) + 1, np.int64)
+    cand = np.zeros(cand_size, np.int64)
+    for stamp in (1, 2):
+        n, need = corner_candidates(corners, key, start, order, live, t._keys, tri_elem, frozen, t.order,
+                                    t.start, t.gx, t.gy, by_cells, cell_mark, corner_mark, stamp, active,
+                                    ptr, cand)
+        if need <= len(cand):
+            break
+        cand = np.zeros(need, np.int64)  # too small: the kernel says how much it needs
+    assert need <= len(cand)
+    return active[:n].copy(), ptr[:n + 1].copy(), cand[:need].copy()
+
+
+@pytest.mark.parametrize("by_cells", [False, True])
+def test_corner_force_pushes_the_triangle_holding_the_corner_and_only_it(by_cells):
+    from repulsionpak.sim.forces import corner_force
 
     x, tris = _strip_of_triangles()
     tri_elem = np.zeros(len(tris), np.int32)
     g = Grid((-2.0, -2.0), (16.0, 5.0), 4.0, 1.5, 1, len(tris))
     g.rebuild_triangles(x, tris, tri_elem)
     corners = np.array([[3.7, 0.2], [20.0, 20.0]])  # inside triangle 6; far away
-    ptr = np.zeros(3, np.int64)
-    cand = np.zeros(2, np.int64)  # too small: the kernel says how much it needs
-    need = corner_candidates(corners, g.tris.order, g.tris.start, *g.tris.params, ptr, cand)
-    assert need > 2
-    cand = np.zeros(need, np.int64)
-    assert corner_candidates(corners, g.tris.order, g.tris.start, *g.tris.params, ptr, cand) == need
-    assert 6 in cand[ptr[0]:ptr[1]] and ptr[2] == ptr[1]  # the far corner has no candidates
+    active, ptr, cand = _corner_lists(corners, g, tri_elem, np.array([False]), by_cells)
+    assert active.tolist() == [0]  # the far corner has no candidates: it is not looked at
+    assert 6 in cand[ptr[0]:ptr[1]]
     F = np.zeros_like(x)
-    corner_force(x, corners, ptr, cand, tris, tri_elem, np.array([True]), 10.0, F)
+    corner_force(x, corners, active, len(active), ptr, cand, tris, tri_elem, np.array([True]), 10.0, F)
     pushed = np.flatnonzero(np.abs(F).sum(1))
     assert sorted(pushed) == sorted(tris[6])
     for v in tris[6]:  # away from the corner, k·(v − c)
         np.testing.assert_allclose(F[v], 10.0 * (x[v] - corners[0]))
-    F[:] = 0.0  # a frozen element is not pushed
-    corner_force(x, corners, ptr, cand, tris, tri_elem, np.array([False]), 10.0, F)
+    F[:] = 0.0  # a pinned element is not pushed
+    corner_force(x, corners, active, len(active), ptr, cand, tris, tri_elem, np.array([False]), 10.0, F)
+    assert not F.any()
+    # a frozen element's triangles are no candidates: no corner near it is looked at
+    assert len(_corner_lists(corners, g, tri_elem, np.array([True]), by_cells)[0]) == 0
+
+
+def _jagged_disc(n_teeth, r_in, r_out, centre=(50.0, 50.0)):
+    """A disc with ``n_teeth`` fine teeth (torn paper, grass): a reflex corner between two."""
+    a = np.linspace(0.0, 2 * np.pi, 2 * n_teeth, endpoint=False)
+    r = np.where(np.arange(2 * n_teeth) % 2 == 0, r_out, r_in)
+    return Polygon(np.column_stack([centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)]))
+
+
+def _all_corners_force(sim, x):
+    """The corner force as it was computed before corners were gathered near the moving
+    meshes only: every corner, every triangle (also frozen ones) of its 3×3 triangle-cell
+    window, in order of corners, then cells (rows, columns), then triangles of a cell."""
+    m, t = sim.model, sim.grid.tris
+    F = np.zeros_like(x)
+    evaluated = set()
+    for k, (cx, cy) in enumerate(m.corners):
+        gx = min(max(int((cx - t.ox) * t.inv_c), 0), t.gx - 1)
+        gy = min(max(int((cy - t.oy) * t.inv_c), 0), t.gy - 1)
+        for yy in range(max(gy - 1, 0), min(gy + 2, t.gy)):
+            for xx in range(max(gx - 1, 0), min(gx + 2, t.gx)):
+                c = yy * t.gx + xx
+                for tri in t.order[t.start[c]:t.start[c + 1]]:
+                    if not m.frozen[m.tri_elem[tri]]:
+                        evaluated.add(k)
+                    if not sim.moving[m.tri_elem[tri]]:
+                        continue
+                    (ax, ay), (bx, by), (qx, qy) = x[m.tris[tri]]
+                    d1 = (cx - bx) * (ay - by) - (ax - bx) * (cy - by)
+                    d2 = (cx - qx) * (by - qy) - (bx - qx) * (cy - qy)
+                    d3 = (cx - ax) * (qy - ay) - (qx - ax) * (cy - ay)
+                    if (d1 < 0 or d2 < 0 or d3 < 0) and (d1 > 0 or d2 > 0 or d3 > 0):
+                        continue
+                    for v in m.tris[tri]:
+                        F[v, 0] += sim.params.k_corner * (x[v, 0] - cx)
+                        F[v, 1] += sim.params.k_corner * (x[v, 1] - cy)
+    return F, evaluated
+
+
+@pytest.mark.parametrize("by_cells", [None, False, True])
+def test_corner_gather_looks_only_at_corners_near_moving_meshes_and_keeps_the_force(template, by_cells):
+    """A jagged container has thousands of reflex corners; a step looks only at those
+    whose triangle window holds a moving (non-frozen) mesh's triangle, and the force is
+    bit for bit the one of scanning every corner's window."""
+    from repulsionpak.sim.forces import corner_force
+
+    region = _jagged_disc(300, 44.0, 48.0)
+    # element 0 straddles the teeth on the right, 1 on the left (frozen), 2 at the centre
+    placement = Placement(np.array([0, 0, 0]), np.array([[93.0, 50.0], [7.0, 52.0], [50.0, 50.0]]),
+                          np.array([0.0, 0.3, 0.1]), 1.0)
+    model, state = make_model([template], placement, SimFrame(1.0), region, cell_size=15.0, field_h=1.0)
+    model.frozen[1] = True
+    sim = Simulator(model, state, SimParams())
+    assert len(model.corners) == 300
+    x = state.x + np.random.default_rng(5).normal(0.0, 0.3, state.x.shape)
+    sim.grid.fit_triangles(x, model.tris)
+    sim.grid.rebuild_triangles(x, model.tris, model.tri_elem)
+    sim._gather_corner_triangles(by_cells)
+    F_ref, evaluated = _all_corners_force(sim, x)
+    active = sim.corner_active[:sim.n_corner_active]
+    assert active.tolist() == sorted(evaluated)  # the corners near element 0's triangles
+    assert 0 < len(active) < 40
+    F = np.zeros_like(x)
+    corner_force(x, model.corners, sim.corner_active, sim.n_corner_active, sim.corner_ptr, sim.corner_tris,
+                 model.tris, model.tri_elem, sim.moving, sim.params.k_corner, F)
+    assert np.abs(F_ref).max() > 0.0  # corners inside element 0's triangles push it
+    assert np.array_equal(F, F_ref)
+    sim.set_moving(0, False)  # pinned between two gathers: no force, as before
+    F[:] = 0.0
+    corner_force(x, model.corners, sim.corner_active, sim.n_corner_active, sim.corner_ptr, sim.corner_tris,
+                 model.tris, model.tri_elem, sim.moving, sim.params.k_corner, F)
     assert not F.any()
 
 

@@ -416,41 +416,90 @@ def project_inside(x, active_all, values, ox, oy, inv_h, limit):
 
 
 @njit(cache=True)
-def corner_candidates(corners, tri_order, tri_start, tox, toy, tinv, tgx, tgy, cand_ptr, cand):
-    """The triangles in the 3×3 triangle-cell window of each reflex corner, ``cand[
-    cand_ptr[k]:cand_ptr[k+1]]`` for corner k. Returns the number of entries needed; if
-    that exceeds ``len(cand)``, the lists are incomplete and the caller must retry with a
-    larger ``cand``.
+def corner_candidates(corners, corner_key, corner_start, corner_order, live_tris, tri_key, tri_elem,
+                      frozen, tri_order, tri_start, tgx, tgy, by_cells, cell_mark, corner_mark, stamp,
+                      active, cand_ptr, cand):
+    """The reflex corners near a moving mesh and their candidate triangles: the
+    triangles of non-frozen elements in the 3×3 triangle-cell window of the corner. The
+    ``n`` corners with any are ``active[:n]`` (ascending), corner ``active[j]``'s list is
+    ``cand[cand_ptr[j]:cand_ptr[j+1]]``. Returns ``(n, entries needed)``; if the latter
+    exceeds ``len(cand)``, the lists are incomplete and the caller must retry with a
+    larger ``cand`` (and a new ``stamp``).
 
     Gathered at each full neighbour query: a triangle containing a corner has its centroid
     within 2/3 of its longest edge (< 0.64 cell) of it, so the window keeps a third of a
-    cell of margin for the few steps until the next query."""
+    cell of margin for the few steps until the next query.
+
+    A corner far from every moving mesh costs nothing (a jagged container has thousands
+    of them): with ``by_cells``, the corners are found from the cells of the live
+    triangles ``live_tris`` (``tri_key``: each triangle's cell, from the last rebuild;
+    corners binned into the same cells: ``corner_start``/``corner_order``, ``corner_key``),
+    marking each cell and corner once (``cell_mark``/``corner_mark`` hold ``stamp`` once
+    seen); without, each corner's window is scanned (fewer corners than live triangles).
+    A corner is found by either route exactly when its window holds a live triangle, so
+    the lists are those of a scan of every corner with frozen triangles left out, in the
+    same order; frozen elements never move, so :func:`corner_force` gets the same sums."""
+    n_act = 0
+    if by_cells:
+        for j in range(live_tris.shape[0]):
+            c = tri_key[live_tris[j]]
+            if cell_mark[c] == stamp:
+                continue
+            cell_mark[c] = stamp
+            cy = c // tgx
+            cx = c - cy * tgx
+            for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
+                for xx in range(max(cx - 1, 0), min(cx + 2, tgx)):
+                    nc = yy * tgx + xx
+                    for q in range(corner_start[nc], corner_start[nc + 1]):
+                        k = corner_order[q]
+                        if corner_mark[k] != stamp:
+                            corner_mark[k] = stamp
+                            active[n_act] = k
+                            n_act += 1
+        active[:n_act].sort()
+    else:
+        for k in range(corners.shape[0]):
+            active[k] = k
+        n_act = corners.shape[0]
     n = 0
-    for k in range(corners.shape[0]):
-        cand_ptr[k] = n
-        gx, gy = cell_of(corners[k, 0], corners[k, 1], tox, toy, tinv, tgx, tgy)
+    kept = 0
+    for j in range(n_act):
+        k = active[j]
+        first = n
+        gy = corner_key[k] // tgx
+        gx = corner_key[k] - gy * tgx
         for yy in range(max(gy - 1, 0), min(gy + 2, tgy)):
             for xx in range(max(gx - 1, 0), min(gx + 2, tgx)):
                 c = yy * tgx + xx
                 for m in range(tri_start[c], tri_start[c + 1]):
+                    t = tri_order[m]
+                    if frozen[tri_elem[t]]:
+                        continue
                     if n < cand.shape[0]:
-                        cand[n] = tri_order[m]
+                        cand[n] = t
                     n += 1
-    cand_ptr[corners.shape[0]] = n
-    return n
+        if n > first:  # (always, with by_cells)
+            active[kept] = k
+            cand_ptr[kept] = first
+            kept += 1
+    cand_ptr[kept] = n
+    return kept, n
 
 
 @njit(cache=True)
-def corner_force(x, corners, cand_ptr, cand, tris, tri_elem, moving, k_b, F):
+def corner_force(x, corners, active, n_active, cand_ptr, cand, tris, tri_elem, moving, k_b, F):
     """Beyond the paper: the container's reflex corners (pointing into the container, like
     the cleft of a heart) can slip between two skin vertices into a mesh, where no vertex
     is outside. A corner found inside a triangle pushes that triangle's vertices away
-    from it, k_b·(v − c) each, like a vertex of a fixed obstacle. Only the corner's
-    candidate triangles (:func:`corner_candidates`) are tested."""
-    for k in range(corners.shape[0]):
+    from it, k_b·(v − c) each, like a vertex of a fixed obstacle. Only the corners near a
+    moving mesh, ``active[:n_active]``, and their candidate triangles
+    (:func:`corner_candidates`) are tested."""
+    for j in range(n_active):
+        k = active[j]
         cx = corners[k, 0]
         cy = corners[k, 1]
-        for m in range(cand_ptr[k], cand_ptr[k + 1]):
+        for m in range(cand_ptr[j], cand_ptr[j + 1]):
             t = cand[m]
             if not moving[tri_elem[t]]:
                 continue
@@ -458,8 +507,8 @@ def corner_force(x, corners, cand_ptr, cand, tris, tri_elem, moving, k_b, F):
             b = tris[t, 1]
             c = tris[t, 2]
             if _inside_triangle(cx, cy, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1]):
-                for j in range(3):
-                    v = tris[t, j]
+                for i in range(3):
+                    v = tris[t, i]
                     F[v, 0] += k_b * (x[v, 0] - cx)
                     F[v, 1] += k_b * (x[v, 1] - cy)
 

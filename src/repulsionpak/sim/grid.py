@@ -121,7 +121,7 @@ class CellList:
         self.elem = np.zeros(n_items, np.int32)
         self._mx = np.zeros(n_items)
         self._my = np.zeros(n_items)
-        self._keys = np.zeros(n_items, np.int64)
+        self._keys = np.zeros(n_items, np.int64)  # after a rebuild: each item's cell (read by the corner gather)
 
     @property
     def params(self):

@@ -22,7 +22,7 @@ from ..params import SimParams
 from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
                      edge_force,
                      inversion_force, overlap_force, project_inside, repulsion_force, shape_force)
-from .grid import Grid
+from .grid import Grid, bin_points
 from .integrate import count_inside, euler_step, grow, growth_speed_caps, skin_areas, window_change
 from .kernels import parallel_ready, set_threads
 from .model import Model, State, element_ranges
@@ -185,8 +185,16 @@ class Simulator:
          self.chunk_b, self.chunk_elem, self.chunk_first, self.chunk_count) = skin_topology(m)
         self.grid = Grid(m.grid_origin, m.grid_extent, m.cell_size, m.tri_cell_size, len(self.chunk_a), len(m.tris))
         self.F = np.zeros((N, 2))
+        # reflex corners near a moving mesh (``corner_active[:n_corner_active]``) and their
+        # candidate triangles, gathered at each full query (see _gather_corner_triangles)
+        self.corner_active = np.zeros(len(m.corners), np.int64)
+        self.n_corner_active = 0
         self.corner_ptr = np.zeros(len(m.corners) + 1, np.int64)
         self.corner_tris = np.zeros(1024, np.int64)  # grown on demand
+        self.live_tris = np.flatnonzero(~m.frozen[m.tri_elem]).astype(np.int64)
+        self._corner_bins = None  # the corners binned into the current triangle cells
+        self._corner_mark = np.zeros(len(m.corners), np.int64)
+        self._corner_stamp = 0
         self.inside = np.zeros(N, np.bool_)
         self.outside = np.zeros(N, np.bool_)
         self.nb_count = np.zeros(N, np.int64)
@@ -273,8 +281,8 @@ class Simulator:
             inversion_force(x, m.tris, self.tri_ptr, m.tri_rest, self.growth, self.moving,
                             p.min_triangle_area, p.k_overlap, F)
         if len(m.corners):
-            corner_force(x, m.corners, self.corner_ptr, self.corner_tris, m.tris, m.tri_elem,
-                         self.moving, p.k_corner, F)
+            corner_force(x, m.corners, self.corner_active, self.n_corner_active, self.corner_ptr,
+                         self.corner_tris, m.tris, m.tri_elem, self.moving, p.k_corner, F)
         euler_step(x, st.v, F, self.active_all, self.dt, self._vmax_dt, m.vert_elem)
         if p.hard_boundary and not self.allow_growth:  # while settling
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
@@ -295,16 +303,35 @@ class Simulator:
         self.moving_area = moving / m.container_area
         return total / m.container_area
 
-    def _gather_corner_triangles(self) -> None:
-        """Candidate triangles of each reflex corner from the freshly built triangle grid
-        (the buffer grows when a corner's window holds more than it has room for)."""
-        t = self.grid.tris
-        need = corner_candidates(self.model.corners, t.order, t.start, *t.params,
-                                 self.corner_ptr, self.corner_tris)
-        if need > len(self.corner_tris):
+    def _gather_corner_triangles(self, by_cells: bool | None = None) -> None:
+        """The reflex corners near a moving mesh and their candidate triangles, from the
+        freshly built triangle grid (the buffer grows when the windows hold more than it
+        has room for). Only corners within a cell of a live triangle cost anything: a
+        jagged container's thousands of corners away from the moving meshes are never
+        looked at (a step cost ~O(corners × triangles per window) before). The corners
+        are binned into the triangle cells once per cell size."""
+        m, t = self.model, self.grid.tris
+        bins = self._corner_bins
+        if bins is None or bins[0] is not t:  # new cells (fit_triangles): bin the corners again
+            key = np.zeros(len(m.corners), np.int64)
+            start = np.zeros(t.gx * t.gy + 1, np.int64)
+            order = np.zeros(len(m.corners), np.int64)
+            corners = np.ascontiguousarray(m.corners, dtype=np.float64)
+            bin_points(corners[:, 0].copy(), corners[:, 1].copy(), *t.params, start, order, key)
+            bins = self._corner_bins = (t, key, start, order, np.zeros(t.gx * t.gy, np.int64))
+        _, key, start, order, cell_mark = bins
+        if by_cells is None:  # from the live triangles' cells when that is cheaper (the same lists)
+            by_cells = len(self.live_tris) < 9 * len(m.corners)
+        while True:
+            self._corner_stamp += 1
+            n, need = corner_candidates(m.corners, key, start, order, self.live_tris, t._keys, m.tri_elem,
+                                        m.frozen, t.order, t.start, t.gx, t.gy, by_cells, cell_mark,
+                                        self._corner_mark, self._corner_stamp, self.corner_active,
+                                        self.corner_ptr, self.corner_tris)
+            if need <= len(self.corner_tris):
+                break
             self.corner_tris = np.zeros(2 * need, np.int64)
-            corner_candidates(self.model.corners, t.order, t.start, *t.params,
-                              self.corner_ptr, self.corner_tris)
+        self.n_corner_active = n
 
     def _relaxed(self) -> np.ndarray:
         """The elements whose skins the self-intersection relaxation may move: not rigid
