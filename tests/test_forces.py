@@ -797,7 +797,8 @@ def test_corner_force_pushes_the_triangle_holding_the_corner_and_only_it(by_cell
     tri_elem = np.zeros(len(tris), np.int32)
     g = Grid((-2.0, -2.0), (16.0, 5.0), 4.0, 1.5, 1, len(tris))
     g.rebuild_triangles(x, tris, tri_elem)
-    corners = np.array([[3.7, 0.2], [20.0, 20.0]])  # inside triangle 6; far away
+    # inside triangle 6, pointing up into the container; far away
+    corners = np.array([[3.7, 0.2, 0.0, 1.0], [20.0, 20.0, 0.0, 1.0]])
     active, ptr, cand = _corner_lists(corners, g, tri_elem, np.array([False]), by_cells)
     assert active.tolist() == [0]  # the far corner has no candidates: it is not looked at
     assert 6 in cand[ptr[0]:ptr[1]]
@@ -805,8 +806,12 @@ def test_corner_force_pushes_the_triangle_holding_the_corner_and_only_it(by_cell
     corner_force(x, corners, active, len(active), ptr, cand, tris, tri_elem, np.array([True]), 10.0, F)
     pushed = np.flatnonzero(np.abs(F).sum(1))
     assert sorted(pushed) == sorted(tris[6])
-    for v in tris[6]:  # away from the corner, k·(v − c)
-        np.testing.assert_allclose(F[v], 10.0 * (x[v] - corners[0]))
+    # all three along the corner's bisector into the container, by k × the vertices' mean
+    # distance from the corner: the triangle moves off the corner (pushed away from the
+    # corner, radially, a small mesh holding several corners inflated instead)
+    mean = np.mean([np.hypot(*(x[v] - corners[0, :2])) for v in tris[6]])
+    for v in tris[6]:
+        np.testing.assert_allclose(F[v], 10.0 * mean * corners[0, 2:])
     F[:] = 0.0  # a pinned element is not pushed
     corner_force(x, corners, active, len(active), ptr, cand, tris, tri_elem, np.array([False]), 10.0, F)
     assert not F.any()
@@ -828,7 +833,7 @@ def _all_corners_force(sim, x):
     m, t = sim.model, sim.grid.tris
     F = np.zeros_like(x)
     evaluated = set()
-    for k, (cx, cy) in enumerate(m.corners):
+    for k, (cx, cy, nx, ny) in enumerate(m.corners):
         gx = min(max(int((cx - t.ox) * t.inv_c), 0), t.gx - 1)
         gy = min(max(int((cy - t.oy) * t.inv_c), 0), t.gy - 1)
         for yy in range(max(gy - 1, 0), min(gy + 2, t.gy)):
@@ -845,9 +850,13 @@ def _all_corners_force(sim, x):
                     d3 = (cx - ax) * (qy - ay) - (qx - ax) * (cy - ay)
                     if (d1 < 0 or d2 < 0 or d3 < 0) and (d1 > 0 or d2 > 0 or d3 > 0):
                         continue
+                    s = 0.0
                     for v in m.tris[tri]:
-                        F[v, 0] += sim.params.k_corner * (x[v, 0] - cx)
-                        F[v, 1] += sim.params.k_corner * (x[v, 1] - cy)
+                        s += np.sqrt((x[v, 0] - cx) ** 2 + (x[v, 1] - cy) ** 2)
+                    s *= sim.params.k_corner / 3.0
+                    for v in m.tris[tri]:
+                        F[v, 0] += s * nx
+                        F[v, 1] += s * ny
     return F, evaluated
 
 
@@ -962,3 +971,20 @@ def test_skin_walk_ends_where_a_walk_trying_both_sides_every_hop_ends(n):
         d = shapely.LineString([x[seg_a[end]], x[seg_b[end]]]).distance(Point(px, py))
         assert best == pytest.approx(d * d, abs=1e-12)
         assert (px - qx) ** 2 + (py - qy) ** 2 == pytest.approx(best, abs=1e-12)
+
+
+def test_reflex_corners_carry_their_bisector_into_the_container():
+    from repulsionpak.sim.model import reflex_corners
+
+    # an L: the region is the square [0, 2]² minus [1, 2]²; its one reflex corner (1, 1)
+    # points into the region, whose inside lies towards (−1, −1)
+    ell = Polygon([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)])
+    for poly in (ell, Polygon(list(ell.exterior.coords)[::-1])):  # either orientation
+        c = reflex_corners(poly)
+        assert c.shape == (1, 4)
+        np.testing.assert_allclose(c[0], [1, 1, -np.sqrt(0.5), -np.sqrt(0.5)])
+    # a hole's corners all point into the container around it: away from the hole
+    holed = Polygon([(-5, -5), (5, -5), (5, 5), (-5, 5)], [[(-1, -1), (1, -1), (1, 1), (-1, 1)]])
+    c = reflex_corners(holed)
+    assert c.shape == (4, 4)
+    np.testing.assert_allclose(c[:, 2:], c[:, :2] / np.hypot(*c[:, :2].T)[:, None])

@@ -143,7 +143,8 @@ class State:
 
 def reflex_corners(region, max_angle_deg: float = 160.0) -> np.ndarray:
     """Vertices of the container's rings where the region's interior angle exceeds 180°
-    + (180 − max_angle_deg), i.e. sharp corners pointing into the container. (C, 2)."""
+    + (180 − max_angle_deg), i.e. sharp corners pointing into the container, and the unit
+    bisector of each pointing into the container: (C, 4) rows x, y, nx, ny."""
     out = []
     polys = getattr(region, "geoms", [region])
     for poly in polys:
@@ -163,8 +164,14 @@ def reflex_corners(region, max_angle_deg: float = 160.0) -> np.ndarray:
             ang = np.degrees(np.arccos(np.clip(cosang, -1, 1)))  # angle between the two edges
             # outer ring: a turn against its orientation is reflex; a hole: the opposite
             reflex = (z * sign < 0) if is_outer else (z * sign > 0)
-            out.extend(pts[reflex & (ang < max_angle_deg)])
-    return np.asarray(out, dtype=float).reshape(-1, 2)
+            # the outside is the wedge between the two edges; the inside is opposite it
+            ua = a / np.maximum(np.hypot(*a.T), 1e-300)[:, None]
+            ub = b / np.maximum(np.hypot(*b.T), 1e-300)[:, None]
+            n = -(ua + ub)
+            n /= np.maximum(np.hypot(*n.T), 1e-300)[:, None]
+            keep = reflex & (ang < max_angle_deg)
+            out.extend(np.c_[pts[keep], n[keep]])
+    return np.asarray(out, dtype=float).reshape(-1, 4)
 
 
 def element_ranges(owner: np.ndarray, n_elements: int) -> np.ndarray:
