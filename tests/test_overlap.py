@@ -106,3 +106,44 @@ def test_distortion_values_unchanged_by_the_kernel():
         metrics._Search = orig
     assert 0.02 < fast < 0.5
     assert fast == pytest.approx(slow, abs=1e-6)
+
+
+def _dots(rng, n, r=0.12):
+    pts = rng.uniform(-1.5, 1.5, (n, 2))
+    pts[: n // 2] = np.round(pts[: n // 2] * 4) / 4  # on a lattice: shared rows, horizontal edges
+    return shapely.union_all([shapely.Point(p).buffer(float(r * rng.uniform(0.5, 1.5)), int(rng.integers(1, 5)))
+                              for p in pts])
+
+
+def test_ring_start_tests_through_a_grid_count_the_same_crossings():
+    """Whether a ring's first vertex lies in the other polygon is tested through a grid of
+    that polygon's edges (only the ray's row); the answer is the full test's, also on
+    vertices, lattice points and horizontal edges."""
+    from repulsionpak.geometry.overlap import _bin_rows, _inside, _inside_grid
+
+    rng = np.random.default_rng(5)
+    for case in range(20):
+        g = _dots(rng, int(rng.integers(1, 60)))
+        if case % 4 == 1:
+            g = shapely.union_all([shapely.box(x, y, x + 0.5, y + 0.25) for x, y in np.round(rng.uniform(-2, 2, (20, 2)) * 4) / 4])
+        r = rings_of(g)
+        grid = OverlapGrid(r)
+        y0, inv, gy, start, edges = _bin_rows(r.xy, r.nxt)
+        pts = np.concatenate([rng.uniform(-2.5, 2.5, (200, 2)), r.xy, np.round(rng.uniform(-2.5, 2.5, (100, 2)) * 4) / 4])
+        for px, py in pts:
+            want = _inside(px, py, r.xy, r.nxt)
+            assert _inside_grid(px, py, r.xy, r.nxt, grid.x0, grid.y0, grid.inv, grid.inv, grid.gx, grid.gy,
+                                grid.cell_start, grid.cell_edges) == want
+            assert _inside_grid(px, py, r.xy, r.nxt, 0.0, y0, 0.0, inv, 1, gy, start, edges) == want
+
+
+@pytest.mark.parametrize("case", range(4))
+def test_intersection_areas_of_many_rings_match_geos(case):
+    """Dotted art (a hundred rings on each side: the ring-start tests go through grids)."""
+    rng = np.random.default_rng(300 + case)
+    a, b = _dots(rng, 100), _dots(rng, 100)
+    assert len(a.geoms) > 20 and len(b.geoms) > 20
+    params = np.c_[rng.uniform(0, 2 * np.pi, 12), rng.normal(0, 0.1, 12), rng.normal(0, 0.1, (12, 2))]
+    params[0] = 0.0
+    got = intersection_areas(rings_of(a), OverlapGrid(rings_of(b)), params)
+    np.testing.assert_allclose(got, _geos_intersections(a, b, params), rtol=0, atol=1e-7 * (a.area + b.area))
