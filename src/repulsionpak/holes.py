@@ -212,6 +212,32 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
     return out
 
 
+#: art of more parts than this (dots, lettering) is dilated part by part (:func:`_dilated`)
+MANY_PARTS = 16
+
+
+def _dilated(geoms: Sequence, reach: float) -> list:
+    """``geoms`` (the non-empty ones) each dilated by ``reach`` (4 segments per quarter
+    circle), to be united. A geometry of more than :data:`MANY_PARTS` polygons is dilated
+    part by part, its parts' buffers going into the union one by one: GEOS buffers a
+    multipolygon as one outline, noding all its parts' offset curves together, which
+    grows much faster than its parts (a copy of 100 dots whose buffers overlap: 80 ms,
+    against 5 ms part by part; 20 s of a 253-copy packing's pocket fill). The union is
+    the same region; art of few parts is buffered whole, as before (same vertices)."""
+    whole, parts = [], []
+    for g in geoms:
+        if g.is_empty:
+            continue
+        n = shapely.get_num_geometries(g)
+        (parts if n > MANY_PARTS else whole).append(g)
+    out = list(shapely.buffer(np.asarray(whole, dtype=object), reach, quad_segs=4)) if whole else []
+    if parts:
+        pieces = shapely.get_parts(np.asarray(parts, dtype=object))
+        pieces = pieces[~shapely.is_empty(pieces)]
+        out += list(shapely.buffer(pieces, reach, quad_segs=4))
+    return out
+
+
 def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,
                  rng: np.random.Generator, min_radius: float, render: RenderParams = RenderParams(),
                  trials: int = 6, limit: int | None = None) -> list[PlacedArt]:
@@ -233,7 +259,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     # come within cos(π/16) ≈ 0.98 of the radius at corners): widen it to cover it
     reach = (keep + eps) / math.cos(math.pi / 16)
     geoms = [shapely.simplify(p.art, eps) for p in placed]
-    taken = robust_union_all([g.buffer(reach, quad_segs=4) for g in geoms if not g.is_empty])
+    taken = robust_union_all(_dilated(geoms, reach))
     free = overlay(shapely.difference, shapely.buffer(region, -(1.005 * margin)), taken)
     if free.is_empty:
         return []
