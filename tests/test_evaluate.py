@@ -477,3 +477,31 @@ def test_plot_scp_bands(tmp_path, squares_scp):
     assert out.stat().st_size > 5000
     with pytest.raises(ParameterError):
         ev.plot_scp_bands({}, tmp_path / "x.png", GAP)
+
+
+def test_area_fraction_unites_only_elements_that_meet(monkeypatch):
+    """area_fraction: overlaps are counted once, art outside the container not at all,
+    and only clusters of intersecting elements are united (one union of a whole packing
+    of dotted art noded 27,000 polygons together: 4 s for what is a sum of areas)."""
+    evaluate_mod = importlib.import_module("repulsionpak.evaluate")
+
+    rng = np.random.default_rng(3)
+    region = box(0, 0, 100, 100)
+    dotted = [shapely.union_all([Point(x + 1.5 * i, y + 1.5 * j).buffer(0.5) for i in range(4) for j in range(4)])
+              for x, y in rng.uniform(2, 90, (30, 2)) // 10 * 10]
+    dotted = [g for k, g in enumerate(dotted) if not any(g.intersects(h) for h in dotted[:k])]
+    pair = [box(40, 95, 60, 110), box(50, 90, 70, 98)]  # overlapping, and partly outside
+    geoms = dotted + pair
+    want = shapely.intersection(shapely.union_all(geoms), region).area / region.area
+    united: list[int] = []
+    union_all = evaluate_mod.robust_union_all
+
+    def spy(gs, **kw):
+        united.append(len(list(gs)))
+        return union_all(gs, **kw)
+
+    monkeypatch.setattr(evaluate_mod, "robust_union_all", spy)
+    got = evaluate_mod.area_fraction(region, geoms)
+    assert got == pytest.approx(want, rel=1e-12)
+    assert united == [2]  # the overlapping pair only
+    assert evaluate_mod.area_fraction(region, []) == 0.0

@@ -110,13 +110,51 @@ def _union(geoms: Sequence) -> shapely.Geometry:
     return _polygonal(robust_union_all(geoms))
 
 
+def _clusters(geoms: np.ndarray) -> list[np.ndarray]:
+    """Indices of ``geoms`` grouped into connected clusters of intersecting geometries."""
+    n = len(geoms)
+    parent = np.arange(n)
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    i, j = shapely.STRtree(geoms).query(geoms, predicate="intersects")
+    for a, b in zip(i[i < j].tolist(), j[i < j].tolist()):
+        ra, rb = root(a), root(b)
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    roots = np.array([root(k) for k in range(n)], dtype=np.int64)
+    order = np.argsort(roots, kind="stable")
+    return np.split(order, np.flatnonzero(np.diff(roots[order])) + 1)
+
+
 def area_fraction(container_region, art_geoms) -> float:
-    """Area of (union of the art ∩ container) / container area (overlaps counted once)."""
+    """Area of (union of the art ∩ container) / container area (overlaps counted once).
+
+    The union is taken within each cluster of intersecting elements only (a packing's
+    elements are a gap apart: nearly all clusters are single elements), and the areas of
+    the clusters inside the container summed: one union of every element's art (a
+    hundred dots each: 27,000 polygons for 267 copies, 4 s; 386,000 for a thousand dots)
+    nodes all of it together for nothing. The value is the same up to rounding (the
+    sum's order)."""
     region = _polygonal(container_region)
     if region.area <= 0:
         raise ParameterError("the container has no area")
-    art = _union(_as_geoms(art_geoms))
-    return float(overlay(shapely.intersection, art, region).area / region.area)
+    geoms = np.array([g for g in _as_geoms(art_geoms) if g is not None and not g.is_empty], dtype=object)
+    if not len(geoms):
+        return 0.0
+    shapely.prepare(region)
+    total = 0.0
+    for members in _clusters(geoms):
+        art = geoms[members[0]] if len(members) == 1 else _union(list(geoms[members]))
+        if shapely.contains(region, art):
+            total += float(art.area)
+        else:
+            total += float(overlay(shapely.intersection, art, region).area)
+    return total / float(region.area)
 
 
 def _pairs(geoms: list, predicate: str = "intersects", distance: float | None = None) -> np.ndarray:
