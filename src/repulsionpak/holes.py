@@ -238,6 +238,15 @@ def _dilated(geoms: Sequence, reach: float) -> list:
     return out
 
 
+def _dilation(g, reach: float):
+    """``g`` dilated by ``reach`` as one geometry (:func:`_dilated`: art of many parts
+    part by part, then united; else ``g.buffer(reach, quad_segs=4)`` itself)."""
+    pieces = _dilated([g], reach)
+    if shapely.get_num_geometries(g) <= MANY_PARTS:
+        return pieces[0] if pieces else shapely.Polygon()
+    return robust_union_all(pieces)
+
+
 def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,
                  rng: np.random.Generator, min_radius: float, render: RenderParams = RenderParams(),
                  trials: int = 6, limit: int | None = None) -> list[PlacedArt]:
@@ -276,7 +285,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
                 continue
             copy, g = got
             out.append(copy)
-            rest = overlay(shapely.difference, part, g.buffer(reach, quad_segs=4))
+            rest = overlay(shapely.difference, part, _dilation(g, reach))
             todo += [q for q in getattr(rest, "geoms", [rest])
                      if isinstance(q, shapely.Polygon) and not q.is_empty and q.area >= math.pi * min_radius ** 2]
             todo.sort(key=lambda q: -q.area)
