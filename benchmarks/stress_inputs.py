@@ -9,7 +9,8 @@
 * ``huge_d.svg``: an element outlined by 40,000 points, a circle whose radius alternates
   40 / 40.3 (a noisy trace whose teeth are real detail at the written tolerance);
 * ``c_strip20.svg`` and ``bar50.svg``: a 20:1 strip container and a 50:1 bar;
-* ``dots100.svg``: one element of 10 × 10 dots (100 subpaths).
+* ``dots100.svg``: one element of 10 × 10 dots (100 subpaths); ``letters100.svg``: one
+  element of 100 letters (``<text>``, A–Z in DejaVu Sans, 10 × 10).
 """
 
 from __future__ import annotations
@@ -67,6 +68,9 @@ def main(out: Path) -> None:
     (out / "bar50.svg").write_text(svg(500, 10, '<rect x="0" y="0" width="500" height="10" fill="#963"/>'))
     dots = "".join(f'<circle cx="{(i % 10 + .5) * 10:.3f}" cy="{(i // 10 + .5) * 10:.3f}" r="3"/>' for i in range(100))
     (out / "dots100.svg").write_text(svg(100, 100, f'<g fill="#336">{dots}</g>'))
+    text = "".join(f'<text x="{(i % 10) * 10:.3f}" y="{(i // 10 + 1) * 10:.3f}" font-size="10.000" '
+                   f'font-family="DejaVu Sans">{chr(65 + i % 26)}</text>' for i in range(100))
+    (out / "letters100.svg").write_text(svg(100, 100, f'<g fill="#633">{text}</g>'))
     print(f"wrote the stress inputs to {out}")
 
 
