@@ -764,7 +764,7 @@ def _strip_of_triangles(n: int = 12):
 def _corner_lists(corners, g, tri_elem, frozen, by_cells, cand_size=2):
     """corner_candidates on grid ``g`` (corners binned into its triangle cells), with a
     buffer grown as the kernel asks: (active corners, pointers, candidates)."""
-    from repulsionpak.sim.forces import corner_candidates
+    from repulsionpak.sim.forces import corner_candidates, mark_corners_near
     from repulsionpak.sim.grid import bin_points
 
     t = g.tris
@@ -779,9 +779,10 @@ def _corner_lists(corners, g, tri_elem, frozen, by_cells, cand_size=2):
     ptr = np.zeros(len(corners) + 1, np.int64)
     cand = np.zeros(cand_size, np.int64)
     for stamp in (1, 2):
-        n, need = corner_candidates(corners, key, start, order, live, t._keys, tri_elem, frozen, t.order,
-                                    t.start, t.gx, t.gy, by_cells, cell_mark, corner_mark, stamp, active,
-                                    ptr, cand)
+        if by_cells:
+            mark_corners_near(live, t._keys, t.gx, t.gy, start, order, cell_mark, corner_mark, stamp)
+        n, need = corner_candidates(key, by_cells, corner_mark, stamp, tri_elem, frozen, t.order, t.start,
+                                    t.gx, t.gy, active, ptr, cand)
         if need <= len(cand):
             break
         cand = np.zeros(need, np.int64)  # too small: the kernel says how much it needs

@@ -418,56 +418,56 @@ def project_inside(x, active_all, values, ox, oy, inv_h, limit):
 
 
 @njit(cache=True)
-def corner_candidates(corners, corner_key, corner_start, corner_order, live_tris, tri_key, tri_elem,
-                      frozen, tri_order, tri_start, tgx, tgy, by_cells, cell_mark, corner_mark, stamp,
-                      active, cand_ptr, cand):
+def mark_corners_near(live_tris, tri_key, tgx, tgy, corner_start, corner_order, cell_mark, corner_mark, stamp):
+    """Marks (``corner_mark[k] = stamp``) the reflex corners whose 3×3 triangle-cell
+    window holds a live triangle: found from the live triangles' cells (``tri_key``: each
+    triangle's cell, from the last rebuild; the corners binned into the same cells:
+    ``corner_start``/``corner_order``), each cell visited once (``cell_mark``). A jagged
+    container's thousands of corners away from the moving meshes are never looked at.
+    Its own kernel, compiled only for containers with many corners (see
+    :func:`corner_candidates`)."""
+    for j in range(live_tris.shape[0]):
+        c = tri_key[live_tris[j]]
+        if cell_mark[c] == stamp:
+            continue
+        cell_mark[c] = stamp
+        cy = c // tgx
+        cx = c - cy * tgx
+        for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
+            for xx in range(max(cx - 1, 0), min(cx + 2, tgx)):
+                nc = yy * tgx + xx
+                for q in range(corner_start[nc], corner_start[nc + 1]):
+                    corner_mark[corner_order[q]] = stamp
+
+
+@njit(cache=True)
+def corner_candidates(corner_key, marked, corner_mark, stamp, tri_elem, frozen, tri_order, tri_start,
+                      tgx, tgy, active, cand_ptr, cand):
     """The reflex corners near a moving mesh and their candidate triangles: the
-    triangles of non-frozen elements in the 3×3 triangle-cell window of the corner. The
-    ``n`` corners with any are ``active[:n]`` (ascending), corner ``active[j]``'s list is
+    triangles of non-frozen elements in the 3×3 triangle-cell window of the corner
+    (``corner_key``: each corner's triangle cell). The ``n`` corners with any are
+    ``active[:n]`` (ascending), corner ``active[j]``'s list is
     ``cand[cand_ptr[j]:cand_ptr[j+1]]``. Returns ``(n, entries needed)``; if the latter
     exceeds ``len(cand)``, the lists are incomplete and the caller must retry with a
-    larger ``cand`` (and a new ``stamp``).
+    larger ``cand`` (and new marks).
 
     Gathered at each full neighbour query: a triangle containing a corner has its centroid
     within 2/3 of its longest edge (< 0.64 cell) of it, so the window keeps a third of a
     cell of margin for the few steps until the next query.
 
-    A corner far from every moving mesh costs nothing (a jagged container has thousands
-    of them): with ``by_cells``, the corners are found from the cells of the live
-    triangles ``live_tris`` (``tri_key``: each triangle's cell, from the last rebuild;
-    corners binned into the same cells: ``corner_start``/``corner_order``, ``corner_key``),
-    marking each cell and corner once (``cell_mark``/``corner_mark`` hold ``stamp`` once
-    seen); without, each corner's window is scanned (fewer corners than live triangles).
-    A corner is found by either route exactly when its window holds a live triangle, so
-    the lists are those of a scan of every corner with frozen triangles left out, in the
-    same order; frozen elements never move, so :func:`corner_force` gets the same sums."""
-    n_act = 0
-    if by_cells:
-        for j in range(live_tris.shape[0]):
-            c = tri_key[live_tris[j]]
-            if cell_mark[c] == stamp:
-                continue
-            cell_mark[c] = stamp
-            cy = c // tgx
-            cx = c - cy * tgx
-            for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
-                for xx in range(max(cx - 1, 0), min(cx + 2, tgx)):
-                    nc = yy * tgx + xx
-                    for q in range(corner_start[nc], corner_start[nc + 1]):
-                        k = corner_order[q]
-                        if corner_mark[k] != stamp:
-                            corner_mark[k] = stamp
-                            active[n_act] = k
-                            n_act += 1
-        active[:n_act].sort()
-    else:
-        for k in range(corners.shape[0]):
-            active[k] = k
-        n_act = corners.shape[0]
+    With ``marked``, only the corners :func:`mark_corners_near` marked with ``stamp`` are
+    looked at (a container with many corners); without, every corner's window is scanned
+    (fewer corners than live triangles). A corner is found by either route exactly when
+    its window holds a live triangle, so the lists are those of a scan of every corner
+    with frozen triangles left out, in the same order; frozen elements never move, so
+    :func:`corner_force` gets the same sums. (The marked corners are taken in one pass
+    over the marks, not sorted: numba's sort more than doubled the compile time of this
+    kernel, which every first run pays.)"""
     n = 0
     kept = 0
-    for j in range(n_act):
-        k = active[j]
+    for k in range(corner_key.shape[0]):
+        if marked and corner_mark[k] != stamp:
+            continue
         first = n
         gy = corner_key[k] // tgx
         gx = corner_key[k] - gy * tgx
@@ -481,7 +481,7 @@ def corner_candidates(corners, corner_key, corner_start, corner_order, live_tris
                     if n < cand.shape[0]:
                         cand[n] = t
                     n += 1
-        if n > first:  # (always, with by_cells)
+        if n > first:  # (always, for a marked corner)
             active[kept] = k
             cand_ptr[kept] = first
             kept += 1

@@ -20,8 +20,8 @@ import numpy as np
 from ..errors import DivergedError, ParameterError
 from ..params import SimParams
 from .forces import (boundary_force, contact_query, contact_update, corner_candidates, corner_force,
-                     edge_force,
-                     inversion_force, overlap_force, project_inside, repulsion_force, shape_force)
+                     edge_force, inversion_force, mark_corners_near, overlap_force, project_inside,
+                     repulsion_force, shape_force)
 from .grid import Grid, bin_points
 from .integrate import count_inside, euler_step, grow, growth_speed_caps, skin_areas, window_change
 from .kernels import parallel_ready, set_threads
@@ -324,9 +324,11 @@ class Simulator:
             by_cells = len(self.live_tris) < 9 * len(m.corners)
         while True:
             self._corner_stamp += 1
-            n, need = corner_candidates(m.corners, key, start, order, self.live_tris, t._keys, m.tri_elem,
-                                        m.frozen, t.order, t.start, t.gx, t.gy, by_cells, cell_mark,
-                                        self._corner_mark, self._corner_stamp, self.corner_active,
+            if by_cells:
+                mark_corners_near(self.live_tris, t._keys, t.gx, t.gy, start, order, cell_mark,
+                                  self._corner_mark, self._corner_stamp)
+            n, need = corner_candidates(key, by_cells, self._corner_mark, self._corner_stamp, m.tri_elem,
+                                        m.frozen, t.order, t.start, t.gx, t.gy, self.corner_active,
                                         self.corner_ptr, self.corner_tris)
             if need <= len(self.corner_tris):
                 break
