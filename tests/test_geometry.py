@@ -239,7 +239,7 @@ def test_skin_of_two_parts_is_one_bridged_polygon():
 
 
 _SAWTOOTH_SKIN = """
-import math, resource, sys
+import resource
 import numpy as np, shapely
 resource.setrlimit(resource.RLIMIT_AS, (1500 * 2**20, 1500 * 2**20))
 from repulsionpak.geometry.outline import skin_polygon
