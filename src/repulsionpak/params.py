@@ -112,7 +112,8 @@ class SimParams:
         "skins, which the penalty force lets poke out a little, keep their art inside.")
     k_corner: float = _doc(
         800.0, "paper units", "Strength with which a reflex container corner found inside a mesh pushes "
-        "that triangle's vertices away (beyond the paper; a fixed obstacle, so stiffer than k_b).")
+        "that triangle off it, along the corner's bisector into the container (beyond the paper; a "
+        "fixed obstacle, so stiffer than k_b).")
     hard_boundary: bool = _doc(
         True, "-", "While settling (after growth stopped), move vertices that left the container "
         "back onto its boundary after every step (beyond the paper's penalty force alone).")
