@@ -476,10 +476,7 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
                     prog(done, total)
 
                 movie_info = recorder.write(packing, progress=frame_done)
-        except Exception:  # noqa: BLE001  (the encoder, sent the same Ctrl-C, may fail first)
-            if not late.stop:
-                raise
-        except KeyboardInterrupt:
+        except (Exception, KeyboardInterrupt):  # noqa: BLE001  (the encoder, sent the same Ctrl-C, may fail first)
             if not late.stop:
                 raise
         if movie_info is not None:

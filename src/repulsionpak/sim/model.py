@@ -159,14 +159,14 @@ def reflex_corners(region, max_angle_deg: float = 160.0) -> np.ndarray:
             prev, nxt = np.roll(pts, 1, axis=0), np.roll(pts, -1, axis=0)
             u, w = pts - prev, nxt - pts
             z = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]  # turn at the vertex
-            a, b = prev - pts, nxt - pts
-            cosang = (a * b).sum(axis=1) / np.maximum(np.hypot(*a.T) * np.hypot(*b.T), 1e-300)
-            ang = np.degrees(np.arccos(np.clip(cosang, -1, 1)))  # angle between the two edges
+            # unit vectors along the two edges from the vertex
+            ua, ub = prev - pts, nxt - pts
+            ua /= np.maximum(np.hypot(*ua.T), 1e-300)[:, None]
+            ub /= np.maximum(np.hypot(*ub.T), 1e-300)[:, None]
+            ang = np.degrees(np.arccos(np.clip((ua * ub).sum(axis=1), -1, 1)))  # angle between the two edges
             # outer ring: a turn against its orientation is reflex; a hole: the opposite
             reflex = (z * sign < 0) if is_outer else (z * sign > 0)
             # the outside is the wedge between the two edges; the inside is opposite it
-            ua = a / np.maximum(np.hypot(*a.T), 1e-300)[:, None]
-            ub = b / np.maximum(np.hypot(*b.T), 1e-300)[:, None]
             n = -(ua + ub)
             n /= np.maximum(np.hypot(*n.T), 1e-300)[:, None]
             keep = reflex & (ang < max_angle_deg)
