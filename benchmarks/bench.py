@@ -7,6 +7,7 @@
     python benchmarks/bench.py secondary            # the same with secondary cats (seeding time)
     python benchmarks/bench.py mesh                 # skin mesh quality (angles, counts)
     python benchmarks/bench.py firstrun             # `repulsionpak demo` with an empty kernel cache, twice
+    python benchmarks/bench.py freshinstall         # the README's `pip install . && repulsionpak demo` in a new venv
     python benchmarks/bench.py controls             # heart scene: free vs --rotation fixed vs --rigid (docs/controls.md)
     python benchmarks/bench.py all
 
@@ -352,6 +353,41 @@ def bench_firstrun() -> None:
         print(f"first run ÷ second run: {walls[0] / walls[1]:.2f}", flush=True)
 
 
+def bench_freshinstall(prebuild: bool = True) -> None:
+    """The README's first command in a new virtual environment: ``pip install <checkout>``
+    (a clean clone of HEAD: the committed code), then ``repulsionpak demo`` twice. With
+    ``prebuild`` the install compiles the kernels into the package
+    (src/repulsionpak/kernel_cache.py); without, ``REPULSIONPAK_PREBUILD=0``."""
+    import os
+    import shutil
+    import tempfile
+
+    root = Path(tempfile.mkdtemp(prefix="repulsionpak-fresh-"))
+    try:
+        src = root / "clone"
+        subprocess.run(["git", "clone", "-q", str(HERE.parent), str(src)], check=True)
+        subprocess.run([sys.executable, "-m", "venv", str(root / "venv")], check=True)
+        bindir = root / "venv" / "bin"
+        env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR")}
+        env["REPULSIONPAK_PREBUILD"] = "1" if prebuild else "0"
+        t = time.perf_counter()
+        subprocess.run([str(bindir / "pip"), "install", "-q", str(src)], check=True, env=env, cwd=root,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        install = time.perf_counter() - t
+        runs = []
+        for k in (1, 2):
+            t = time.perf_counter()
+            subprocess.run([str(bindir / "repulsionpak"), "demo", "-q", "-o", str(root / f"demo{k}.svg")],
+                           check=True, env=env, cwd=root)
+            runs.append(time.perf_counter() - t)
+        same = (root / "demo1.svg").read_bytes() == (root / "demo2.svg").read_bytes()
+        label = "kernels compiled at install" if prebuild else "REPULSIONPAK_PREBUILD=0"
+        print(f"fresh venv, {label}: pip install {install:.1f} s, first demo {runs[0]:.1f} s, "
+              f"second {runs[1]:.1f} s (outputs {'identical' if same else 'DIFFER'})")
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
 def bench_controls(seeds=(1, 2, 3)) -> None:
     """The heart scene (animals, no pocket fill) packed in-process with every element free,
     fixed upright (``--rotation fixed``) and rigid (``--rigid``): simulation seconds,
@@ -399,7 +435,7 @@ def bench_controls(seeds=(1, 2, 3)) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "threads", "preprocess", "heart", "pockets", "secondary",
-                                     "mesh", "firstrun", "controls", "all"])
+                                     "mesh", "firstrun", "freshinstall", "controls", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
@@ -416,6 +452,9 @@ def main() -> None:
         bench_mesh()
     if a.what in ("firstrun", "all"):
         bench_firstrun()
+    if a.what in ("freshinstall", "all"):
+        bench_freshinstall()
+        bench_freshinstall(prebuild=False)
     if a.what in ("controls", "all"):
         bench_controls()
     if a.what in ("iteration", "all"):
