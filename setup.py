@@ -26,7 +26,8 @@ class BuildPyWithKernels(build_py):
             return
         lib = Path(self.build_lib).resolve()
         dest = lib / "repulsionpak" / "_kernels"
-        env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(lib), os.environ.get("PYTHONPATH", "")])}
+        path = [str(lib), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(path)}  # the package just built
         print("repulsionpak: compiling the numba kernels into the package (about 30 s; "
               "REPULSIONPAK_PREBUILD=0 skips this)", flush=True)
         try:
