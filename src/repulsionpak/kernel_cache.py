@@ -42,16 +42,18 @@ _installed = False
 
 
 def _dispatchers(module) -> list:
-    """The disk-cached numba dispatchers defined in ``module``: plain ``@njit(cache=True)``
-    kernels, and both builds of :func:`repulsionpak.sim.kernels.parallel_kernel` kernels."""
+    """The disk-cached numba dispatchers defined in ``module`` (not those it imports): plain
+    ``@njit(cache=True)`` kernels, and both builds of
+    :func:`repulsionpak.sim.kernels.parallel_kernel` kernels."""
     from .sim.kernels import Kernel
 
     found = []
     for value in vars(module).values():
+        if getattr(getattr(value, "py_func", None), "__module__", None) != module.__name__:
+            continue
         if isinstance(value, Kernel):
             found += [value.serial, value.parallel]
-        elif (type(value).__name__ == "CPUDispatcher"
-              and getattr(value.py_func, "__module__", None) == module.__name__):
+        elif type(value).__name__ == "CPUDispatcher":
             found.append(value)
     return [d for d in found if type(getattr(d, "_cache", None)).__name__ == "FunctionCache"]
 
