@@ -15,7 +15,9 @@ At run time :func:`install` copies those entries into the cache numba uses for e
 only entries for this numba version and this CPU (numba's own cache key holds the CPU name
 and features and a hash of the kernel's bytecode), stamped with the installed source file
 (numba checks that stamp when it loads an entry). A wheel built elsewhere, or for another
-numba, installs nothing and the first run compiles as before. Nothing here ever fails a
+numba, installs nothing and the first run compiles as before; so do the few kernels of
+options the demo does not use (the designer controls, ``k_shape``, a container with
+thousands of corners), on their first use. Nothing here ever fails a
 run: any surprise (numba's private cache API changed, a read-only folder) leaves the
 kernels to be compiled as usual.
 """
