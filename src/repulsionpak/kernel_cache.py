@@ -176,27 +176,55 @@ def _finished(proc: subprocess.Popen) -> str:
     return out
 
 
-def build(dest: Path) -> int:
-    """Compile the kernels a packing, its report and its two-thread runs use (the demo,
-    ``evaluate --elements`` on its result, the warm-up's parallel builds) into a temporary
-    numba cache and :func:`export` them to ``dest``. Run by ``setup.py`` on the package's
-    build folder (``PYTHONPATH``); returns the number of entries."""
-    from . import examples
+def _workload(folder: Path) -> None:
+    """What ``repulsionpak demo`` and ``repulsionpak evaluate --elements`` on its result
+    compile, through the library (the build environment has no typer, rich or matplotlib):
+    the packing with the warm-up process beside it (:func:`repulsionpak.warmup.start`, which
+    goes on with the two-thread builds), the measurement with the distortion fit, the SVG,
+    and the file read back and measured with the SCP. ``tests/test_kernel_cache.py`` checks
+    that the CLI's demo and evaluate compile nothing after installing what this compiled."""
+    from . import examples, warmup
+    from .evaluate import evaluate, evaluate_file
+    from .io import load_container, load_elements
+    from .pack import CONTAINER_TOLERANCE, margin_of, pack
+    from .packing_output import invariants, packing_svg_text
+    from .params import Params
 
+    proc = warmup.start()
+    try:
+        gap = examples.DEFAULT_GAP
+        container = load_container(examples.container_file(examples.DEFAULT_CONTAINER),
+                                   tolerance=CONTAINER_TOLERANCE * gap)
+        elements = load_elements(examples.element_files())
+        secondary = load_elements(examples.secondary_files())
+        params = Params(gap=gap, seed=1)
+        packing = pack(container, elements, params, secondary=secondary)
+        sources = [*elements, *secondary]
+        metrics = evaluate(container, packing.placed, gap, with_scp=False, margin=margin_of(params, gap),
+                           sources=sources)
+        svg = Path(folder) / "demo.svg"
+        svg.write_text(packing_svg_text(packing, metrics, invariants(packing, metrics), path=svg),
+                       encoding="utf-8")
+        evaluate_file(svg, sources=sources)
+        if proc is not None:
+            proc.wait()  # the two-thread builds
+    finally:
+        warmup.stop(proc)
+
+
+def build(dest: Path) -> int:
+    """Compile the kernels a packing, its report and its two-thread runs use
+    (:func:`_workload`; then the warm-up's two-thread builds, for a machine without a
+    spare core) into a temporary numba cache and :func:`export` them to ``dest``. Run by
+    ``setup.py`` on the package's build folder (``PYTHONPATH``); returns the number of
+    entries."""
     work = tempfile.mkdtemp(prefix="repulsionpak-prebuild-")
     try:
         env = {**os.environ, "NUMBA_CACHE_DIR": os.path.join(work, "numba"),
                "PYTHONDONTWRITEBYTECODE": "1"}
         env.pop("REPULSIONPAK_NO_WARMUP", None)
-        svg = os.path.join(work, "demo.svg")
-        # the first run as a user's: the packing and its warm-up process compile together
-        _finished(_started(["-m", "repulsionpak.cli", "demo", "-q", "-o", svg], env, work))
-        # the distortion kernels (a report, `evaluate --elements`) and the parallel builds
-        evaluate = _started(["-m", "repulsionpak.cli", "evaluate", svg,
-                             "--elements", str(examples.element_files()[0].parent),
-                             "--elements", str(examples.secondary_files()[0].parent)], env, work)
+        _finished(_started(["-m", "repulsionpak.kernel_cache", "workload", work], env, work))
         _finished(_started(["-m", "repulsionpak.warmup", "--parallel"], env, work))
-        _finished(evaluate)
         code = ("import sys, importlib, pkgutil, repulsionpak\n"
                 "from repulsionpak import kernel_cache\n"
                 "names = [m.name for m in pkgutil.walk_packages(repulsionpak.__path__, 'repulsionpak.',\n"
@@ -214,5 +242,7 @@ def build(dest: Path) -> int:
 if __name__ == "__main__":
     if len(sys.argv) == 3 and sys.argv[1] == "build":
         print(f"{build(Path(sys.argv[2]))} compiled kernels written to {sys.argv[2]}")
+    elif len(sys.argv) == 3 and sys.argv[1] == "workload":  # (build's first step)
+        _workload(Path(sys.argv[2]))
     else:
         sys.exit("usage: python -m repulsionpak.kernel_cache build DEST")
