@@ -1,8 +1,8 @@
 """Build hook: compile the numba kernels into the wheel (see src/repulsionpak/kernel_cache.py).
 
 Everything else about the package is in pyproject.toml. ``pip install .`` builds a wheel on
-the machine it installs on; after copying the sources this runs the demo, a distortion
-measurement and the two-thread kernel builds once (about 30 s on two cores) and ships
+the machine it installs on; after copying the sources this packs the demo, measures it
+and compiles the two-thread kernel builds once (about 25 s on two cores) and ships
 numba's cache files, so that the first ``repulsionpak demo`` loads its kernels instead of
 compiling them. ``REPULSIONPAK_PREBUILD=0`` skips it (a wheel for other machines: their
 CPU would not match the compiled code anyway, and they compile on first use as before).
@@ -28,7 +28,7 @@ class BuildPyWithKernels(build_py):
         dest = lib / "repulsionpak" / "_kernels"
         path = [str(lib), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(path)}  # the package just built
-        print("repulsionpak: compiling the numba kernels into the package (about 30 s; "
+        print("repulsionpak: compiling the numba kernels into the package (about 25 s; "
               "REPULSIONPAK_PREBUILD=0 skips this)", flush=True)
         try:
             subprocess.run([sys.executable, "-m", "repulsionpak.kernel_cache", "build", str(dest)],

@@ -4,8 +4,8 @@ numba compiles a kernel the first time a process calls it and caches the machine
 disk (``cache=True``): a fresh install spends ~20 CPU seconds compiling during its first
 packing (:mod:`repulsionpak.warmup` splits that over two cores, it still costs about 5 s of
 wall time), and its first report another ~8 s for the distortion kernels. Building the
-package (``pip install .`` builds a wheel on the machine it installs on) therefore runs
-the same work once — the demo, the distortion measurement of its result and the
+package (``pip install .`` builds a wheel on the machine it installs on) therefore does
+the same work once — packs the demo, measures it with the distortion fit and compiles the
 two-thread builds of the simulation kernels — with ``NUMBA_CACHE_DIR`` in a temporary
 folder, and ships numba's cache files in ``repulsionpak/_kernels`` (:func:`build`, run by
 ``setup.py``; ``REPULSIONPAK_PREBUILD=0`` skips it, for a wheel meant for other machines).
