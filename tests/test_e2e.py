@@ -299,3 +299,27 @@ def test_the_thread_cap_also_caps_the_report_fits(monkeypatch):
     assert _fit_workers() == 1
     monkeypatch.delenv("REPULSIONPAK_THREADS")
     assert 1 <= _fit_workers() <= 4
+
+
+@pytest.mark.parametrize("delay", [0.15, 0.4])
+def test_ctrl_c_while_the_command_starts_prints_no_traceback(tmp_path, delay):
+    """Ctrl-C while ``repulsionpak`` still imports its packages (before main() can catch it)
+    or just after: status 130 (or killed by SIGINT, which the shell reports as 130), never a
+    traceback; during the imports it says "interrupted" (the traceback it printed before)."""
+    import shutil
+    import signal
+    import subprocess
+    import time
+
+    exe = shutil.which("repulsionpak")
+    if exe is None:
+        pytest.skip("the repulsionpak command is not installed")
+    p = subprocess.Popen([exe, "demo", "-q", "-o", str(tmp_path / "d.svg")], stderr=subprocess.PIPE,
+                         stdout=subprocess.DEVNULL, text=True, cwd=tmp_path)
+    time.sleep(delay)
+    p.send_signal(signal.SIGINT)
+    err = p.communicate(timeout=60)[1]
+    assert "Traceback" not in err, err
+    assert p.returncode in (130, -signal.SIGINT)
+    if p.returncode == -signal.SIGINT:  # interrupted while importing: said by the package's hook
+        assert err.strip().splitlines()[-1] == "repulsionpak: interrupted", err

@@ -8,12 +8,37 @@ fill a container shape with deformable copies of vector elements, SVG in, SVG ou
 >>> write_packing_svg("out.svg", packing.container, packing.placed, packing.gap)
 """
 
-from .errors import (ConfigError, DivergedError, InputError, OutputError, ParameterError,
+import sys as _sys
+
+
+def _quiet_interrupt_while_importing() -> None:
+    """The ``repulsionpak`` command imports this package (numpy, numba, shapely: about half a
+    second) before its ``main()`` can catch Ctrl-C; an interrupt in that window ends the
+    command with one line, as later ones do, instead of a traceback (exit status 130 as
+    before: Python re-raises SIGINT after reporting it). Only in the command's process."""
+    import os
+
+    if not _sys.argv or os.path.basename(_sys.argv[0]) not in ("repulsionpak", "repulsionpak.exe"):
+        return
+    previous = _sys.excepthook
+
+    def report(kind, value, tb):
+        if issubclass(kind, KeyboardInterrupt):
+            _sys.stderr.write("repulsionpak: interrupted\n")
+        else:
+            previous(kind, value, tb)
+
+    _sys.excepthook = report
+
+
+_quiet_interrupt_while_importing()
+
+from .errors import (ConfigError, DivergedError, InputError, OutputError, ParameterError,  # noqa: E402
                      RepulsionPakError, SimulationError)
-from .io import load_container, load_element, load_elements, read_packing_svg, render_png, write_packing_svg
-from .pack import Packing, pack
-from .params import Params, load_config
-from .types import ArtPath, Container, Element, PlacedArt, Style
+from .io import load_container, load_element, load_elements, read_packing_svg, render_png, write_packing_svg  # noqa: E402
+from .pack import Packing, pack  # noqa: E402
+from .params import Params, load_config  # noqa: E402
+from .types import ArtPath, Container, Element, PlacedArt, Style  # noqa: E402
 from .evaluate import evaluate  # noqa: E402  (function; the module stays importable by name)
 
 __version__ = "0.1.0"
