@@ -103,6 +103,17 @@ def bend_limits(templates, template_index, sim) -> np.ndarray:
 CONTAINER_TOLERANCE = 0.001
 
 
+def skin_excess(params: Params, gap: float) -> float:
+    """How much wider than half the gap a skin can leave the room beside its art (container
+    units): the skin's extra width (``preprocess.skin_offset`` beyond 0.5, meant to be
+    taken up by the compression where meshes press on each other, which small, stiff meshes
+    hardly show) and its sampling tolerance (a chord of the skin ring lies inside the exact
+    offset). Where neither is taken up, two arts end 2× this further apart than the gap;
+    the verification's growth closes it (:func:`repulsionpak.verify.verify_and_repair`)."""
+    pp = params.preprocess
+    return max(0.0, pp.skin_offset - 0.5) * gap + pp.skin_tolerance * gap
+
+
 def margin_of(params: Params, gap: float) -> float:
     """The edge margin in container units: ``params.margin``, or half the gap."""
     return 0.5 * gap if params.margin is None else float(params.margin)
@@ -336,7 +347,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     packing.placed, packing.verification = verify_and_repair(
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
         min_scale=v.min_scale, repair=v.repair, straightened=straightened,
-        grow_to=v.grow_to * gap, max_scale=v.max_grow, should_stop=stop_repair)
+        grow_to=v.grow_to * gap, max_scale=v.max_grow, should_stop=stop_repair,
+        grow_reach=skin_excess(params, gap))
     if stop_repair is not None and v.repair and stop_repair():
         packing.stopped_by["verify"] = "interrupted"  # a partial packing (exit 130), promises kept
     packing.seconds["verify"] = time.perf_counter() - t4

@@ -373,10 +373,12 @@ def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float
 
 
 def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
-             max_scale, tol, rounds, inner=None, fixed=None):
+             max_scale, tol, rounds, inner=None, fixed=None, reach=0.0):
     """Grow every element about its centroid into the room around it, never closer than
     ``target`` to another element nor ``margin`` to the edge, and no bigger than
-    ``max_scale`` of its size: each round, an element with slack s (half the spare
+    ``max_scale`` of its size — or than the size at which its outermost point has moved
+    ``reach`` (container units), when that is more (small elements: see
+    :func:`verify_and_repair`): each round, an element with slack s (half the spare
     distance to its nearest neighbour, or the spare distance to the edge) grows by
     1 + s/R, R its largest radius, so none of its points moves further than s (all grow at
     once, so a pair never closes more than its spare distance)."""
@@ -386,9 +388,12 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
         return
     radius = {i: float(np.sqrt(((shapely.get_coordinates(geoms[i]) - (centre[i] + shift[i])) ** 2)
                                .sum(axis=1).max())) for i in idx}
+    # the largest scale of each element (of its size as simulated: scale 1)
+    cap = {i: max(max_scale, 1.0 + reach * scale[i] / radius[i]) if radius[i] > 0 else max_scale
+           for i in idx}
     for _ in range(rounds):
         # only the elements that may still grow need their slack
-        can = np.array([not (fixed is not None and fixed[i]) and scale[i] < max_scale
+        can = np.array([not (fixed is not None and fixed[i]) and scale[i] < cap[i]
                         and radius[i] > 0 for i in idx])
         if not can.any():
             break
@@ -413,7 +418,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
             if not can[p]:
                 continue
             if sl > 1e-3 * target:
-                grow[i] = min(1.0 + sl / radius[i], max_scale / scale[i])
+                grow[i] = min(1.0 + sl / radius[i], cap[i] / scale[i])
         if not grow:
             break
         for i, f in grow.items():
@@ -427,12 +432,17 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
 def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float,
                       min_scale: float = 0.5, rounds: int = 24, repair: bool = True,
                       straightened: list | None = None, grow_to: float = 0.0,
-                      max_scale: float = 1.15, should_stop: Callable[[], bool] | None = None
-                      ) -> tuple[list[PlacedArt], Verification]:
+                      max_scale: float = 1.15, should_stop: Callable[[], bool] | None = None,
+                      grow_reach: float = 0.0) -> tuple[list[PlacedArt], Verification]:
     """Check (and, with ``repair``, enforce) the promises on the art of ``placed``.
 
     ``margin`` and ``min_gap`` in container units. Returns the (possibly shrunk, with
     dropped elements removed) art and the verification of what is returned.
+    After the repair, with ``grow_to`` > 0, elements grow into the room left around them
+    (:func:`_inflate`) up to ``max_scale`` of their size, or until their outermost point
+    has moved ``grow_reach`` when that is more: the room the skins' extra width leaves
+    between two arts is the same in container units whatever the elements' size, so an
+    element not much wider than the gap needs more than ``max_scale`` to close it.
     ``should_stop()`` true ends the repair rounds early (Ctrl-C while very detailed art is
     repaired): what still violates is then dropped, so the promises hold all the same."""
     region = _polygonal(region)
@@ -547,7 +557,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 keep_helpful(moved, need, False)
     if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
-                 w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed)
+                 w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach)
     # final verification, exact, on what is returned
     geoms = [transform(exact[i], i) for i in range(n)]
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
