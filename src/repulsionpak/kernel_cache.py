@@ -11,8 +11,9 @@ folder, and ships numba's cache files in ``repulsionpak/_kernels`` (:func:`build
 ``setup.py``; ``REPULSIONPAK_PREBUILD=0`` skips it, for a wheel meant for other machines).
 
 At run time :func:`install` copies those entries into the cache numba uses for each kernel
-(beside the installed sources, or wherever ``NUMBA_CACHE_DIR`` points), once per cache:
-only entries for this numba version and this CPU (numba's own cache key holds the CPU name
+(beside the installed sources, or wherever ``NUMBA_CACHE_DIR`` points), the first time a
+process packs or measures, and only the entries that cache lacks for this numba version
+and this CPU (numba's own cache key holds the CPU name
 and features and a hash of the kernel's bytecode), stamped with the installed source file
 (numba checks that stamp when it loads an entry). A wheel built elsewhere, or for another
 numba, installs nothing and the first run compiles as before; so do the few kernels of
