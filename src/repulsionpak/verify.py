@@ -372,13 +372,17 @@ def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float
     return cands[best], float(pred[best])
 
 
+#: the most the skins' extra width (``grow_reach``) lets the final growth scale an element
+REACH_MAX_SCALE = 2.0
+
+
 def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
              max_scale, tol, rounds, inner=None, fixed=None, reach=0.0):
     """Grow every element about its centroid into the room around it, never closer than
     ``target`` to another element nor ``margin`` to the edge, and no bigger than
     ``max_scale`` of its size — or than the size at which its outermost point has moved
-    ``reach`` (container units), when that is more (small elements: see
-    :func:`verify_and_repair`): each round, an element with slack s (half the spare
+    ``reach`` (container units), when that is more, up to :data:`REACH_MAX_SCALE` (small
+    elements: see :func:`verify_and_repair`): each round, an element with slack s (half the spare
     distance to its nearest neighbour, or the spare distance to the edge) grows by
     1 + s/R, R its largest radius, so none of its points moves further than s (all grow at
     once, so a pair never closes more than its spare distance)."""
@@ -388,9 +392,11 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
         return
     radius = {i: float(np.sqrt(((shapely.get_coordinates(geoms[i]) - (centre[i] + shift[i])) ** 2)
                                .sum(axis=1).max())) for i in idx}
-    # the largest scale of each element (of its size as simulated: scale 1)
-    cap = {i: max(max_scale, 1.0 + reach * scale[i] / radius[i]) if radius[i] > 0 else max_scale
-           for i in idx}
+    # the largest scale of each element (of its size as simulated: scale 1); the reach
+    # never more than doubles one (a speck or a dot far smaller than the gap keeps its size
+    # class: the live view's removed elements, shrunk to specks, stay specks)
+    cap = {i: max(max_scale, min(1.0 + reach * scale[i] / radius[i], REACH_MAX_SCALE))
+           if radius[i] > 0 else max_scale for i in idx}
     for _ in range(rounds):
         # only the elements that may still grow need their slack
         can = np.array([not (fixed is not None and fixed[i]) and scale[i] < cap[i]

@@ -201,10 +201,13 @@ class LiveController:
             b = [s for path in p.paths for s in path.subpaths if len(s)]
             pts = np.concatenate(b) if b else np.zeros((1, 2))
             ext.append(float(np.ptp(pts, axis=0).max()))
-        med = float(np.median(ext))
         # the specks: at most as many as were removed, the smallest, each far below the rest
+        # of its kind (a removed primary against the primaries: the many small pocket copies
+        # added after the run would pull a median of all elements down to a speck's size)
+        kinds = [getattr(p, "kind", "primary") for p in placed]
+        med = {k: float(np.median([e for e, kk in zip(ext, kinds) if kk == k])) for k in set(kinds)}
         specks = {int(i) for i in np.argsort(ext, kind="stable")[:len(self.removed)]
-                  if ext[i] <= 5 * REMOVED_SCALE * med}
+                  if ext[i] <= 5 * REMOVED_SCALE * med[kinds[i]]}
         return [p for i, p in enumerate(placed) if i not in specks]
 
     # -- internals (simulation thread) -------------------------------------------------
