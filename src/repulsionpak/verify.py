@@ -446,9 +446,10 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     dropped elements removed) art and the verification of what is returned.
     After the repair, with ``grow_to`` > 0, elements grow into the room left around them
     (:func:`_inflate`) up to ``max_scale`` of their size, or until their outermost point
-    has moved ``grow_reach`` when that is more: the room the skins' extra width leaves
-    between two arts is the same in container units whatever the elements' size, so an
-    element not much wider than the gap needs more than ``max_scale`` to close it.
+    has moved ``grow_reach`` when that is more (at most :data:`REACH_MAX_SCALE`): the room
+    the skins' extra width leaves between two arts is the same in container units whatever
+    the elements' size, so an element not much wider than the gap needs more than
+    ``max_scale`` to close it.
     ``should_stop()`` true ends the repair rounds early (Ctrl-C while very detailed art is
     repaired): what still violates is then dropped, so the promises hold all the same."""
     region = _polygonal(region)
