@@ -22,10 +22,16 @@ from setuptools.command.build_py import build_py
 class BuildPyWithKernels(build_py):
     def run(self):
         super().run()
-        if getattr(self, "editable_mode", False) or os.environ.get("REPULSIONPAK_PREBUILD", "1") == "0":
+        if getattr(self, "editable_mode", False):
             return
         lib = Path(self.build_lib).resolve()
         dest = lib / "repulsionpak" / "_kernels"
+        if os.environ.get("REPULSIONPAK_PREBUILD", "1") == "0":
+            if dest.exists():  # left in the build folder by an earlier build: not for this one
+                import shutil
+
+                shutil.rmtree(dest, ignore_errors=True)
+            return
         path = [str(lib), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(path)}  # the package just built
         print("repulsionpak: compiling the numba kernels into the package (about 25 s; "
