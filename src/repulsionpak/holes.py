@@ -241,10 +241,9 @@ def _dilated(geoms: Sequence, reach: float) -> list:
 def _dilation(g, reach: float):
     """``g`` dilated by ``reach`` as one geometry (:func:`_dilated`: art of many parts
     part by part, then united; else ``g.buffer(reach, quad_segs=4)`` itself)."""
-    pieces = _dilated([g], reach)
     if shapely.get_num_geometries(g) <= MANY_PARTS:
-        return pieces[0] if pieces else shapely.Polygon()
-    return robust_union_all(pieces)
+        return g.buffer(reach, quad_segs=4)
+    return robust_union_all(_dilated([g], reach))
 
 
 def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,

@@ -213,6 +213,21 @@ def _workload(folder: Path) -> None:
         warmup.stop(proc)
 
 
+def _export_all(dest: Path) -> int:
+    """:func:`export` of every module of the package that imports here (build's last step,
+    in a process whose ``NUMBA_CACHE_DIR`` holds what the workload compiled)."""
+    import pkgutil
+
+    from . import __path__ as package_path
+
+    for m in pkgutil.walk_packages(package_path, "repulsionpak.", onerror=lambda name: None):
+        try:
+            importlib.import_module(m.name)
+        except Exception:  # noqa: BLE001  (a module needing an optional dependency: the live view)
+            pass
+    return export(dest)
+
+
 def build(dest: Path) -> int:
     """Compile the kernels a packing, its report and its two-thread runs use
     (:func:`_workload`; then the warm-up's two-thread builds, for a machine without a
@@ -226,15 +241,7 @@ def build(dest: Path) -> int:
         env.pop("REPULSIONPAK_NO_WARMUP", None)
         _finished(_started(["-m", "repulsionpak.kernel_cache", "workload", work], env, work))
         _finished(_started(["-m", "repulsionpak.warmup", "--parallel"], env, work))
-        code = ("import sys, importlib, pkgutil, repulsionpak\n"
-                "from repulsionpak import kernel_cache\n"
-                "names = [m.name for m in pkgutil.walk_packages(repulsionpak.__path__, 'repulsionpak.',\n"
-                "                                             onerror=lambda name: None)]\n"
-                "for n in names:\n"
-                "    try: importlib.import_module(n)\n"
-                "    except Exception: pass  # a module needing an optional dependency (the live view)\n"
-                "print(kernel_cache.export(sys.argv[1]))\n")
-        out = _finished(_started(["-c", code, str(dest)], env, work))
+        out = _finished(_started(["-m", "repulsionpak.kernel_cache", "export", str(dest)], env, work))
         return int(out.strip().splitlines()[-1])
     finally:
         shutil.rmtree(work, ignore_errors=True)
@@ -245,5 +252,7 @@ if __name__ == "__main__":
         print(f"{build(Path(sys.argv[2]))} compiled kernels written to {sys.argv[2]}")
     elif len(sys.argv) == 3 and sys.argv[1] == "workload":  # (build's first step)
         _workload(Path(sys.argv[2]))
+    elif len(sys.argv) == 3 and sys.argv[1] == "export":  # (build's last step)
+        print(_export_all(Path(sys.argv[2])))
     else:
         sys.exit("usage: python -m repulsionpak.kernel_cache build DEST")
