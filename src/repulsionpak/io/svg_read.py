@@ -51,6 +51,7 @@ from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
 from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
 from .svg_text import text_to_paths
+from .svg_pathdata import path_data_error
 from .svg_xml import inline_declarations as _inline_declarations
 from .svg_xml import local_name as _local
 
@@ -565,7 +566,6 @@ def _check_tree(path, root: ET.Element) -> None:
     cost(root, 0)
 
 
-_BAD_PATH_CHARS = re.compile(r"[^MmZzLlHhVvCcSsQqTtAa0-9eE.,+\-\s]")
 _BAD_POINTS_CHARS = re.compile(r"[^0-9eE.,+\-\s]")
 
 
@@ -576,6 +576,7 @@ def _check_attributes(path, root: ET.Element) -> None:
     import svgelements as se
 
     bad_data = None
+    n_bad = 0
     for el in root.iter():
         tf = el.get("transform")
         if tf is not None and tf.strip():
@@ -587,18 +588,27 @@ def _check_attributes(path, root: ET.Element) -> None:
                     f"<{_local(el.tag)}> has an invalid transform {tf[:80]!r}; "
                     "fix or remove the transform attribute",
                 ) from None
-        if bad_data is None:
-            for attr, pattern in (("d", _BAD_PATH_CHARS), ("points", _BAD_POINTS_CHARS)):
-                v = el.get(attr)
-                m = pattern.search(v) if v else None
-                if m:
-                    bad_data = (_local(el.tag), attr, v[max(0, m.start() - 10) : m.start() + 20])
-                    break
+        d = el.get("d")
+        err = path_data_error(d) if d else None
+        if err is not None:
+            # drawn up to the error, as browsers do (svgelements would skip or reinterpret
+            # what follows): cut the data after its last whole segment
+            el.set("d", d[: err.valid])
+            n_bad += 1
+            if bad_data is None:
+                bad_data = (_local(el.tag), "d", d[err.valid : max(err.at, err.valid) + 20].strip(), f" ({err.reason})")
+        v = el.get("points")
+        m = _BAD_POINTS_CHARS.search(v) if v else None
+        if m:
+            n_bad += 1
+            if bad_data is None:
+                bad_data = (_local(el.tag), "points", v[max(0, m.start() - 10) : m.start() + 20], "")
     if bad_data is not None:
-        tag, attr, near = bad_data
+        tag, attr, near, reason = bad_data
+        more = f" (and {n_bad - 1} more shape{'s' if n_bad > 2 else ''})" if n_bad > 1 else ""
         warn(
             path,
-            f"<{tag}> {attr}=... has invalid data near {near!r}; "
+            f"<{tag}> {attr}=... has invalid data near {near!r}{reason}{more}; "
             "the shape is drawn up to the error (as browsers do)",
         )
 
