@@ -191,6 +191,20 @@ def test_distortions_by_source_name_and_summary():
     assert s["median"] == pytest.approx(np.median(vals[:2])) and s["max"] == pytest.approx(vals[1])
     assert s["p95"] == pytest.approx(np.percentile(vals[:2], 95)) and s["values"][2] is None
     assert metrics.distortion_summary([None])["p95"] is None
+    assert "by_kind" not in s
+
+
+def test_distortion_summary_by_kind():
+    vals = [0.10, 0.12, None, 0.0, 0.01, 0.02]
+    kinds = ["primary", "primary", "primary", "secondary", "secondary", "secondary"]
+    s = metrics.distortion_summary(vals, kinds)
+    prim, sec = s["by_kind"]["primary"], s["by_kind"]["secondary"]
+    assert prim["n"] == 3 and prim["max"] == pytest.approx(0.12) and prim["median"] == pytest.approx(0.11)
+    assert sec["n"] == 3 and sec["max"] == pytest.approx(0.02)
+    # the pocket copies pull the overall statistics below the primaries' own
+    assert s["median"] == pytest.approx(0.02) and s["median"] < prim["median"]
+    only = metrics.distortion_summary([0.1], ["primary"])["by_kind"]
+    assert list(only) == ["primary"]
 
 
 def test_evaluate_reports_distortion_with_sources():

@@ -617,7 +617,7 @@ def evaluate(
             "n_below_margin": sum(1 for e in known_edges if e < 0.98 * margin),
             "values": edges,
         },
-        "distortion": _metrics.distortion_summary(dist),
+        "distortion": _metrics.distortion_summary(dist, [p.kind for p in placed]),
         "scp": s,
         "scp_at_half_gap": q_half,
         "scp_ratio": (q_half / q0) if (q_half is not None and q0) else None,
@@ -711,6 +711,10 @@ def format_table(result: dict) -> str:
     dd = result.get("distortion") or {}
     if dd.get("median") is not None:
         rows.append(("distortion median / p95", f"{_fmt(dd.get('median'))} / {_fmt(dd.get('p95'))}"))
+        prim = (dd.get("by_kind") or {}).get("primary") or {}
+        if prim.get("median") is not None and dd.get("by_kind", {}).get("secondary"):
+            rows.append(("  primaries: median / p95 / max",
+                         f"{_fmt(prim['median'])} / {_fmt(prim['p95'])} / {_fmt(prim['max'])}"))
     s = result.get("scp") or {}
     if s.get("q"):
         rows.append(("Q_s(0) = 1 - A (raster)", _fmt(s["q"][0])))

@@ -336,15 +336,25 @@ def frame_angle(frame) -> float | None:
     return math.atan2(m[1, 0], m[0, 0])
 
 
-def distortion_summary(values: Sequence[float | None]) -> dict:
-    """``{"median", "p95", "max", "values"}`` of per-element distortions (``None``
-    entries ignored; statistics ``None`` when nothing is known)."""
+def _distortion_stats(values) -> dict:
     v = np.array([x for x in values if x is not None and np.isfinite(x)], dtype=float)
-    vals = [None if x is None else float(x) for x in values]
     if len(v) == 0:
-        return {"median": None, "p95": None, "max": None, "values": vals}
-    return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95)),
-            "max": float(v.max()), "values": vals}
+        return {"median": None, "p95": None, "max": None}
+    return {"median": float(np.median(v)), "p95": float(np.percentile(v, 95)), "max": float(v.max())}
+
+
+def distortion_summary(values: Sequence[float | None], kinds: Sequence[str] | None = None) -> dict:
+    """``{"median", "p95", "max", "values"}`` of per-element distortions (``None``
+    entries ignored; statistics ``None`` when nothing is known). With ``kinds`` (each
+    element's ``"primary"`` / ``"secondary"``), also ``"by_kind"``: the same statistics
+    and the count of each kind present — the pocket copies, small and often undeformed,
+    pull the overall percentiles down, so the primaries' own are given too."""
+    out = {**_distortion_stats(values), "values": [None if x is None else float(x) for x in values]}
+    if kinds is not None:
+        out["by_kind"] = {k: {**_distortion_stats([x for x, kk in zip(values, kinds) if kk == k]),
+                              "n": sum(1 for kk in kinds if kk == k)}
+                          for k in ("primary", "secondary") if k in kinds}
+    return out
 
 
 # --------------------------------------------------------------------------- promises
