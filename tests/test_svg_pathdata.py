@@ -1,5 +1,5 @@
-"""Path data is read as browsers draw it: up to its first error (SVG 2, path data error
-handling), with a warning that says where and what the error is."""
+"""Path data and polygon points are read as browsers draw them: up to their first error (SVG 2,
+path data error handling), with a warning that says where and what the error is."""
 
 from __future__ import annotations
 
@@ -82,3 +82,20 @@ def test_one_warning_for_many_bad_shapes(tmp_path):
         load_element(p)
     msgs = [str(x.message) for x in w if "invalid data" in str(x.message)]
     assert len(msgs) == 1 and "(and 2 more shapes)" in msgs[0]
+
+
+@pytest.mark.parametrize("points, area, warns", [
+    ("1e1,0 50.5.5 50,50", 1002.5, None),  # "50.5.5" is 50.5 and .5 (svgelements read one number)
+    ("-5-5 50-5 50,50", 1512.5, None),
+    ("0,0 50,0 50,50 0", 1250.0, "an odd number of coordinates"),  # the last number is ignored
+    ("0 0 50 0 50 50 x 0 50", 1250.0, "has invalid data near"),  # drawn up to the error
+])
+def test_polygon_points_read_as_browsers_do(tmp_path, points, area, warns):
+    p = tmp_path / "p.svg"
+    p.write_text(f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100"><polygon points="{points}"/></svg>')
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        el = load_element(p)
+    msgs = [str(x.message) for x in w if "points=" in str(x.message)]
+    assert (warns is None and not msgs) or (warns is not None and len(msgs) == 1 and warns in msgs[0])
+    assert outline_of(el).geometry.area == pytest.approx(area)

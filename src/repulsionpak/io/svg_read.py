@@ -567,6 +567,7 @@ def _check_tree(path, root: ET.Element) -> None:
 
 
 _BAD_POINTS_CHARS = re.compile(r"[^0-9eE.,+\-\s]")
+_POINTS_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 def _check_attributes(path, root: ET.Element) -> None:
@@ -598,11 +599,19 @@ def _check_attributes(path, root: ET.Element) -> None:
             if bad_data is None:
                 bad_data = (_local(el.tag), "d", d[err.valid : max(err.at, err.valid) + 20].strip(), f" ({err.reason})")
         v = el.get("points")
-        m = _BAD_POINTS_CHARS.search(v) if v else None
-        if m:
-            n_bad += 1
-            if bad_data is None:
-                bad_data = (_local(el.tag), "points", v[max(0, m.start() - 10) : m.start() + 20], "")
+        if v:
+            # read the numbers as browsers do (svgelements reads "50.5.5" as one number, not
+            # 50.5 and .5) up to the first invalid character, and draw whole pairs only
+            m = _BAD_POINTS_CHARS.search(v)
+            nums = _POINTS_NUMBER.findall(v if m is None else v[: m.start()])
+            if m is not None or len(nums) % 2:
+                n_bad += 1
+                if bad_data is None:
+                    bad_data = ((_local(el.tag), "points", v[max(0, m.start() - 10) : m.start() + 20], "")
+                                if m is not None else
+                                (_local(el.tag), "points", v.strip()[-20:],
+                                 " (an odd number of coordinates: the last one has no partner)"))
+            el.set("points", " ".join(f"{a},{b}" for a, b in zip(nums[0::2], nums[1::2])))
     if bad_data is not None:
         tag, attr, near, reason = bad_data
         more = f" (and {n_bad - 1} more shape{'s' if n_bad > 2 else ''})" if n_bad > 1 else ""
