@@ -17,7 +17,8 @@ from typing import NamedTuple
 
 #: numbers each command takes per segment (repeated groups allowed)
 _ARITY = {"m": 2, "l": 2, "h": 1, "v": 1, "c": 6, "s": 4, "q": 4, "t": 2, "a": 7, "z": 0}
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+#: an SVG number (also of ``points`` lists): "50.5.5" is 50.5 and .5, "1-2" is 1 and -2
+NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _WSP = " \t\r\n\f"
 _NUMBER_START = "0123456789+-."
 _ARC_ARGS = "rx ry rotation large-arc-flag sweep-flag x y"
@@ -78,7 +79,7 @@ def path_data_error(d: str) -> PathDataError | None:
                         i = _skip(d, i + 1)
                         continue
                     return PathDataError(valid, i, _needs(cmd))
-                m = _NUMBER.match(d, i)
+                m = NUMBER.match(d, i)
                 if m is None:
                     if j == 0 and groups > 0:  # the command's segments end here
                         break

@@ -50,8 +50,8 @@ from ..geometry.outline import (
 from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
 from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
+from .svg_pathdata import NUMBER, path_data_error
 from .svg_text import text_to_paths
-from .svg_pathdata import path_data_error
 from .svg_xml import inline_declarations as _inline_declarations
 from .svg_xml import local_name as _local
 
@@ -567,13 +567,14 @@ def _check_tree(path, root: ET.Element) -> None:
 
 
 _BAD_POINTS_CHARS = re.compile(r"[^0-9eE.,+\-\s]")
-_POINTS_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
 
 def _check_attributes(path, root: ET.Element) -> None:
     """Reject unparseable ``transform`` attributes (svgelements would crash on them with
-    an IndexError) and warn about path data with invalid characters (drawn, as browsers
-    do, up to the first error)."""
+    an IndexError); cut path data (``d``) and point lists (``points``) after their last
+    whole segment or pair before an error, as browsers draw them, with one warning naming
+    the first error (:mod:`.svg_pathdata`); point lists are rewritten with their numbers
+    read as browsers read them."""
     import svgelements as se
 
     bad_data = None
@@ -603,7 +604,7 @@ def _check_attributes(path, root: ET.Element) -> None:
             # read the numbers as browsers do (svgelements reads "50.5.5" as one number, not
             # 50.5 and .5) up to the first invalid character, and draw whole pairs only
             m = _BAD_POINTS_CHARS.search(v)
-            nums = _POINTS_NUMBER.findall(v if m is None else v[: m.start()])
+            nums = NUMBER.findall(v if m is None else v[: m.start()])
             if m is not None or len(nums) % 2:
                 n_bad += 1
                 if bad_data is None:
