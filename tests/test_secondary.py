@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 import shapely
 
 from repulsionpak.params import SecondaryParams
@@ -119,3 +120,49 @@ def test_max_count_bounds_every_secondary_copy():
         assert packing.n_secondary <= cap
         assert packing.n_primary == 6
     assert packing.n_secondary == 5  # the room was there
+
+
+def test_seeds_in_a_wide_sliver_leave_room_for_copies_as_wide_as_it():
+    """A copy in a pocket of half-width d grows to about 2(d − 0.6 gap) across, so copies
+    a gap apart stand 2d − 0.2 gap apart: seeds taken in random order keep 0.75 of that
+    (2d/1.34 − 0.15 gap) between them, not the fixed 2 gaps or d they kept before (more,
+    smaller copies, each with its own gap ring: the suite's mean area 0.559 → 0.563)."""
+    region, skins = _sliver(0.0)  # 16 units wide: d = 8 = 4 gaps
+    gap = 2.0
+    pockets = pocket_seeds(region, skins, gap=gap, params=SecondaryParams(grid=400))
+    s = pockets.seeds
+    d = np.hypot(s[:, None, 0] - s[None, :, 0], s[:, None, 1] - s[None, :, 1])
+    np.fill_diagonal(d, np.inf)
+    depth = float(pockets.distance.max())
+    assert depth == pytest.approx(8.0, abs=1.0)
+    assert d.min() >= 2.0 * depth / 1.34 - 0.15 * gap - 2 * pockets.h  # was 8 (the disc of its depth)
+    assert len(s) >= 5  # still a row along the 200-unit sliver
+
+
+def test_a_narrow_band_with_one_primary_gets_its_pockets_filled(tmp_path):
+    """The default count of a band 2.5 gaps wide is one primary; the automatic fill's cap
+    of 10 copies per primary left 10 copies at random points of the band (median gap
+    1.68 here). At least AUTO_FILL_MIN copies are allowed now: the gap is kept (1.02)."""
+    from repulsionpak.evaluate import gap_statistics
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.pack import AUTO_FILL_MIN, pack
+    from repulsionpak.params import Params
+
+    t = np.linspace(math.radians(200), math.radians(340), 60)
+    outer = [(500 + 480 * math.cos(a), 600 + 480 * math.sin(a)) for a in t]
+    inner = [(500 + 405 * math.cos(a), 600 + 405 * math.sin(a)) for a in t[::-1]]
+    pts = " ".join(f"{x:.2f},{y:.2f}" for x, y in outer + inner)
+    (tmp_path / "band.svg").write_text(f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 700">'
+                                       f'<polygon points="{pts}"/></svg>')
+    (tmp_path / "disc.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 20 20">'
+                                       '<circle cx="10" cy="10" r="9"/></svg>')
+    (tmp_path / "square.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 60 60">'
+                                         '<rect x="5" y="5" width="50" height="50"/></svg>')
+    cont = load_container(tmp_path / "band.svg", tolerance=0.03)
+    els = load_elements([tmp_path / "disc.svg", tmp_path / "square.svg"])
+    packing = pack(cont, els, Params(gap=30.0, seed=1))
+    assert packing.n_primary == 1 and AUTO_FILL_MIN > 10
+    assert packing.n_secondary > 10
+    gs = gap_statistics([p.art for p in packing.placed])
+    assert 0.9 <= gs["median"] / 30.0 <= 1.1
+    assert packing.verification.ok

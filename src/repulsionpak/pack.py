@@ -103,6 +103,10 @@ def bend_limits(templates, template_index, sim) -> np.ndarray:
 CONTAINER_TOLERANCE = 0.001
 
 
+#: the automatic pocket fill's cap on its copies is 10 per primary, and at least this
+AUTO_FILL_MIN = 50
+
+
 def skin_excess(params: Params, gap: float) -> float:
     """How much wider than half the gap a skin can leave the room beside its art (container
     units): the skin's extra width (``preprocess.skin_offset`` beyond 0.5, meant to be
@@ -308,7 +312,11 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     user_cap = params.secondary.max_count  # a bound on every secondary copy, the fills' too
     if not secondary and params.secondary.auto:
         secondary = elements  # the pockets get small copies of the primaries (sec. 9)
-        cap = 10 * len(placement.template_index)
+        # at most 10 copies per primary, but never fewer than AUTO_FILL_MIN: a narrow
+        # container's default count can be one or two primaries, whose band of pockets
+        # then held 10 copies seeded at random points, the slack between them showing
+        # in the median gap (docs/algorithm.md, narrow bands)
+        cap = max(10 * len(placement.template_index), AUTO_FILL_MIN)
         mc = params.secondary.max_count
         params = dataclasses.replace(params, secondary=dataclasses.replace(
             params.secondary, max_count=cap if mc is None else min(mc, cap)))

@@ -165,7 +165,9 @@ class SecondaryParams:
         0.8, "× gap", "d_min: seeds need at least this distance to the nearest mesh or the "
         "boundary (paper: 5–10 px on a 1000 px grid, about one gap); a copy there has art about "
         "0.3 gap across, so pockets down to about 2.6 gaps wide between neighbouring art get one.")
-    d_sep: float = _doc(2.0, "× gap", "d_sep: kept seeds are at least this far apart (paper: 10 px).")
+    d_sep: float = _doc(2.0, "× gap", "d_sep: kept seeds are at least this far apart (paper: 10 px); "
+                        "in a pocket of half-width d, at least 2d/1.34 - 0.15 gap apart (the room a copy "
+                        "as wide as the pocket takes).")
     grid: int = _doc(1000, "pixels", "Longer side of the distance-transform grid.")
     max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")
     initial_fraction: float = _doc(
