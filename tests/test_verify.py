@@ -334,3 +334,24 @@ def test_elements_about_a_gap_across_keep_the_asked_gap(tmp_path):
     assert data["invariants"]["ok"] and data["n_primary"] == 120
     assert 0.9 <= data["gap_stats"]["median"] / 20 <= 1.1  # 1.125 before
     assert data["gap_stats"]["p10"] / 20 >= 0.8
+
+
+def test_a_thin_part_poking_into_a_body_comes_out_by_its_owner_shrinking():
+    """A square's thin spike 4 units deep in a bar below it, both held by the container's
+    edges so that neither can move away. The bar is the smaller of the two, and shrank
+    about every point by most of its thickness (the heart's snake, a penguin's tail through
+    it: shrunk to 0.67); the square clears the spike shrinking about its top by a sixth,
+    less art lost, so it is the one that shrinks."""
+    region = shapely.box(0, 0, 200, 58)
+    bar = rect(20, 1, 180, 11, "bar.svg")  # on the margin: a move down breaks it as much
+    spiky = np.array([[70, 57], [130, 57], [130, 16], [102, 16], [102, 7], [98, 7], [98, 16], [70, 16]],
+                     dtype=float)
+    placed = [bar, PlacedArt("spiky.svg", "primary", (ArtPath((spiky,), (True,), Style()),))]
+    a0 = [g.area for g in geoms(placed)]
+    assert a0[0] < a0[1]
+    out, v = verify_and_repair(placed, region, gap=5, margin=1, min_gap=4.5)
+    assert v.ok and not v.dropped and len(out) == 2
+    g = geoms(out)
+    assert g[0].distance(g[1]) >= 4.5 - 1e-6
+    assert g[0].area >= 0.95 * a0[0]  # the bar kept its size
+    assert g[1].area < a0[1]  # the spike's owner gave way
