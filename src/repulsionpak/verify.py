@@ -285,6 +285,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 # the heart's snake: the snake shrank to 0.67 of its size)
                 ci = _shrink_cost(gi, centre(i), pi, u / nu, total)
                 cj = _shrink_cost(gj, centre(j), pj, -u / nu, total)
+                if ci == cj:  # both hopeless (no point moves the contact away): as before
+                    ci, cj = gi.area, gj.area
                 k, pk = (i, pi) if ci <= cj else (j, pj)
             else:
                 k, pk = (i, pi) if gi.area <= gj.area else (j, pj)
