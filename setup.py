@@ -11,6 +11,7 @@ reported and leaves a working package that compiles on first use.
 """
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -27,10 +28,7 @@ class BuildPyWithKernels(build_py):
         lib = Path(self.build_lib).resolve()
         dest = lib / "repulsionpak" / "_kernels"
         if os.environ.get("REPULSIONPAK_PREBUILD", "1") == "0":
-            if dest.exists():  # left in the build folder by an earlier build: not for this one
-                import shutil
-
-                shutil.rmtree(dest, ignore_errors=True)
+            shutil.rmtree(dest, ignore_errors=True)  # left in the build folder by an earlier build
             return
         path = [str(lib), *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))]
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(path)}  # the package just built
@@ -43,10 +41,7 @@ class BuildPyWithKernels(build_py):
             detail = getattr(exc, "stderr", None) or ""
             print(f"repulsionpak: warning: kernels not compiled into the package ({exc}); the first "
                   f"run compiles them instead\n{detail[-2000:]}", file=sys.stderr, flush=True)
-            if dest.exists():
-                import shutil
-
-                shutil.rmtree(dest, ignore_errors=True)
+            shutil.rmtree(dest, ignore_errors=True)
 
 
 setup(cmdclass={"build_py": BuildPyWithKernels})

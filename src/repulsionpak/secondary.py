@@ -52,6 +52,14 @@ class Pockets:
         return out
 
 
+#: seeds in a pocket of half-width d (distance to the primaries' skins): a copy there
+#: grows until its skin (0.6 gap) fills the width, about 2(d − 0.6 gap) across, so copies
+#: a gap apart stand 2d − 0.2 gap apart; seeds taken in random order with an exclusion
+#: radius r end 1.34 r apart on average (random sequential adsorption in a row), so
+#: r = (2d − 0.2 gap) / 1.34 = _SPACING·d − 0.15 gap
+_SPACING = 2.0 / 1.34
+
+
 def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: SecondaryParams) -> Pockets:
     """Seed points far from every mesh and from the container boundary.
 
@@ -244,13 +252,6 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     packing.area_fraction_meshes = res.area_fraction
     return len(seeds)
 
-
-#: seeds in a pocket of half-width d (distance to the primaries' skins): a copy there
-#: grows until its skin (0.6 gap) fills the width, about 2(d − 0.6 gap) across, so copies
-#: a gap apart stand 2d − 0.2 gap apart; seeds taken in random order with an exclusion
-#: radius r end 1.34 r apart on average (random sequential adsorption in a row), so
-#: r = (2d − 0.2 gap) / 1.34 = _SPACING·d − 0.15 gap
-_SPACING = 2.0 / 1.34
 
 #: size classes of the secondary templates (a copy's skin is built for its size ± 10 %)
 SIZE_STEP = 1.2

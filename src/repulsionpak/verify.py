@@ -333,16 +333,21 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             (None if not np.isfinite(emin) else emin))
 
 
+def _shrink_candidates(g, centroid: np.ndarray, max_points: int) -> np.ndarray:
+    """Points an element may shrink about: its centroid (first) and at most
+    ``max_points`` of its outline's vertices, evenly taken."""
+    xy = np.asarray(shapely.get_coordinates(g), dtype=float)
+    xy = xy[::max(1, -(-len(xy) // max_points))]
+    return np.concatenate([np.asarray(centroid, dtype=float)[None, :], xy])
+
+
 def _shrink_cost(g, centroid: np.ndarray, p: np.ndarray, u: np.ndarray, total: float,
                  max_points: int = 64) -> float:
     """The art area an element ``g`` loses when it shrinks about its best point (the
     candidates of :func:`_shrink_centre`, without its pole) to take the contact at ``p``
     ``total`` away along ``u``: area × (1 − (1 − r)²) for the predicted relative shrink r
     (infinite when no point moves the contact away)."""
-    xy = np.asarray(shapely.get_coordinates(g), dtype=float)
-    xy = xy[::max(1, -(-len(xy) // max_points))]
-    cands = np.concatenate([np.asarray(centroid, dtype=float)[None, :], xy])
-    r = float(_predicted_shrink(cands, [(p, u, total, True)]).min())
+    r = float(_predicted_shrink(_shrink_candidates(g, centroid, max_points), [(p, u, total, True)]).min())
     if not np.isfinite(r) or r >= 1.0:
         return np.inf
     return float(g.area) * (1.0 - (1.0 - r) ** 2)
@@ -379,9 +384,7 @@ def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float
     element and moves every contact away."""
     if not contacts or g.is_empty:
         return centroid, None
-    xy = np.asarray(shapely.get_coordinates(g), dtype=float)
-    xy = xy[::max(1, -(-len(xy) // max_points))]
-    cands = [np.asarray(centroid, dtype=float)[None, :], xy]
+    cands = [_shrink_candidates(g, centroid, max_points)]
     part = max(getattr(g, "geoms", [g]), key=lambda q: q.area)
     if part.geom_type == "Polygon" and part.area > 0:
         pole = polylabel(part, tolerance=0.01 * float(np.sqrt(part.area)))
