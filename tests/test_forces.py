@@ -928,6 +928,54 @@ def test_shape_force_is_zero_for_a_similarity_and_undoes_a_shear():
     assert not F.any()
 
 
+def _rms_deviation(p, rest):
+    """RMS distance of ``p`` from the best similarity of ``rest``, over p's RMS radius."""
+    za = (rest - rest.mean(0)) @ [1, 1j]
+    zb = (p - p.mean(0)) @ [1, 1j]
+    c = np.vdot(za, zb) / np.vdot(za, za)
+    return np.sqrt(np.sum(np.abs(zb - c * za) ** 2) / np.sum(np.abs(zb) ** 2))
+
+
+def test_bend_limit_leaves_the_dented_vertices_where_their_neighbour_pushed_them():
+    """The bend limit (beyond the paper) pulls a mesh bent past it back onto the limit.
+    A vertex inside another mesh keeps its dent while the dents stay under half the
+    budget (the others straighten more); without that, every step pulled it back into
+    the neighbour that dented it. Dents over half the budget are scaled like the rest."""
+    from repulsionpak.sim.shape import KEEP_SHARE, limit_deformation
+
+    t = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    rest = np.c_[10 * np.cos(t), 10 * np.sin(t)]
+    start = np.array([0, 24], np.int32)
+    moving = np.ones(1, bool)
+    limit = np.array([0.05])
+    rng = np.random.default_rng(5)
+    bent = rest * 1.5 + [40.0, 7.0] + rng.normal(0, 1.5, rest.shape)
+    bent[3] = rest[3] * 1.5 * (13.0 / 15.0) + [40.0, 7.0]  # a dent of 2 units at vertex 3
+    keep = np.zeros(24, bool)
+    keep[3] = True
+    assert _rms_deviation(bent, rest) > 2 * limit[0]
+
+    plain = bent.copy()
+    limit_deformation(plain, rest, start, moving, limit, np.zeros(24, bool))
+    kept = bent.copy()
+    limit_deformation(kept, rest, start, moving, limit, keep)
+    for p in (plain, kept):
+        assert _rms_deviation(p, rest) == pytest.approx(limit[0], rel=0.02)
+    assert np.hypot(*(kept[3] - bent[3])) < 1e-9  # the dented vertex stays
+    assert np.hypot(*(plain[3] - bent[3])) > 0.5  # ... the uniform projection undid the dent
+    # the others straighten more than they would alone
+    others = np.arange(24) != 3
+    assert np.linalg.norm(kept[others] - bent[others]) > np.linalg.norm(plain[others] - bent[others])
+
+    # dents holding more than KEEP_SHARE of the budget: the uniform projection
+    deep = bent.copy()
+    deep[3] = rest[3] * 1.5 * (9.0 / 15.0) + [40.0, 7.0]  # 6 units
+    a, b = deep.copy(), deep.copy()
+    limit_deformation(a, rest, start, moving, limit, keep)
+    limit_deformation(b, rest, start, moving, limit, np.zeros(24, bool))
+    assert KEEP_SHARE < 1 and np.allclose(a, b)
+
+
 def _walk_both_sides(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
     """The walk as first written: every hop tries the next segment, then the previous."""
     def d2(k):

@@ -288,7 +288,7 @@ class Simulator:
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
         if m.bend_limit.any():
-            limit_deformation(x, m.x_rest, m.elem_vstart, self.moving, m.bend_limit)
+            limit_deformation(x, m.x_rest, m.elem_vstart, self.moving, m.bend_limit, self.inside)
         if m.rot_on is not None:  # designer controls: rotation limits, rigid bodies
             apply_controls(x, st.v, m.x_rest, m.elem_vstart, self.moving, m.rot_on, m.rot_lo,
                            m.rot_hi, m.rigid)

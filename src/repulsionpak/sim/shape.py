@@ -55,11 +55,25 @@ def similarity_sums(x, x_rest, s, t):
     return cx, cy, rx, ry, re, im, ww, zz
 
 
+#: the share of an element's deviation budget (limit² × its squared RMS radius) that its
+#: kept vertices (see :func:`limit_deformation`) may hold before the projection scales
+#: them back with the others
+KEEP_SHARE = 0.5
+
+
 @parallel_kernel
-def limit_deformation(x, x_rest, elem_vstart, moving, limit):
+def limit_deformation(x, x_rest, elem_vstart, moving, limit, keep):
     """Project every moving element e onto RMS deviation ≤ ``limit[e]`` × its RMS radius
     from the least-squares similarity of ``x_rest``. Returns the number of elements
-    projected."""
+    projected.
+
+    Vertices flagged in ``keep`` (the skin vertices inside another mesh) keep their
+    deviation while it is under ``KEEP_SHARE`` of the budget; the others are scaled down
+    by as much more as the limit needs. Scaling every deviation alike pulled a dented
+    vertex back into the neighbour that dented it after every step, and a pointed part
+    pressed into a neighbour stayed there, up to 0.86 gap deep (the heart's animals: deepest
+    vertex p90 0.53 gap with the uniform projection, 0.09 with this one; no limit at all:
+    0.01) — gap violations the final repair then resolved by shrinking."""
     M = elem_vstart.shape[0] - 1
     hit = np.zeros(M, np.int64)
     for e in prange(M):
@@ -83,13 +97,27 @@ def limit_deformation(x, x_rest, elem_vstart, moving, limit):
         ratio = np.sqrt(dev / zz)
         if ratio <= lim:
             continue
+        kept = 0.0
+        for i in range(s, t):
+            if keep[i]:
+                wx = x_rest[i, 0] - rx
+                wy = x_rest[i, 1] - ry
+                dx = x[i, 0] - (cx + re * wx - im * wy)
+                dy = x[i, 1] - (cy + im * wx + re * wy)
+                kept += dx * dx + dy * dy
+        target = lim * lim * zz
         f = lim / ratio
+        fk = f
+        if kept > 0.0 and kept < KEEP_SHARE * target:
+            f = np.sqrt((target - kept) / (dev - kept))
+            fk = 1.0
         for i in range(s, t):
             wx = x_rest[i, 0] - rx
             wy = x_rest[i, 1] - ry
             gx = cx + re * wx - im * wy
             gy = cy + im * wx + re * wy
-            x[i, 0] = gx + f * (x[i, 0] - gx)
-            x[i, 1] = gy + f * (x[i, 1] - gy)
+            g = fk if keep[i] else f
+            x[i, 0] = gx + g * (x[i, 0] - gx)
+            x[i, 1] = gy + g * (x[i, 1] - gy)
         hit[e] = 1
     return hit.sum()
