@@ -976,6 +976,65 @@ def test_bend_limit_leaves_the_dented_vertices_where_their_neighbour_pushed_them
     assert KEEP_SHARE < 1 and np.allclose(a, b)
 
 
+def test_skin_anchors_stand_a_skin_width_inside_the_ring(template):
+    """Every skin vertex is bound to the nearest point of its art: at rest that point lies
+    the skin offset (0.6 gap; the template's gap is 2) inward along the ring's normal."""
+    model, _ = two_square_model(template, (30, 30), (60, 60), shrink=0.5)
+    skin = model.is_skin
+    assert (model.anchor_tri[skin] >= 0).all() and (model.anchor_tri[~skin] == -1).all()
+    # bound to triangles of the vertex's own element
+    assert (model.tri_elem[model.anchor_tri[skin]] == model.vert_elem[skin]).all()
+    w = model.anchor_w[skin]
+    sides = w > 0.5 * np.median(w)  # the corners' normals lean: a smaller depth there
+    assert np.median(w) == pytest.approx(0.6 * 2.0 * 0.5, rel=0.05)  # × the placement's shrink
+    assert sides.mean() > 0.6
+
+
+def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre():
+    """A skin vertex pressed to within a fifth of its rest width of the art is moved back
+    out to ``fraction`` of it over a few steps (the art's triangle moving in, so the
+    element's mean position does not move); a vertex at its width is left alone."""
+    from repulsionpak.sim.skinwidth import keep_skin_width
+
+    t = build_template(outline_of(square_element()), scale=1.0, gap=2.0)
+    model, state = two_square_model(t, (30, 30), (60, 60))
+    x = state.x.copy()
+    s, n = int(model.elem_vstart[0]), int(model.elem_nskin[0])
+    i = s + n // 3
+    w = model.anchor_w[i]
+    assert w > 0.5
+    growth = np.ones(model.n_elements)
+    active = np.flatnonzero(model.is_skin).astype(np.int64)
+
+    def normal(p):
+        tang = p[s + (i - s + 1) % n] - p[s + (i - s - 1) % n]
+        return model.anchor_sign[i] * np.array([tang[1], -tang[0]]) / np.hypot(*tang)
+
+    def depth(p):
+        a = model.anchor_bary[i] @ p[model.tris[model.anchor_tri[i]]]
+        return (p[i] - a) @ normal(p)
+
+    assert depth(x) == pytest.approx(w)
+    for _ in range(20):  # squash it to a fifth (the vertex may be a corner of its anchor's triangle)
+        x[i] -= (depth(x) - 0.2 * w) * normal(x)
+    assert depth(x) == pytest.approx(0.2 * w, rel=1e-2)
+    start = x.copy()
+    for _ in range(12):
+        keep_skin_width(x, model.tris, model.anchor_tri, model.anchor_bary, model.anchor_w,
+                        model.anchor_sign, active, model.vert_elem, model.elem_vstart,
+                        model.elem_nskin, growth, 0.8, 0.5)
+    assert depth(x) == pytest.approx(0.8 * w, rel=1e-3)  # half the shortfall per call
+    e0 = slice(s, int(model.elem_vstart[1]))
+    assert np.allclose(x[e0].mean(axis=0), start[e0].mean(axis=0), atol=1e-9)
+    assert np.array_equal(x[int(model.elem_vstart[1]):], start[int(model.elem_vstart[1]):])
+    # at rest nothing moves
+    y = state.x.copy()
+    assert keep_skin_width(y, model.tris, model.anchor_tri, model.anchor_bary, model.anchor_w,
+                           model.anchor_sign, active, model.vert_elem, model.elem_vstart,
+                           model.elem_nskin, growth, 0.8, 0.5) == 0
+    assert np.array_equal(y, state.x)
+
+
 def _walk_both_sides(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
     """The walk as first written: every hop tries the next segment, then the previous."""
     def d2(k):

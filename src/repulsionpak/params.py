@@ -92,6 +92,10 @@ class SimParams:
     bend_limit_convex: float = _doc(
         0.08, "-", "The same for nearly convex elements (art ≥ 0.9 of its convex hull), "
         "whose dents show more.")
+    skin_width: float = _doc(
+        0.8, "× rest width", "Each skin vertex is kept at least this share of its rest distance "
+        "outside the nearest point of its art (beyond the paper: a squashed skin let arts whose skins "
+        "touched stand well under the gap apart; 0 = off).")
     k_overlap: float = _doc(80.0, "paper units", "k_o, strength of the overlap force (Eq. 4).")
     k_boundary: float = _doc(80.0, "paper units", "k_b, strength of the boundary force (Eq. 5).")
     soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")
@@ -379,6 +383,7 @@ class Params:
               for k in ("k_repulsion", "k_edge", "k_overlap", "k_boundary", "k_shape")],
             (s.k_growth >= 0, "sim.k_growth must be >= 0"),
             (s.bend_limit >= 0 and s.bend_limit_convex >= 0, "sim.bend_limit and bend_limit_convex must be >= 0"),
+            (0 <= s.skin_width <= 1, "sim.skin_width must be in [0, 1]"),
             (s.soft > 0, "sim.soft must be > 0"),
             (s.cell_size > 0, "sim.cell_size must be > 0"),
             (s.stop_window >= 2, "sim.stop_window must be >= 2"),

@@ -108,6 +108,13 @@ class Model:
     grid_origin: tuple[float, float]
     grid_extent: tuple[float, float]
     inset_extra: float = 0.0  # sim units added to the boundary inset (the edge margin's share)
+    # skins kept wide (sim/skinwidth.py): per vertex, the triangle (-1: not a skin vertex)
+    # and barycentric coordinates of the nearest art point, the rest width outside it
+    # (at placement, before growth) and the skin ring's orientation
+    anchor_tri: np.ndarray | None = None  # (N,) int32
+    anchor_bary: np.ndarray | None = None  # (N, 3)
+    anchor_w: np.ndarray | None = None  # (N,)
+    anchor_sign: np.ndarray | None = None  # (N,)
     # designer controls (repulsionpak.controls.setup_model); None/False: none (the default)
     rot_on: np.ndarray | None = None  # (M,) bool: rotation limited to [rot_lo, rot_hi]
     rot_lo: np.ndarray | None = None  # (M,) radians relative to the rest shape
@@ -189,6 +196,20 @@ def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.nda
     return ptr, cols[order].astype(np.int32)
 
 
+def _rest_widths(pts: np.ndarray, tris: np.ndarray, atri: np.ndarray, abary: np.ndarray,
+                 n_skin: int, sign: float) -> np.ndarray:
+    """Each skin vertex's distance outside its anchor along the ring's outward normal, on
+    the placed mesh ``pts`` (0 for the other vertices)."""
+    ring = pts[:n_skin]
+    tang = np.roll(ring, -1, axis=0) - np.roll(ring, 1, axis=0)
+    ln = np.maximum(np.hypot(tang[:, 0], tang[:, 1]), 1e-300)
+    normal = sign * np.c_[tang[:, 1], -tang[:, 0]] / ln[:, None]
+    anchor = np.einsum("ij,ijk->ik", abary, pts[tris[atri]])
+    w = np.zeros(len(pts))
+    w[:n_skin] = np.maximum(np.einsum("ij,ij->i", ring - anchor, normal), 0.0)
+    return w
+
+
 def build_model(templates: Sequence[Template], placement: Placement, frame: SimFrame,
                 region_sim, cell_size: float, gap: float, kinds: Sequence[str] | None = None,
                 frozen: Sequence[bool] | None = None, base: tuple["Model", State] | None = None
@@ -199,6 +220,8 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     secondary phase to append new elements to frozen primaries.
     """
     xs, vert_elem, skin, springs, rest0, s_elem, s_edge, tris, t_elem = [], [], [], [], [], [], [], [], []
+    an_tri, an_bary, an_w, an_sign = [], [], [], []
+    ntri = 0  # triangles before the next element's
     nominal = list(base[0].max_growth) if base is not None else []
     starts, nskin = [0], []
     m0 = 0
@@ -213,6 +236,11 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         s_edge.append(bm.spring_is_edge)
         tris.append(bm.tris)
         t_elem.append(bm.tri_elem)
+        an_tri.append(bm.anchor_tri)
+        an_bary.append(bm.anchor_bary)
+        an_w.append(bm.anchor_w)
+        an_sign.append(bm.anchor_sign)
+        ntri = len(bm.tris)
         starts = list(bm.elem_vstart)
         nskin = list(bm.elem_nskin)
         m0 = bm.n_elements
@@ -235,12 +263,25 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         s_edge.append(edge)
         tris.append(t.tris + n)
         t_elem.append(np.full(len(t.tris), e, np.int32))
+        at = np.full(len(pts), -1, np.int32)
+        at[:t.n_skin] = t.anchor_tri + ntri
+        ntri += len(t.tris)
+        ab = np.zeros((len(pts), 3))
+        ab[:t.n_skin] = t.anchor_bary
+        an_tri.append(at)
+        an_bary.append(ab)
+        an_sign.append(np.full(len(pts), t.ring_sign))
+        an_w.append(_rest_widths(pts, t.tris, t.anchor_tri, t.anchor_bary, t.n_skin, t.ring_sign))
         n += len(pts)
         starts.append(n)
         nskin.append(t.n_skin)
         nominal.append(1.0 / placement.shrink_of(k))
     x = np.ascontiguousarray(np.concatenate(xs), dtype=np.float64)
     N = len(x)
+    anchors = dict(anchor_tri=np.ascontiguousarray(np.concatenate(an_tri), dtype=np.int32),
+                   anchor_bary=np.ascontiguousarray(np.concatenate(an_bary), dtype=np.float64),
+                   anchor_w=np.ascontiguousarray(np.concatenate(an_w), dtype=np.float64),
+                   anchor_sign=np.ascontiguousarray(np.concatenate(an_sign), dtype=np.float64))
     springs_a = np.ascontiguousarray(np.concatenate(springs), dtype=np.int32)
     tris_a = np.ascontiguousarray(np.concatenate(tris), dtype=np.int32)
     vtri_ptr, vtri = _csr(N, tris_a.ravel(), np.repeat(np.arange(len(tris_a)), 3))
@@ -286,6 +327,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         corners=base[0].corners if base is not None else reflex_corners(region_sim), cell_size=float(cell_size), tri_cell_size=float(tri_cell),
         grid_origin=(float(minx - cell_size), float(miny - cell_size)),
         grid_extent=(float(maxx - minx + 2 * cell_size), float(maxy - miny + 2 * cell_size)),
+        **anchors,
     )
     if base is not None:
         model.inset_extra = base[0].inset_extra

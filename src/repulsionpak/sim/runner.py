@@ -29,6 +29,7 @@ from .model import Model, State, element_ranges
 from .controls import apply_controls, edge_force_stiff
 from .selfintersect import relax_self_intersections
 from .shape import limit_deformation
+from .skinwidth import SKIN_RELAX, keep_skin_width
 
 MAX_NEIGHBOURS = 24
 CHUNK = 4  # skin segments per chunk in the full neighbour query
@@ -287,6 +288,10 @@ class Simulator:
         if p.hard_boundary and not self.allow_growth:  # while settling
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
+        if p.skin_width > 0 and m.anchor_tri is not None:
+            keep_skin_width(x, m.tris, m.anchor_tri, m.anchor_bary, m.anchor_w, m.anchor_sign,
+                            self.active_skin, m.vert_elem, m.elem_vstart, m.elem_nskin, self.growth,
+                            p.skin_width, SKIN_RELAX)
         if m.bend_limit.any():
             limit_deformation(x, m.x_rest, m.elem_vstart, self.moving, m.bend_limit, self.inside)
         if m.rot_on is not None:  # designer controls: rotation limits, rigid bodies
