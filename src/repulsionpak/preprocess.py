@@ -65,7 +65,8 @@ class Template:
     art_tri: np.ndarray
     art_bary: np.ndarray
     skin_area: float
-    #: per skin vertex, the nearest art point (:func:`skin_anchors`), and the ring's orientation
+    #: per skin vertex, the nearest art point (:func:`skin_anchors`); the skin ring's
+    #: orientation (+1 counter-clockwise)
     anchor_tri: np.ndarray
     anchor_bary: np.ndarray
     ring_sign: float
@@ -103,25 +104,23 @@ def build_template(outline: Outline, scale: float, gap: float,
     art = (art - outline.center) * scale
     art_tri, art_bary = bind_points(art, verts, tris)
     x, y = ring[:, 0], ring[:, 1]
-    skin_area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-    anchor_tri, anchor_bary, ring_sign = skin_anchors(geom, verts[:len(ring)], verts, tris)
+    signed = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    anchor_tri, anchor_bary = skin_anchors(geom, verts[:len(ring)], verts, tris)
     return Template(outline, float(scale), verts, len(ring), tris, springs, len(edges),
-                    art_tri, art_bary, skin_area, anchor_tri, anchor_bary, ring_sign)
+                    art_tri, art_bary, abs(signed), anchor_tri, anchor_bary,
+                    1.0 if signed > 0 else -1.0)
 
 
 def skin_anchors(art, ring: np.ndarray, verts: np.ndarray, tris: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, float]:
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """Where each skin vertex (``ring``) stands over its ``art`` (beyond the paper): the
-    nearest point of the art's outline as (triangle of the mesh, barycentric coordinates),
-    and the ring's orientation (+1 counter-clockwise).
+    nearest point of the art's outline as (triangle of the mesh, barycentric coordinates).
     :func:`repulsionpak.sim.skinwidth.keep_skin_width` keeps each skin vertex most of its
     rest distance outside that point, so the skin cannot be pressed thin."""
     lines = shapely.shortest_line(art.boundary, shapely.points(ring))
     near = shapely.get_coordinates(shapely.get_point(lines, 0))
     tri, bary = bind_points(near, verts, tris)
-    x, y = ring[:, 0], ring[:, 1]
-    sign = 1.0 if float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) > 0 else -1.0
-    return tri.astype(np.int32), bary, sign
+    return tri.astype(np.int32), bary
 
 
 def _untangle(ring: np.ndarray) -> np.ndarray:
