@@ -1008,7 +1008,7 @@ def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre(
 
     def normal(p):
         tang = p[s + (i - s + 1) % n] - p[s + (i - s - 1) % n]
-        return model.anchor_sign[i] * np.array([tang[1], -tang[0]]) / np.hypot(*tang)
+        return model.ring_sign[model.vert_elem[i]] * np.array([tang[1], -tang[0]]) / np.hypot(*tang)
 
     def depth(p):
         a = model.anchor_bary[i] @ p[model.tris[model.anchor_tri[i]]]
@@ -1021,7 +1021,7 @@ def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre(
     start = x.copy()
     for _ in range(12):
         keep_skin_width(x, model.tris, model.anchor_tri, model.anchor_bary, model.anchor_w,
-                        model.anchor_sign, active, model.vert_elem, model.elem_vstart,
+                        model.ring_sign, active, model.vert_elem, model.elem_vstart,
                         model.elem_nskin, growth, 0.8, 0.5)
     assert depth(x) == pytest.approx(0.8 * w, rel=1e-3)  # half the shortfall per call
     e0 = slice(s, int(model.elem_vstart[1]))
@@ -1030,7 +1030,7 @@ def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre(
     # at rest nothing moves
     y = state.x.copy()
     assert keep_skin_width(y, model.tris, model.anchor_tri, model.anchor_bary, model.anchor_w,
-                           model.anchor_sign, active, model.vert_elem, model.elem_vstart,
+                           model.ring_sign, active, model.vert_elem, model.elem_vstart,
                            model.elem_nskin, growth, 0.8, 0.5) == 0
     assert np.array_equal(y, state.x)
 

@@ -16,6 +16,7 @@ import shapely
 from ..geometry.edt import distance_transform
 from ..placement import Placement, placed_vertices
 from ..preprocess import Template
+from .skinwidth import skin_depths
 
 
 @dataclass(frozen=True)
@@ -109,12 +110,12 @@ class Model:
     grid_extent: tuple[float, float]
     inset_extra: float = 0.0  # sim units added to the boundary inset (the edge margin's share)
     # skins kept wide (sim/skinwidth.py): per vertex, the triangle (-1: not a skin vertex)
-    # and barycentric coordinates of the nearest art point, the rest width outside it
-    # (at placement, before growth) and the skin ring's orientation
+    # and barycentric coordinates of the nearest art point and the rest width outside it
+    # (at placement, before growth); per element, the skin ring's orientation
     anchor_tri: np.ndarray | None = None  # (N,) int32
     anchor_bary: np.ndarray | None = None  # (N, 3)
     anchor_w: np.ndarray | None = None  # (N,)
-    anchor_sign: np.ndarray | None = None  # (N,)
+    ring_sign: np.ndarray | None = None  # (M,) +1 counter-clockwise
     # designer controls (repulsionpak.controls.setup_model); None/False: none (the default)
     rot_on: np.ndarray | None = None  # (M,) bool: rotation limited to [rot_lo, rot_hi]
     rot_lo: np.ndarray | None = None  # (M,) radians relative to the rest shape
@@ -196,20 +197,6 @@ def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.nda
     return ptr, cols[order].astype(np.int32)
 
 
-def _rest_widths(pts: np.ndarray, tris: np.ndarray, atri: np.ndarray, abary: np.ndarray,
-                 n_skin: int, sign: float) -> np.ndarray:
-    """Each skin vertex's distance outside its anchor along the ring's outward normal, on
-    the placed mesh ``pts`` (0 for the other vertices)."""
-    ring = pts[:n_skin]
-    tang = np.roll(ring, -1, axis=0) - np.roll(ring, 1, axis=0)
-    ln = np.maximum(np.hypot(tang[:, 0], tang[:, 1]), 1e-300)
-    normal = sign * np.c_[tang[:, 1], -tang[:, 0]] / ln[:, None]
-    anchor = np.einsum("ij,ijk->ik", abary, pts[tris[atri]])
-    w = np.zeros(len(pts))
-    w[:n_skin] = np.maximum(np.einsum("ij,ij->i", ring - anchor, normal), 0.0)
-    return w
-
-
 def build_model(templates: Sequence[Template], placement: Placement, frame: SimFrame,
                 region_sim, cell_size: float, gap: float, kinds: Sequence[str] | None = None,
                 frozen: Sequence[bool] | None = None, base: tuple["Model", State] | None = None
@@ -220,7 +207,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     secondary phase to append new elements to frozen primaries.
     """
     xs, vert_elem, skin, springs, rest0, s_elem, s_edge, tris, t_elem = [], [], [], [], [], [], [], [], []
-    an_tri, an_bary, an_w, an_sign = [], [], [], []
+    an_tri, an_bary, ring_sign = [], [], []
     ntri = 0  # triangles before the next element's
     nominal = list(base[0].max_growth) if base is not None else []
     starts, nskin = [0], []
@@ -238,8 +225,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         t_elem.append(bm.tri_elem)
         an_tri.append(bm.anchor_tri)
         an_bary.append(bm.anchor_bary)
-        an_w.append(bm.anchor_w)
-        an_sign.append(bm.anchor_sign)
+        ring_sign.append(bm.ring_sign)
         ntri = len(bm.tris)
         starts = list(bm.elem_vstart)
         nskin = list(bm.elem_nskin)
@@ -270,8 +256,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         ab[:t.n_skin] = t.anchor_bary
         an_tri.append(at)
         an_bary.append(ab)
-        an_sign.append(np.full(len(pts), t.ring_sign))
-        an_w.append(_rest_widths(pts, t.tris, t.anchor_tri, t.anchor_bary, t.n_skin, t.ring_sign))
+        ring_sign.append([t.ring_sign])
         n += len(pts)
         starts.append(n)
         nskin.append(t.n_skin)
@@ -280,8 +265,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     N = len(x)
     anchors = dict(anchor_tri=np.ascontiguousarray(np.concatenate(an_tri), dtype=np.int32),
                    anchor_bary=np.ascontiguousarray(np.concatenate(an_bary), dtype=np.float64),
-                   anchor_w=np.ascontiguousarray(np.concatenate(an_w), dtype=np.float64),
-                   anchor_sign=np.ascontiguousarray(np.concatenate(an_sign), dtype=np.float64))
+                   ring_sign=np.ascontiguousarray(np.concatenate(ring_sign), dtype=np.float64))
     springs_a = np.ascontiguousarray(np.concatenate(springs), dtype=np.int32)
     tris_a = np.ascontiguousarray(np.concatenate(tris), dtype=np.int32)
     vtri_ptr, vtri = _csr(N, tris_a.ravel(), np.repeat(np.arange(len(tris_a)), 3))
@@ -329,6 +313,13 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         grid_extent=(float(maxx - minx + 2 * cell_size), float(maxy - miny + 2 * cell_size)),
         **anchors,
     )
+    # the new skins' rest widths, measured on the placed meshes (frozen ones keep theirs)
+    n0 = base[0].n_vertices if base is not None else 0
+    model.anchor_w = np.zeros(N)
+    if base is not None:
+        model.anchor_w[:n0] = base[0].anchor_w
+    skin_depths(x, tris_a, model.anchor_tri, model.anchor_bary, model.ring_sign, model.vert_elem,
+                model.elem_vstart, model.elem_nskin, np.flatnonzero(model.is_skin[n0:]) + n0, model.anchor_w)
     if base is not None:
         model.inset_extra = base[0].inset_extra
         model.bend_limit[:m0] = base[0].bend_limit

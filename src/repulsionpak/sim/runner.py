@@ -289,7 +289,7 @@ class Simulator:
             project_inside(x, self.active_all, m.field.values, m.field.ox, m.field.oy,
                            1.0 / m.field.h, 0.0)
         if p.skin_width > 0 and m.anchor_tri is not None:
-            keep_skin_width(x, m.tris, m.anchor_tri, m.anchor_bary, m.anchor_w, m.anchor_sign,
+            keep_skin_width(x, m.tris, m.anchor_tri, m.anchor_bary, m.anchor_w, m.ring_sign,
                             self.active_skin, m.vert_elem, m.elem_vstart, m.elem_nskin, self.growth,
                             p.skin_width, SKIN_RELAX)
         if m.bend_limit.any():

@@ -88,23 +88,18 @@ def limit_deformation(x, x_rest, elem_vstart, moving, limit, keep):
         re /= ww
         im /= ww
         dev = 0.0
+        kept = 0.0  # the share of it the kept vertices hold
         for i in range(s, t):
             wx = x_rest[i, 0] - rx
             wy = x_rest[i, 1] - ry
             dx = x[i, 0] - (cx + re * wx - im * wy)
             dy = x[i, 1] - (cy + im * wx + re * wy)
             dev += dx * dx + dy * dy
+            if keep[i]:
+                kept += dx * dx + dy * dy
         ratio = np.sqrt(dev / zz)
         if ratio <= lim:
             continue
-        kept = 0.0
-        for i in range(s, t):
-            if keep[i]:
-                wx = x_rest[i, 0] - rx
-                wy = x_rest[i, 1] - ry
-                dx = x[i, 0] - (cx + re * wx - im * wy)
-                dy = x[i, 1] - (cy + im * wx + re * wy)
-                kept += dx * dx + dy * dy
         target = lim * lim * zz
         f = lim / ratio
         fk = f

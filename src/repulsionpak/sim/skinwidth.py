@@ -25,12 +25,50 @@ from numba import njit
 SKIN_RELAX = 0.5
 
 
+@njit(cache=True, inline="always")
+def _depth(x, i, e, tris, anchor_tri, anchor_bary, ring_sign, elem_vstart, elem_nskin, hypot):
+    """How far skin vertex ``i`` (of element ``e``) stands outside its anchor along its
+    ring's outward normal (from its two ring neighbours), and that normal; (0, 0, 0) when
+    the neighbours coincide. ``hypot``: the tangent's length by ``np.hypot`` (the rest
+    widths, as first measured with numpy) rather than the square root of its square."""
+    s = elem_vstart[e]
+    n = elem_nskin[e]
+    j = i - s
+    prv = s + (j - 1 + n) % n
+    nxt = s + (j + 1) % n
+    tx = x[nxt, 0] - x[prv, 0]
+    ty = x[nxt, 1] - x[prv, 1]
+    ln = np.hypot(tx, ty) if hypot else np.sqrt(tx * tx + ty * ty)
+    if ln <= 0.0:
+        return 0.0, 0.0, 0.0
+    nx = ring_sign[e] * ty / ln
+    ny = -ring_sign[e] * tx / ln
+    t = anchor_tri[i]
+    px = (anchor_bary[i, 0] * x[tris[t, 0], 0] + anchor_bary[i, 1] * x[tris[t, 1], 0]
+          + anchor_bary[i, 2] * x[tris[t, 2], 0])
+    py = (anchor_bary[i, 0] * x[tris[t, 0], 1] + anchor_bary[i, 1] * x[tris[t, 1], 1]
+          + anchor_bary[i, 2] * x[tris[t, 2], 1])
+    return (x[i, 0] - px) * nx + (x[i, 1] - py) * ny, nx, ny
+
+
 @njit(cache=True)
-def keep_skin_width(x, tris, anchor_tri, anchor_bary, anchor_w, anchor_sign, active_skin,
+def skin_depths(x, tris, anchor_tri, anchor_bary, ring_sign, vert_elem, elem_vstart, elem_nskin,
+                verts, out):
+    """:func:`_depth` of each skin vertex in ``verts`` into ``out`` (at least 0): the rest
+    widths, measured on the placed meshes."""
+    for k in range(verts.shape[0]):
+        i = verts[k]
+        d, _, _ = _depth(x, i, vert_elem[i], tris, anchor_tri, anchor_bary, ring_sign,
+                         elem_vstart, elem_nskin, True)
+        out[i] = max(d, 0.0)
+
+
+@njit(cache=True)
+def keep_skin_width(x, tris, anchor_tri, anchor_bary, anchor_w, ring_sign, active_skin,
                     vert_elem, elem_vstart, elem_nskin, growth, fraction, relax):
     """Project every skin vertex in ``active_skin`` to at least ``fraction`` × its rest
     width (``anchor_w`` × its element's growth) outside its anchor, along the outward
-    normal of its skin ring (from its two ring neighbours; ``anchor_sign`` +1 for a
+    normal of its skin ring (:func:`_depth`; ``ring_sign`` per element, +1 for a
     counter-clockwise ring). ``relax`` of the violation is corrected per call. Returns the
     number of vertices corrected."""
     hits = 0
@@ -40,36 +78,22 @@ def keep_skin_width(x, tris, anchor_tri, anchor_bary, anchor_w, anchor_sign, act
         if t < 0:
             continue
         e = vert_elem[i]
-        s = elem_vstart[e]
-        n = elem_nskin[e]
-        j = i - s
-        prv = s + (j - 1 + n) % n
-        nxt = s + (j + 1) % n
-        tx = x[nxt, 0] - x[prv, 0]
-        ty = x[nxt, 1] - x[prv, 1]
-        ln = np.sqrt(tx * tx + ty * ty)
-        if ln <= 0.0:
+        depth, nx, ny = _depth(x, i, e, tris, anchor_tri, anchor_bary, ring_sign, elem_vstart, elem_nskin,
+                               False)
+        if nx == 0.0 and ny == 0.0:
             continue
-        nx = anchor_sign[i] * ty / ln
-        ny = -anchor_sign[i] * tx / ln
-        a = tris[t, 0]
-        b = tris[t, 1]
-        c = tris[t, 2]
-        ba = anchor_bary[i, 0]
-        bb = anchor_bary[i, 1]
-        bc = anchor_bary[i, 2]
-        px = ba * x[a, 0] + bb * x[b, 0] + bc * x[c, 0]
-        py = ba * x[a, 1] + bb * x[b, 1] + bc * x[c, 1]
-        depth = (x[i, 0] - px) * nx + (x[i, 1] - py) * ny
         target = fraction * anchor_w[i] * growth[e]
         if depth >= target:
             continue
+        a = tris[t, 0]
+        b = tris[t, 1]
+        c = tris[t, 2]
         # gradient of the constraint: +1 on x_i, −bary on the triangle's corners (x_i may
         # be one of them)
         ci = 1.0
-        ca = -ba
-        cb = -bb
-        cc = -bc
+        ca = -anchor_bary[i, 0]
+        cb = -anchor_bary[i, 1]
+        cc = -anchor_bary[i, 2]
         if a == i:
             ci += ca
             ca = 0.0
