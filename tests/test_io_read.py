@@ -200,6 +200,30 @@ def test_a_line_is_never_filled(tmp_path):
     assert styles == [("#000000", None), (None, "#ff0000")]
 
 
+@pytest.mark.parametrize("attrs", ['rx="20"', 'ry="20"', 'rx="20" ry="auto"', 'rx="auto" ry="20"',
+                                   'rx="20" style="fill:red"'])
+def test_an_ellipse_with_one_radius_is_a_circle(tmp_path, attrs):
+    """SVG 2: an ellipse's missing (or ``auto``) radius takes the other's value, as browsers
+    draw it; svgelements made it 1 and ``<ellipse rx="20"/>`` packed as a 40 × 2 sliver."""
+    body = f'<ellipse cx="50" cy="50" {attrs}/>'
+    el = _quiet(load_element, _write(tmp_path, "e.svg", _svg(body)))
+    (path,) = el.paths
+    b = _region(path).bounds
+    assert b == pytest.approx((30, 30, 70, 70), abs=1e-6)
+    assert _region(path).area == pytest.approx(math.pi * 400, rel=5e-3)  # flattened
+
+
+def test_shapes_without_a_size_are_not_drawn(tmp_path):
+    """A circle without ``r``, an ellipse without radii, a rect without ``height``: not
+    drawn in a browser (size 0), drawn 1 unit across by svgelements; alone in an element,
+    the file is refused as having nothing visible."""
+    none = '<circle cx="50" cy="50"/><ellipse cx="20" cy="20"/><rect x="5" y="5" width="30"/>'
+    el = _quiet(load_element, _write(tmp_path, "some.svg", _svg(none + '<rect x="60" y="60" width="9" height="9"/>')))
+    assert [tuple(round(v, 6) for v in _region(p).bounds) for p in el.paths] == [(60, 60, 69, 69)]
+    with pytest.raises(InputError, match="no visible geometry"):
+        _quiet(load_element, _write(tmp_path, "none.svg", _svg(none)))
+
+
 def test_css_custom_properties(tmp_path):
     """var(--x, fallback) as browsers resolve it: inherited, overridden, nested, in style
     sheets and style attributes; an undefined one is ignored with a note (was black)."""

@@ -758,6 +758,43 @@ def _substitute_variables(root: ET.Element, notes: set[str]) -> None:
         stack.extend((c, env) for c in el if isinstance(c.tag, str))
 
 
+def _styled(el: ET.Element, prop: str) -> bool:
+    """Whether ``el``'s inline style sets the property ``prop`` (CSS outranks attributes)."""
+    return re.search(rf"(?:^|;)\s*{prop}\s*:", el.get("style") or "") is not None
+
+
+def _auto(value: str | None) -> bool:
+    return value is None or value.strip().lower() in ("", "auto")
+
+
+def _shape_sizes(root: ET.Element) -> None:
+    """Give circles, ellipses and rects the sizes SVG 2 gives them where an attribute is
+    missing: an ellipse's ``rx`` or ``ry`` left out (or ``auto``) takes the other's value,
+    and a circle without ``r``, an ellipse without either radius or a rect without
+    ``width`` or ``height`` is not drawn (as in browsers). svgelements drew them with a
+    size of 1 instead: ``<ellipse rx="20"/>``, a circle in a browser, packed as a 40 × 2
+    sliver."""
+    for el in root.iter():
+        if not isinstance(el.tag, str):
+            continue
+        name = _local(el.tag)
+        if name == "circle" and el.get("r") is None and not _styled(el, "r"):
+            el.set("r", "0")
+        elif name == "ellipse" and not (_styled(el, "rx") or _styled(el, "ry")):
+            rx, ry = el.get("rx"), el.get("ry")
+            if _auto(rx) and _auto(ry):
+                el.set("rx", "0")
+                el.set("ry", "0")
+            elif _auto(rx):
+                el.set("rx", ry)
+            elif _auto(ry):
+                el.set("ry", rx)
+        elif name == "rect":
+            for k in ("width", "height"):
+                if _auto(el.get(k)) and not _styled(el, k):
+                    el.set(k, "0")
+
+
 def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
     """Make the tree safe for svgelements: move non-rendered containers into ``<defs>``
     (svgelements would otherwise draw their children), drop ``foreignObject``."""
@@ -1278,6 +1315,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     notes: set[str] = set()
     _apply_stylesheets(root_xml, notes)
     _sanitize(path, root_xml, notes)
+    _shape_sizes(root_xml)
     fonts_missing = text_to_paths(root_xml, notes)
     if fonts_missing:
         warn(path, fonts_missing)
