@@ -213,6 +213,16 @@ def test_an_ellipse_with_one_radius_is_a_circle(tmp_path, attrs):
     assert _region(path).area == pytest.approx(math.pi * 400, rel=5e-3)  # flattened
 
 
+@pytest.mark.parametrize("radii", ['rx="10"', 'ry="10"', 'rx="auto" ry="10"', 'rx="10" ry="auto"'])
+def test_a_rect_corner_radius_left_out_or_auto_takes_the_other(tmp_path, radii):
+    """Browsers round the corners of ``<rect rx="auto" ry="10">`` by 10 both ways; the
+    "auto" was read as 0 (square corners)."""
+    body = f'<rect x="10" y="10" width="50" height="50" {radii}/>'
+    el = _quiet(load_element, _write(tmp_path, "r.svg", _svg(body)))
+    (path,) = el.paths
+    assert _region(path).area == pytest.approx(2500 - (4 - math.pi) * 100, rel=2e-3)
+
+
 def test_shapes_without_a_size_are_not_drawn(tmp_path):
     """A circle without ``r``, an ellipse without radii, a rect without ``height``: not
     drawn in a browser (size 0), drawn 1 unit across by svgelements; alone in an element,

@@ -770,7 +770,7 @@ def _auto(value: str | None) -> bool:
 def _shape_sizes(root: ET.Element) -> None:
     """Give circles, ellipses and rects the sizes SVG 2 gives them where an attribute is
     missing: an ellipse's ``rx`` or ``ry`` left out (or ``auto``) takes the other's value,
-    and a circle without ``r``, an ellipse without either radius or a rect without
+    as does a rect's corner radius, and a circle without ``r``, an ellipse without either radius or a rect without
     ``width`` or ``height`` is not drawn (as in browsers). svgelements drew them with a
     size of 1 instead: ``<ellipse rx="20"/>``, a circle in a browser, packed as a 40 × 2
     sliver."""
@@ -793,6 +793,9 @@ def _shape_sizes(root: ET.Element) -> None:
             for k in ("width", "height"):
                 if _auto(el.get(k)) and not _styled(el, k):
                     el.set(k, "0")
+            for k in ("rx", "ry"):  # left out, a corner radius takes the other's (svgelements
+                if el.get(k) is not None and _auto(el.get(k)):  # does so); "auto" it read as 0
+                    del el.attrib[k]
 
 
 def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
