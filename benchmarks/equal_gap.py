@@ -12,7 +12,8 @@ and prints both (markdown table).
         --out-dir /tmp/equal-gap heart convex-circle stars-circle ...
 
 ``heart`` is the paper's scene (../shared/data, gap 5.2, seed 1); other names are scenes of
-:func:`repulsionpak.scenes.suite`. Nothing here writes into the repository.
+:func:`repulsionpak.scenes.suite` or :func:`repulsionpak.scenes.holdout_suite`. Nothing here
+writes into the repository.
 """
 
 from __future__ import annotations
@@ -49,12 +50,13 @@ def old_pack(args, container, elements, out, gap, seed, count) -> float:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("scenes", nargs="+", help="'heart' or names from repulsionpak.scenes.suite()")
+    ap.add_argument("scenes", nargs="+", help="'heart' or names from repulsionpak.scenes.suite() or "
+                    "holdout_suite()")
     ap.add_argument("--old-src", type=Path, required=True, help="src/ folder of the old checkout")
     ap.add_argument("--old-python", default=sys.executable, help="Python with the old version's dependencies")
     ap.add_argument("--out-dir", type=Path, required=True)
     args = ap.parse_args(argv)
-    suite = {s.name: s for s in scenes.suite()}
+    suite = {s.name: s for s in scenes.suite() + scenes.holdout_suite()}
     print("| scene | asked gap | old: median gap / asked | old: area | old: art overlap | "
           "new, asked the old median: median / asked | new: area | new: art overlap |")
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
@@ -77,6 +79,10 @@ def main(argv=None) -> int:
         old_pack(args, cont, elems, wd / "old.svg", gap, seed, count)
         old = measure(wd / "old.svg", gap)
         m = old["gap"]["median"]
+        if not m > 0:  # half the old copies touch or overlap a neighbour: no gap to ask for
+            print(f"| {name} | {gap:.4g} | {m / gap:.3f} | {old['area_fraction']:.3f} | "
+                  f"{old['overlap_area']:.3g} | — | — | — |", flush=True)
+            continue
         run_pack(cont, elems, wd / "new.svg", gap=m, seed=seed, count=count, progress=False)
         new = measure(wd / "new.svg", m)
         (wd / "result.json").write_text(json.dumps({"scene": name, "gap": gap, "old": old, "new": new},
