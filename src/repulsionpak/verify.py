@@ -220,6 +220,13 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             centres[i] = _centre(geoms[i])
         return centres[i]
 
+    shrink_points: dict = {}  # an element too close to several others: its candidates once
+
+    def cost(i, p, u, total):
+        if i not in shrink_points:
+            shrink_points[i] = _shrink_candidates(geoms[i], centre(i), SHRINK_POINTS)
+        return _shrink_cost(shrink_points[i], float(geoms[i].area), p, u, total)
+
     if len(idx) >= 2:
         a, b = _near_pairs(arr, np.arange(len(arr)), min_gap)
         keep = a < b
@@ -283,8 +290,8 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 # shrinks a little about a far point, while the body would have to shrink
                 # by the whole depth about any of its points (a penguin's tail through
                 # the heart's snake: the snake shrank to 0.67 of its size)
-                ci = _shrink_cost(gi, centre(i), pi, u / nu, total)
-                cj = _shrink_cost(gj, centre(j), pj, -u / nu, total)
+                ci = cost(i, pi, u / nu, total)
+                cj = cost(j, pj, -u / nu, total)
                 if ci == cj:  # both hopeless (no point moves the contact away): as before
                     ci, cj = gi.area, gj.area
                 k, pk = (i, pi) if ci <= cj else (j, pj)
@@ -333,6 +340,10 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             (None if not np.isfinite(emin) else emin))
 
 
+#: outline vertices an element may shrink about, besides its centroid (and pole)
+SHRINK_POINTS = 64
+
+
 def _shrink_candidates(g, centroid: np.ndarray, max_points: int) -> np.ndarray:
     """Points an element may shrink about: its centroid (first) and at most
     ``max_points`` of its outline's vertices, evenly taken."""
@@ -341,16 +352,15 @@ def _shrink_candidates(g, centroid: np.ndarray, max_points: int) -> np.ndarray:
     return np.concatenate([np.asarray(centroid, dtype=float)[None, :], xy])
 
 
-def _shrink_cost(g, centroid: np.ndarray, p: np.ndarray, u: np.ndarray, total: float,
-                 max_points: int = 64) -> float:
-    """The art area an element ``g`` loses when it shrinks about its best point (the
-    candidates of :func:`_shrink_centre`, without its pole) to take the contact at ``p``
-    ``total`` away along ``u``: area × (1 − (1 − r)²) for the predicted relative shrink r
-    (infinite when no point moves the contact away)."""
-    r = float(_predicted_shrink(_shrink_candidates(g, centroid, max_points), [(p, u, total, True)]).min())
+def _shrink_cost(cands: np.ndarray, area: float, p: np.ndarray, u: np.ndarray, total: float) -> float:
+    """The art area an element of ``area`` loses when it shrinks about its best point of
+    ``cands`` (:func:`_shrink_candidates`: those of :func:`_shrink_centre`, without its
+    pole) to take the contact at ``p`` ``total`` away along ``u``: area × (1 − (1 − r)²)
+    for the predicted relative shrink r (infinite when no point moves the contact away)."""
+    r = float(_predicted_shrink(cands, [(p, u, total, True)]).min())
     if not np.isfinite(r) or r >= 1.0:
         return np.inf
-    return float(g.area) * (1.0 - (1.0 - r) ** 2)
+    return area * (1.0 - (1.0 - r) ** 2)
 
 
 def _predicted_shrink(cands: np.ndarray, contacts: list) -> np.ndarray:
@@ -369,7 +379,7 @@ def _predicted_shrink(cands: np.ndarray, contacts: list) -> np.ndarray:
 
 
 def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float = 1.25,
-                   max_points: int = 64) -> tuple[np.ndarray, float | None]:
+                   max_points: int = SHRINK_POINTS) -> tuple[np.ndarray, float | None]:
     """The point an element (current geometry ``g``) should shrink about to clear its
     ``contacts`` (see :func:`_check`), and the relative shrink predicted there; ``None``
     for the latter: its centroid, as before. Shrinking about the centroid moves a contact

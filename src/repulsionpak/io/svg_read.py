@@ -760,7 +760,7 @@ def _substitute_variables(root: ET.Element, notes: set[str]) -> None:
 
 def _styled(el: ET.Element, prop: str) -> bool:
     """Whether ``el``'s inline style sets the property ``prop`` (CSS outranks attributes)."""
-    return re.search(rf"(?:^|;)\s*{prop}\s*:", el.get("style") or "") is not None
+    return any(name == prop for name, _, _ in _inline_declarations(el.get("style")))
 
 
 def _auto(value: str | None) -> bool:
