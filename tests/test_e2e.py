@@ -36,8 +36,9 @@ def check_packing(container, placed, gap, min_area):
 @needs_shared
 @pytest.mark.slow
 def test_heart_scene_like_the_paper(tmp_path):
-    """The acceptance command: zero overlaps, all art inside, area >= 0.54 (0.567
-    measured with the default count, 20 animals of 15 gaps; 0.539 with the 31 of the
+    """The acceptance command: zero overlaps, all art inside, area >= 0.57 (0.601
+    measured with the default count, 20 animals of 15 gaps, and each pocket filled with the
+    animal that covers it best; 0.567 with random ones, 0.539 with the 31 animals of the
     earlier 12 gaps, see docs/quality.md), median nearest-neighbour gap within ±25%,
     through the CLI with a report."""
     out, rep = tmp_path / "out.svg", tmp_path / "report.json"
@@ -48,7 +49,7 @@ def test_heart_scene_like_the_paper(tmp_path):
     assert info["gap"] == pytest.approx(5.2)
     primaries = [p for p in placed if p.kind == "primary"]
     assert len(primaries) == 20 and len(placed) > len(primaries)  # pockets filled (secondary.auto)
-    m = check_packing(load_container(SHARED / "containers" / "heart.svg"), placed, 5.2, 0.54)
+    m = check_packing(load_container(SHARED / "containers" / "heart.svg"), placed, 5.2, 0.57)
     assert m["gap"]["p10"] >= 0.8 * 5.2  # the verified gap floor (0.9 gap)
     report = json.loads(rep.read_text())
     for key in ("n_primary", "n_secondary", "n_vertices", "iterations", "seconds", "area_fraction", "gap",

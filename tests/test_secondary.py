@@ -10,7 +10,8 @@ import shapely
 
 from repulsionpak.params import SecondaryParams
 from repulsionpak.preprocess import outline_of
-from repulsionpak.secondary import SIZE_STEP, fit_scale, outline_samples, pocket_axes, pocket_seeds
+from repulsionpak.secondary import (SIZE_STEP, _fit_to_pockets, fit_scale, fit_scales, outline_samples, pocket_axes,
+                                    pocket_seeds)
 from repulsionpak.types import ArtPath, Element
 
 
@@ -70,6 +71,59 @@ def test_a_bar_fits_larger_along_its_sliver_and_keeps_the_offset():
     # width across the sliver (16) minus the offset on both sides: the bar is 10 wide
     assert along * 10.0 <= 16.0 - 2 * offset + 2 * pockets.h
     assert along * 10.0 >= 0.8 * (16.0 - 2 * offset)
+
+
+def _scan_every_scale(pockets, seed, pts, angle, offset, s0, steps):
+    """The reference fit: every scale tested at once with numpy, the first misfit kept."""
+    c, s = np.cos(angle), np.sin(angle)
+    q = pts @ np.array([[c, s], [-s, c]])
+    cand = seed + (s0 * steps)[:, None, None] * q[None, :, :]
+    ok = (pockets.lookup(cand) >= offset).all(axis=1)
+    bad = np.nonzero(~ok)[0]
+    j = (len(steps) if len(bad) == 0 else int(bad[0])) - 1
+    return float(s0 * steps[max(j, 0)])
+
+
+def test_fit_scales_stop_at_the_first_misfit_exactly_like_a_full_scan():
+    region, skins = _sliver(30.0)
+    pockets = pocket_seeds(region, skins, gap=2.0, params=SecondaryParams(grid=400))
+    pts = outline_samples(outline_of(_bar_element()))
+    rng = np.random.default_rng(5)
+    steps = np.geomspace(0.05, 2.0, 80)
+    for k in range(len(pockets.seeds)):
+        angles = rng.uniform(0, 2 * np.pi, 7)
+        got = fit_scales(pockets, pockets.seeds[k], pts, angles, 1.0, 1.3, steps)
+        want = [_scan_every_scale(pockets, pockets.seeds[k], pts, a, 1.0, 1.3, steps) for a in angles]
+        assert got.tolist() == want  # bit for bit
+    # a seed off the grid fits nothing: the smallest scale is returned
+    assert fit_scale(pockets, np.array([1e4, 1e4]), pts, 0.0, 1.0, 1.3, steps) == 1.3 * steps[0]
+
+
+def test_each_pocket_takes_the_element_whose_fitted_copy_covers_most():
+    """A bar fills a sliver better than a square does, a square an open pocket better than a
+    bar: with both as candidates each pocket takes its better one, in either order; with one
+    candidate the assignment stands."""
+    square = Element("square", "square.svg", (ArtPath((_box(0, 0, 10, 10),), (True,)),))
+    outlines = [outline_of(_bar_element()), outline_of(square)]
+    region, skins = _sliver(0.0)
+    sliver = pocket_seeds(region, skins, gap=2.0, params=SecondaryParams(grid=400))
+    far = np.array([[-400, -400], [-399, -400], [-399, -399]], float)  # a skin outside the box
+    open_box = pocket_seeds(shapely.box(-100, -100, 100, 100), [far], gap=2.0, params=SecondaryParams(grid=400))
+    for pockets, best in ((sliver, 0), (open_box, 1)):
+        n = len(pockets.seeds)
+        inner = np.abs(pockets.seeds).max(axis=1) < 60  # seeds not pressed against the box's edge
+        for order in ((0, 1), (1, 0)):
+            cand = np.tile(np.array(order), (n, 1))
+            _, scales, chosen = _fit_to_pockets(pockets, outlines, cand, None, 1.0, True, np.random.default_rng(1))
+            assert (chosen[inner] == best).all()
+            areas = np.array([outlines[i].geometry.area for i in chosen]) * scales ** 2
+            for i in (0, 1):  # no candidate alone would have covered more
+                _, alone, _ = _fit_to_pockets(pockets, outlines, np.full((n, 1), i), None, 1.0, True,
+                                              np.random.default_rng(1))
+                assert (areas >= outlines[i].geometry.area * alone ** 2 * (1 - 1e-9)).all()
+        _, _, chosen = _fit_to_pockets(pockets, outlines, np.full((n, 1), 1 - best), None, 1.0, True,
+                                       np.random.default_rng(1))
+        assert (chosen == 1 - best).all()
 
 
 def test_outline_samples_cover_the_inside():

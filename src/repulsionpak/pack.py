@@ -321,6 +321,10 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         params = dataclasses.replace(params, secondary=dataclasses.replace(
             params.secondary, max_count=cap if mc is None else min(mc, cap)))
         packing.params = params
+    elif secondary and params.secondary.candidates is None:
+        # given secondaries are the designer's mix: assigned at random, as in the paper
+        params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, candidates=1))
+        packing.params = params
     if secondary and res.stopped_by != "interrupted":
         from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
 

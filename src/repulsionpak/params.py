@@ -178,6 +178,12 @@ class SecondaryParams:
     max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")
     initial_fraction: float = _doc(
         0.5, "-", "Initial secondary size relative to its pocket (its skin's radius = fraction × distance).")
+    candidates: int | None = _doc(
+        None, "elements", "Elements each pocket tries (the next ones of the shuffled cycle); the one whose "
+        "copy, fitted to the pocket, covers the most art is placed, so compact elements take more "
+        "pockets. None: every element for the automatic fill (copies of the primaries), 1 for "
+        "secondaries given with --secondary (the designer's mix, assigned at random as in the paper). "
+        "Not with designer controls.")
     fill_holes: bool = _doc(
         True, "-", "Put an undeformed secondary copy in every hole of the packed art (a ring's "
         "middle, a letter's counter) that can hold one a gap away from its edge; part of the pocket "
@@ -402,6 +408,7 @@ class Params:
             (sec.d_min > 0 and sec.d_sep > 0, "secondary.d_min and d_sep must be > 0"),
             (64 <= sec.grid <= 10_000, "secondary.grid must be in [64, 10000]"),
             (sec.max_count is None or sec.max_count >= 0, "secondary.max_count must be >= 0"),
+            (sec.candidates is None or sec.candidates >= 1, "secondary.candidates must be >= 1"),
             (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
             (sec.hole_min_radius > 0, "secondary.hole_min_radius must be > 0"),
             (0 <= sec.hole_depth <= 10, "secondary.hole_depth must be in [0, 10]"),

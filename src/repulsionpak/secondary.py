@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from numba import njit
 
 from .controls import any_controls, controls_of, initial_angles, setup_model, weighted_assignment
 from .evaluate import rasterize
@@ -164,13 +165,44 @@ def fit_scale(pockets: Pockets, seed: np.ndarray, pts: np.ndarray, angle: float,
     scaled, turned by ``angle`` and centred on ``seed``, keeps ``offset`` from every skin
     and the boundary at all its samples, stopping at the first scale that does not fit;
     ``s0 · steps[0]`` when none does."""
-    c, s = np.cos(angle), np.sin(angle)
-    q = pts @ np.array([[c, s], [-s, c]])  # rotated by angle
-    cand = seed + (s0 * steps)[:, None, None] * q[None, :, :]  # (S, n, 2)
-    ok = (pockets.lookup(cand) >= offset).all(axis=1)
-    bad = np.nonzero(~ok)[0]
-    j = (len(steps) if len(bad) == 0 else int(bad[0])) - 1
-    return float(s0 * steps[max(j, 0)])
+    return float(fit_scales(pockets, seed, pts, np.array([angle], dtype=float), offset, s0, steps)[0])
+
+
+def fit_scales(pockets: Pockets, seed: np.ndarray, pts: np.ndarray, angles: np.ndarray, offset: float,
+               s0: float, steps: np.ndarray) -> np.ndarray:
+    """:func:`fit_scale` for each of ``angles`` at once (A,)."""
+    angles = np.asarray(angles, dtype=float)
+    q = np.stack([pts @ np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]]) for a in angles])
+    scales = s0 * np.asarray(steps, dtype=float)
+    first = _first_misfit(pockets.dist, pockets.x0, pockets.y0, pockets.h, float(seed[0]), float(seed[1]),
+                          np.ascontiguousarray(q), scales, float(offset))
+    return scales[np.maximum(first - 1, 0)]
+
+
+@njit(cache=True)
+def _first_misfit(dist, x0, y0, h, sx, sy, q, scales, offset):  # pragma: no cover - numba
+    """For each turned outline ``q[a]`` (A, n, 2) centred on (sx, sy): the index of the first
+    of ``scales`` at which one of its samples lies less than ``offset`` from a skin or the
+    boundary on the grid ``dist`` (0 off the grid), or len(scales) when every one fits.
+    Each outline stops at its first misfit (the same answer as testing every scale)."""
+    ny, nx = dist.shape
+    n_a, n = q.shape[0], q.shape[1]
+    out = np.full(n_a, len(scales), np.int64)
+    for a in range(n_a):
+        for j in range(len(scales)):
+            s = scales[j]
+            misfit = False
+            for p in range(n):
+                jx = int(np.floor((sx + s * q[a, p, 0] - x0) / h))
+                iy = int(np.floor((sy + s * q[a, p, 1] - y0) / h))
+                d = dist[iy, jx] if 0 <= iy < ny and 0 <= jx < nx else 0.0
+                if not d >= offset:
+                    misfit = True
+                    break
+            if misfit:
+                out[a] = j
+                break
+    return out
 
 
 def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator,
@@ -203,8 +235,15 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     else:
         order = rng.permutation(len(outlines))
         assign = order[np.arange(len(seeds)) % len(outlines)]
-    angles, scales = _fit_to_pockets(pockets, outlines, assign, ctrls if controlled else None,
-                                     p.preprocess.skin_offset * gap, p.placement.rotate, rng)
+    k = len(outlines) if sp.candidates is None else min(sp.candidates, len(outlines))
+    if not controlled and k > 1:
+        # each pocket also tries the next elements of the shuffled cycle and keeps the one
+        # whose fitted copy covers the most art
+        cand = order[(np.arange(len(seeds))[:, None] + np.arange(k)[None, :]) % len(outlines)]
+    else:
+        cand = assign[:, None]
+    angles, scales, assign = _fit_to_pockets(pockets, outlines, cand, ctrls if controlled else None,
+                                             p.preprocess.skin_offset * gap, p.placement.rotate, rng)
     # one template per element and size class (factor SIZE_STEP): every copy's skin is
     # built for about its own final size, so it keeps about half a gap around its art
     # however small or large its pocket is
@@ -261,11 +300,13 @@ ANGLE_TRIES = 6
 _STEPS = np.geomspace(0.5, 4.0, 37)
 
 
-def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, rotate: bool,
-                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Start angle and nominal scale (file → container units) of each pocket's copy.
+def _fit_to_pockets(pockets: Pockets, outlines, candidates: np.ndarray, ctrls, offset: float, rotate: bool,
+                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Element, start angle and nominal scale (file → container units) of each pocket's copy.
 
-    The nominal scale is the largest at which the copy's art, centred on the seed, keeps
+    ``candidates`` (n, k): the library elements pocket j may take; the one whose fitted copy
+    has the largest art area is chosen (k = 1: the assignment as given). The nominal scale
+    is the largest at which the copy's art, centred on the seed, keeps
     its skin offset (``offset``) from every primary skin and the boundary — measured on
     the pocket's distance transform at samples on and inside its outline
     (:func:`outline_samples`) — so its skin just fills the pocket. Free copies try their
@@ -273,11 +314,15 @@ def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, ro
     with the largest fit: a bar lies along a sliver, a star turns its tips into the
     corners of a pocket. Rotation-controlled copies keep the
     angles their controls give (:func:`repulsionpak.controls.initial_angles`).
+    Returns (angles, scales, chosen elements), each (n,).
     """
-    n = len(assign)
+    n = len(candidates)
+    assign = candidates[:, 0]
     axes = pocket_axes(pockets)
-    samples = [outline_samples(o) for o in outlines]
-    radius = [float(np.sqrt((smp ** 2).sum(axis=1).max())) for smp in samples]
+    used = np.unique(candidates)
+    samples = {int(i): outline_samples(outlines[int(i)]) for i in used}
+    radius = {i: float(np.sqrt((smp ** 2).sum(axis=1).max())) for i, smp in samples.items()}
+    art = {int(i): float(outlines[int(i)].geometry.area) for i in used}
     if rotate:
         angles = rng.uniform(0.0, 2.0 * np.pi, (n, ANGLE_TRIES))
     else:
@@ -287,15 +332,19 @@ def _fit_to_pockets(pockets: Pockets, outlines, assign, ctrls, offset: float, ro
     elif rotate:
         angles = np.column_stack([angles, axes, axes + np.pi])
     seeds = pockets.seeds
-    out_a, out_s = np.zeros(n), np.zeros(n)
+    out_a, out_s, out_i = np.zeros(n), np.zeros(n), assign.copy()
     for k in range(n):
-        i = int(assign[k])
-        # the inscribed-circle fit: the circumscribed skin radius equals the distance
-        s_round = max(pockets.distance[k] - offset, 0.5 * pockets.distance[k]) / max(radius[i], 1e-300)
-        best = (-1.0, 0.0)
-        for a in angles[k]:
-            sc = fit_scale(pockets, seeds[k], samples[i], float(a), offset, s_round, _STEPS)
-            if sc > best[0] * (1.0 + 1e-9):
-                best = (sc, float(a))
-        out_s[k], out_a[k] = max(best[0], s_round), best[1]
-    return out_a, out_s
+        best_area = -1.0
+        for i in map(int, candidates[k]):
+            # the inscribed-circle fit: the circumscribed skin radius equals the distance
+            s_round = max(pockets.distance[k] - offset, 0.5 * pockets.distance[k]) / max(radius[i], 1e-300)
+            best = (-1.0, 0.0)
+            for a, sc in zip(angles[k], fit_scales(pockets, seeds[k], samples[i], angles[k], offset,
+                                                   s_round, _STEPS)):
+                if sc > best[0] * (1.0 + 1e-9):
+                    best = (float(sc), float(a))
+            sc = max(best[0], s_round)
+            if art[i] * sc * sc > best_area * (1.0 + 1e-9):
+                best_area = art[i] * sc * sc
+                out_s[k], out_a[k], out_i[k] = sc, best[1], i
+    return out_a, out_s, out_i

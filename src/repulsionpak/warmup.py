@@ -325,6 +325,17 @@ def _warm_flatten() -> None:
     flatten_subpath(sub, 1e-3)
 
 
+def _warm_misfit() -> None:
+    """The pocket fill's fitting kernel (:func:`repulsionpak.secondary.fit_scales`), between
+    the two simulations."""
+    from .secondary import Pockets, fit_scales
+
+    none = np.zeros(0, np.int64)
+    pockets = Pockets(np.ones((4, 4)), 0.0, 0.0, 1.0, np.zeros(0), none, none)
+    fit_scales(pockets, np.array([2.0, 2.0]), np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([0.0]), 0.5, 1.0,
+               np.array([1.0, 2.0]))
+
+
 def _arc():
     th = np.linspace(0.0, 0.5 * np.pi, 9)
     return np.column_stack([np.cos(th), np.sin(th)]), np.column_stack([-np.sin(th), np.cos(th)]), th
@@ -362,6 +373,8 @@ def warm_up(simulation: bool = True, render: bool = True, parallel: bool = True)
             if not _claim(_name(dispatcher)):
                 break  # the packing got there first (compile_forward): it has the rest
             dispatcher.compile(sig)  # loads it instead when the cache has it
+        if _claim("_warm_misfit"):
+            _warm_misfit()
     if render:
         _warm_render()
     if parallel:
