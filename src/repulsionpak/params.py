@@ -60,7 +60,7 @@ class PlacementParams:
     element_size: float = _doc(
         15.0, "× gap", "Typical final element diameter used to estimate the count (when count is None): "
         "the larger, the fewer and bigger the elements, and the less of the container their gaps take "
-        "(12 until November 28; 15 covers more on 47 of 53 suite scenes, see docs/quality.md).")
+        "(12 until November 28; 15 covers more on 48 of the 53 suite scenes, see docs/quality.md).")
     initial_fraction: float = _doc(
         0.075, "-", "Share of the container area the skins occupy at the start (paper: 5–10%).")
     target_fraction: float = _doc(
@@ -457,7 +457,8 @@ def _check_type(value, tp, where: str, source: str):
         raise ConfigError(f"{source}: {where} is too large ({str(value)[:20]}...)") from None
     if v is _MISMATCH:
         name = getattr(base, "__name__", str(base))
-        raise ConfigError(f"{source}: {where} must be a {name}, got {value!r} ({type(value).__name__})")
+        article = "an" if name[:1] in "aeiou" else "a"
+        raise ConfigError(f"{source}: {where} must be {article} {name}, got {value!r} ({type(value).__name__})")
     return v
 
 
