@@ -20,11 +20,13 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
-import os
 import statistics
+import sys
 import tempfile
-import time
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import contract  # noqa: E402  (benchmarks/contract.py: the suites' own measuring code)
 
 
 def _suite(name: str):
@@ -37,25 +39,19 @@ def run_one(task: tuple[str, str, float, str]) -> dict:
     """Pack one scene with the default count at one element size; its numbers."""
     suite, name, size, workdir = task
     from repulsionpak import scenes
-    from repulsionpak.cli import run_pack
 
     scene = {s.name: s for s in _suite(suite)}[name]
-    base = Path(workdir) / f"es{size:g}" / name
-    files = scene.write(base)
-    config = base / "config.toml"
+    base = Path(workdir) / f"es{size:g}"
+    base.mkdir(parents=True, exist_ok=True)
+    config = base / f"{name}.toml"
     config.write_text(f"[placement]\nelement_size = {size!r}\n")
-    out = files.container.parent / "packing.svg"
-    t0 = time.perf_counter()
-    report = run_pack(files.container, list(files.elements), out, gap=files.gap, seed=scene.seed,
-                      count=None, config=config, progress=False)
-    seconds = time.perf_counter() - t0
-    m = scenes.measure(files, out)
-    promises = m["promises"]
-    return {"scene": name, "element_size": size, "n_primary": report["n_primary"],
-            "n_secondary": report["n_secondary"], "area": m["area_fraction"], "scp_ratio": m["scp_ratio"],
-            "gap_median": promises["gap_median"]["value"], "gap_p10": promises["gap_p10"]["value"],
-            "broken": [k for k, v in promises.items() if isinstance(v, dict) and v.get("ok") is False],
-            "seconds": seconds}
+    run = scenes.run_scene(scene, base, config=config, estimate_count=True)
+    r = contract._summary(scene, run, None, run["seconds"])
+    return {"scene": name, "element_size": size, "n_primary": run["report"]["n_primary"],
+            "n_secondary": run["report"]["n_secondary"], "area": r["area_fraction"], "scp_ratio": r["scp_ratio"],
+            "gap_median": r["gap_median_rel"], "gap_p10": r["gap_p10_rel"],
+            "broken": [k for k, ok in contract.promise_status(r).items() if ok is False],
+            "seconds": run["seconds"]}
 
 
 def summary(rows: list[dict], sizes: list[float]) -> list[str]:
@@ -101,8 +97,7 @@ def main() -> None:
     workdir = args.workdir or tempfile.mkdtemp(prefix="default-count-")
     tasks = [(args.suite, n, s, workdir) for n in names for s in sizes]
     if args.jobs > 1:
-        os.environ.setdefault("REPULSIONPAK_THREADS", "1")  # one numba thread per process
-        with multiprocessing.get_context("spawn").Pool(args.jobs) as pool:
+        with multiprocessing.get_context("spawn").Pool(args.jobs, initializer=contract._init_worker) as pool:
             rows = pool.map(run_one, tasks, chunksize=1)
     else:
         rows = [run_one(t) for t in tasks]

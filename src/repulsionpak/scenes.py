@@ -681,9 +681,12 @@ def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None)
     return res
 
 
-def run_scene(scene: Scene, workdir: str | Path, grid: int | None = None, png: bool = False) -> dict:
+def run_scene(scene: Scene, workdir: str | Path, grid: int | None = None, png: bool = False, *,
+              config: Path | None = None, estimate_count: bool = False) -> dict:
     """Write ``scene`` under ``workdir``, pack it with ``repulsionpak pack``'s own code
     path (:func:`repulsionpak.cli.run_pack`), and :func:`measure` the output SVG.
+    ``config``: a TOML parameter file for the packing (``--config``); ``estimate_count``:
+    leave the number of primaries to the default estimate instead of the scene's count.
 
     Returns ``{"scene", "files", "svg", "png", "report", "metrics", "seconds"}``
     (``report``: what ``--report`` would hold, without the distortion, which
@@ -700,7 +703,8 @@ def run_scene(scene: Scene, workdir: str | Path, grid: int | None = None, png: b
     png_path = base / "packing.png" if png else None
     t0 = time.perf_counter()
     rep = run_pack(files.container, list(files.elements), out, gap=files.gap, seed=scene.seed,
-                   count=scene.count, png=png_path, progress=False)
+                   count=None if estimate_count else scene.count, config=config, png=png_path,
+                   progress=False)
     seconds = time.perf_counter() - t0
     return {"scene": scene, "files": files, "svg": out, "png": png_path, "report": rep,
             "metrics": measure(files, out, grid), "seconds": seconds}
