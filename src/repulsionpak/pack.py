@@ -360,7 +360,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
         min_scale=v.min_scale, repair=v.repair, straightened=straightened,
         grow_to=v.grow_to * gap, max_scale=v.max_grow, should_stop=stop_repair,
-        grow_reach=skin_excess(params, gap))
+        grow_reach=skin_excess(params, gap), gather=v.gather * gap)
     if stop_repair is not None and v.repair and stop_repair():
         packing.stopped_by["verify"] = "interrupted"  # a partial packing (exit 130), promises kept
     packing.seconds["verify"] = time.perf_counter() - t4

@@ -246,6 +246,10 @@ class VerifyParams:
         "room around them until they are this close to a neighbour or the margin from the edge "
         "(0: no growth).")
     max_grow: float = _doc(1.15, "-", "An element grows to at most this multiple of its size.")
+    gather: float = _doc(
+        1.1, "× gap", "After the growth, an element farther than this from its nearest neighbour "
+        "moves towards it until they are grow_to apart (a band of copies limited by its width "
+        "otherwise ends with every gap a little wide); 0: off.")
     straighten: float = _doc(
         0.75, "× sim.bend_limit", "An element whose art ends up distorted beyond this multiple of "
         "its bend limit (symmetric difference with its best rotated, scaled copy, over its "
@@ -426,6 +430,8 @@ class Params:
             (self.verify.grow_to == 0 or self.verify.grow_to >= self.verify.min_gap,
              f"verify.grow_to ({self.verify.grow_to!r}) must be 0 or >= verify.min_gap ({self.verify.min_gap!r})"),
             (self.verify.max_grow >= 1, "verify.max_grow must be >= 1"),
+            (self.verify.gather == 0 or self.verify.gather > self.verify.grow_to > 0,
+             f"verify.gather ({self.verify.gather!r}) must be 0 or > verify.grow_to ({self.verify.grow_to!r}) > 0"),
         ]
         for ok, msg in checks:
             if not ok:

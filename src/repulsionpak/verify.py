@@ -65,15 +65,22 @@ class Verification:
 
 
 def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
-               shift: np.ndarray = np.zeros(2)) -> PlacedArt:
-    """``placed`` scaled by ``scale`` about ``centre`` (strokes scaled with it), then moved
-    by ``shift``."""
+               shift: np.ndarray = np.zeros(2), angle: float = 0.0) -> PlacedArt:
+    """``placed`` scaled by ``scale`` and turned by ``angle`` (radians, x towards y) about
+    ``centre`` (strokes scaled with it), then moved by ``shift``."""
     c = np.asarray(centre, dtype=float)
     t = c + np.asarray(shift, dtype=float)
-    paths = tuple(p.transformed(lambda pts: t + (np.asarray(pts) - c) * scale) for p in placed.paths)
+    if angle:
+        r = scale * np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+        paths = tuple(p.transformed(lambda pts: t + (np.asarray(pts) - c) @ r.T) for p in placed.paths)
+    else:
+        r = np.array([[scale, 0.0], [0.0, scale]])
+        paths = tuple(p.transformed(lambda pts: t + (np.asarray(pts) - c) * scale) for p in placed.paths)
     frame = placed.frame
     if frame is not None:  # the same similarity, as a matrix
-        m = np.array([[scale, 0.0, t[0] - scale * c[0]], [0.0, scale, t[1] - scale * c[1]], [0.0, 0.0, 1.0]])
+        m = np.eye(3)
+        m[:2, :2] = r
+        m[:2, 2] = t - r @ c
         frame = m @ frame
     return dataclasses.replace(placed, paths=paths, stroke_scale=placed.stroke_scale * scale, frame=frame)
 
@@ -474,11 +481,110 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
                 shift[i][0], shift[i][1])
 
 
+def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, target, threshold,
+            margin, tol, rounds=6, fixed=None):
+    """Close the gaps wider than ``threshold``: each element whose nearest neighbour is
+    farther than ``threshold`` moves towards it until the two are ``target`` apart,
+    never closer than ``margin`` to the edge. Where elements cannot grow into the room
+    between them (a narrow band holds copies limited by its width, not by their
+    neighbours), the repulsion spreads the length left over evenly, every gap a little
+    wide; gathered, it leaves most gaps at the gap asked for and a few wider pockets
+    that pocket copies may fill.
+
+    Moving an element changes its distance to anything by at most the longest way one of
+    its points travels, and every other element is at least as far as its nearest, so a
+    move whose points travel at most (distance − target) keeps it at least ``target``
+    from every element. A straight move that would come closer than ``margin`` to the
+    edge is tried again turned (about the element's centre, by up to the angle that moves
+    its farthest point as far as the step: an element that fills the width of a curved
+    band slides along it only so), at half the step so the travel bound holds, and
+    halved until the margin is kept. None crosses what is not the container (the segment
+    between the two nearest points must lie in ``region``). Elements move one at a time,
+    the loneliest first; the rounds repeat while moves help."""
+    idx = [i for i in range(len(geoms)) if alive[i] and not (fixed is not None and fixed[i])]
+    if not idx or threshold <= target:
+        return
+    everyone = np.array([i for i in range(len(geoms)) if alive[i]])
+    reach = 4.0 * threshold  # farther apart: another element lies between them, or the edge
+    # turned moves: directions up to 45 degrees off the straight one, turns that move the
+    # farthest point up to the step; the most direct first
+    tries = sorted(((np.cos(b), np.sin(b), k) for b in np.radians([0, 15, -15, 30, -30, 45, -45])
+                    for k in (0.0, 0.125, -0.125, 0.25, -0.25, 0.5, -0.5, 1.0, -1.0)),
+                   key=lambda t: (-round(t[0], 6), abs(t[2])))
+    stuck: set = set()
+
+    def moved_copy(i, step, u, turn):
+        g = shapely.affinity.scale(base[i], scale[i], scale[i], origin=tuple(centre[i]))
+        if angle[i] + turn:
+            g = shapely.affinity.rotate(g, angle[i] + turn, origin=tuple(centre[i]), use_radians=True)
+        return shapely.affinity.translate(g, shift[i][0] + step * u[0], shift[i][1] + step * u[1])
+
+    for _ in range(rounds):
+        bounds = shapely.bounds(np.array([geoms[i] for i in everyone], dtype=object))
+        moved = False
+        order = []
+        for i in idx:
+            d, j = _nearest(geoms, everyone, bounds, i, reach)
+            if d > threshold:
+                order.append((-d, i))
+        for _, i in sorted(order):
+            d, j = _nearest(geoms, everyone, bounds, i, reach)
+            if not d > threshold or j < 0:
+                continue
+            line = shapely.shortest_line(geoms[i], geoms[j])
+            if not region.covers(line):  # the room between them is not the container's
+                continue
+            p, q = shapely.get_coordinates(line)
+            u = (q - p) / max(float(np.hypot(*(q - p))), 1e-300)
+            budget = d - target - tol
+            g = moved_copy(i, budget, u, 0.0)
+            ok = float(shapely.distance(boundary, g)) - margin > tol
+            step, v, turn = budget, u, 0.0
+            if not ok and i not in stuck:  # turned: the step and the turn share the travel budget
+                c = np.asarray(shapely.get_coordinates(geoms[i])) - (centre[i] + shift[i])
+                radius = float(np.sqrt((c ** 2).sum(axis=1).max())) if len(c) else 0.0
+                for step in (0.5 * budget, 0.25 * budget, 0.125 * budget) if radius > 0 else ():
+                    for cb, sb, k in tries:
+                        v = np.array([u[0] * cb - u[1] * sb, u[0] * sb + u[1] * cb])
+                        turn = k * step / radius
+                        g = moved_copy(i, step, v, turn)
+                        if float(shapely.distance(boundary, g)) - margin > tol:
+                            ok = True
+                            break
+                    if ok:
+                        break
+                if not ok:
+                    stuck.add(i)  # wedged: not tried again
+            if not ok or step <= 1e-3 * target:
+                continue
+            shift[i] += step * v
+            angle[i] += turn
+            geoms[i] = g
+            bounds[np.searchsorted(everyone, i)] = geoms[i].bounds
+            moved = True
+        if not moved:
+            break
+
+
+def _nearest(geoms, everyone, bounds, i, reach):
+    """(distance, index) of the element of ``everyone`` nearest to ``i`` among those whose
+    bounding boxes come within ``reach`` of its box; (inf, -1) when there is none."""
+    b = bounds[np.searchsorted(everyone, i)]
+    near = ((bounds[:, 0] <= b[2] + reach) & (bounds[:, 2] >= b[0] - reach)
+            & (bounds[:, 1] <= b[3] + reach) & (bounds[:, 3] >= b[1] - reach) & (everyone != i))
+    js = everyone[near]
+    if not len(js):
+        return np.inf, -1
+    d = shapely.distance(geoms[i], np.array([geoms[j] for j in js], dtype=object))
+    k = int(np.argmin(d))
+    return float(d[k]), int(js[k])
+
+
 def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float,
                       min_scale: float = 0.5, rounds: int = 24, repair: bool = True,
                       straightened: list | None = None, grow_to: float = 0.0,
                       max_scale: float = 1.15, should_stop: Callable[[], bool] | None = None,
-                      grow_reach: float = 0.0) -> tuple[list[PlacedArt], Verification]:
+                      grow_reach: float = 0.0, gather: float = 0.0) -> tuple[list[PlacedArt], Verification]:
     """Check (and, with ``repair``, enforce) the promises on the art of ``placed``.
 
     ``margin`` and ``min_gap`` in container units. Returns the (possibly shrunk, with
@@ -488,7 +594,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     has moved ``grow_reach`` when that is more (at most :data:`REACH_MAX_SCALE`): the room
     the skins' extra width leaves between two arts is the same in container units whatever
     the elements' size, so an element not much wider than the gap needs more than
-    ``max_scale`` to close it.
+    ``max_scale`` to close it. With ``gather`` > ``grow_to`` (container units), elements
+    then farther than ``gather`` from their nearest neighbour move towards it until they
+    are ``grow_to`` apart (:func:`_gather`).
     ``should_stop()`` true ends the repair rounds early (Ctrl-C while very detailed art is
     repaired): what still violates is then dropped, so the promises hold all the same."""
     region = _polygonal(region)
@@ -514,9 +622,13 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     fixed = np.array([bool(getattr(p, "pinned", False)) for p in placed])  # pinned: never touched
     fixed = fixed if fixed.any() else None
 
+    angle = np.zeros(n)  # radians about centre[i]: only the gathering turns an element
+
     def transform(g, i):
-        return shapely.affinity.translate(
-            shapely.affinity.scale(g, scale[i], scale[i], origin=tuple(centre[i])), shift[i][0], shift[i][1])
+        g = shapely.affinity.scale(g, scale[i], scale[i], origin=tuple(centre[i]))
+        if angle[i]:
+            g = shapely.affinity.rotate(g, angle[i], origin=tuple(centre[i]), use_radians=True)
+        return shapely.affinity.translate(g, shift[i][0], shift[i][1])
 
     def place(i):
         geoms[i] = transform(base[i], i)
@@ -604,6 +716,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach)
+        if gather > grow_to:
+            _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, grow_to + 2 * eps,
+                    gather + 2 * eps, w_margin, tol, fixed=fixed)
     # final verification, exact, on what is returned
     geoms = [transform(exact[i], i) for i in range(n)]
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
@@ -631,9 +746,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     for i in range(n):
         if not alive[i]:
             continue
-        if scale[i] != 1.0 or shift[i].any():
+        if scale[i] != 1.0 or shift[i].any() or angle[i]:
             shrunk[i] = float(scale[i])
-            out.append(scaled_art(placed[i], float(scale[i]), centre[i], shift[i]))
+            out.append(scaled_art(placed[i], float(scale[i]), centre[i], shift[i], float(angle[i])))
         else:
             out.append(placed[i])
     ok = not (need > 0).any()
