@@ -427,3 +427,26 @@ def test_ten_keyholes_in_a_glyph_c_keep_the_median_gap(tmp_path):
     assert p["overlap"]["ok"] and p["outside"]["ok"] and p["edge_margin"]["ok"]
     assert 0.9 <= p["gap_median"]["value"] <= 1.1
     assert p["gap_p10"]["value"] >= 0.8
+
+
+def test_a_reflex_corner_poking_into_a_long_element_pushes_it_off_the_corner():
+    """The container's V-shaped cleft pokes 1 unit into a long bar's top edge, 40 units from
+    its centroid, and a pinned block a gap below keeps the bar from stepping down. The way
+    out is down, off the corner (by its depth in the art and the margin): the deficit
+    measured from the art's points outside (0.3 deep) and a push towards the centroid
+    (along the bar) shrank the bar about its centroid for nothing first (the heart's snake
+    under its cleft: 0.67 of its size); shrinking about its bottom below the corner it
+    keeps 0.78 of its size (0.75 before)."""
+    from repulsionpak.verify import _edge_poke
+
+    region = shapely.Polygon([(0, 0), (100, 0), (110, 30), (120, 0), (300, 0), (300, 200), (0, 200)])
+    bar = PlacedArt("bar.svg", "primary", (ArtPath((np.array([[40, 29], [260, 29], [260, 44], [40, 44.0]]),),
+                                                   (True,), Style()),))
+    block = PlacedArt("block.svg", "primary", (ArtPath((np.array([[30, 49], [270, 49], [270, 100], [30, 100.0]]),),
+                                                       (True,), Style()),), pinned=True)
+    p, u, depth = _edge_poke(region.boundary, geoms([bar])[0], 2.5)
+    assert depth == pytest.approx(1.0) and p == pytest.approx([110, 29]) and u == pytest.approx([0, 1])
+    out, v = verify_and_repair([bar, block], region, gap=5, margin=2.5, min_gap=4.5)
+    assert v.ok and not v.dropped
+    assert v.shrunk[0] > 0.77
+    assert region.boundary.distance(geoms(out)[0]) >= 2.5 - 1e-6
