@@ -143,6 +143,16 @@ def _edge_distance(region_boundary, region, g) -> float:
     return -float(np.max(shapely.distance(region_boundary, shapely.points(out))))
 
 
+def _moved(g, scale: float, angle: float, centre, dx: float, dy: float):
+    """Outline ``g`` scaled by ``scale`` and turned by ``angle`` (radians) about ``centre``,
+    then moved by (dx, dy): the similarity the repair, the growth and the gathering apply
+    (:func:`scaled_art` applies it to the art)."""
+    g = shapely.affinity.scale(g, scale, scale, origin=tuple(centre))
+    if angle:
+        g = shapely.affinity.rotate(g, angle, origin=tuple(centre), use_radians=True)
+    return shapely.affinity.translate(g, dx, dy)
+
+
 def _edge_poke(boundary, g, margin: float):
     """Where the container's edge reaches deepest into the art ``g`` (a reflex corner of
     the container inside it, or the middle of an edge it crosses): ``(p, u, depth)``, p
@@ -505,9 +515,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
         for i, f in grow.items():
             scale[i] *= f
             radius[i] *= f
-            geoms[i] = shapely.affinity.translate(
-                shapely.affinity.scale(base[i], scale[i], scale[i], origin=tuple(centre[i])),
-                shift[i][0], shift[i][1])
+            geoms[i] = _moved(base[i], scale[i], 0.0, centre[i], shift[i][0], shift[i][1])
 
 
 def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, target, threshold,
@@ -541,23 +549,22 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, t
                     for k in (0.0, 0.125, -0.125, 0.25, -0.25, 0.5, -0.5, 1.0, -1.0)),
                    key=lambda t: (-round(t[0], 6), abs(t[2])))
     stuck: set = set()
+    memo: dict = {}  # the distances of pairs neither of which moved
 
     def moved_copy(i, step, u, turn):
-        g = shapely.affinity.scale(base[i], scale[i], scale[i], origin=tuple(centre[i]))
-        if angle[i] + turn:
-            g = shapely.affinity.rotate(g, angle[i] + turn, origin=tuple(centre[i]), use_radians=True)
-        return shapely.affinity.translate(g, shift[i][0] + step * u[0], shift[i][1] + step * u[1])
+        return _moved(base[i], scale[i], angle[i] + turn, centre[i], shift[i][0] + step * u[0],
+                      shift[i][1] + step * u[1])
 
     for _ in range(rounds):
         bounds = shapely.bounds(np.array([geoms[i] for i in everyone], dtype=object))
         moved = False
         order = []
         for i in idx:
-            d, j = _nearest(geoms, everyone, bounds, i, reach)
+            d, j = _nearest(geoms, everyone, bounds, i, reach, memo)
             if d > threshold:
                 order.append((-d, i))
         for _, i in sorted(order):
-            d, j = _nearest(geoms, everyone, bounds, i, reach)
+            d, j = _nearest(geoms, everyone, bounds, i, reach, memo)
             if not d > threshold or j < 0:
                 continue
             line = shapely.shortest_line(geoms[i], geoms[j])
@@ -595,16 +602,20 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, t
             break
 
 
-def _nearest(geoms, everyone, bounds, i, reach):
+def _nearest(geoms, everyone, bounds, i, reach, memo):
     """(distance, index) of the element of ``everyone`` nearest to ``i`` among those whose
-    bounding boxes come within ``reach`` of its box; (inf, -1) when there is none."""
+    bounding boxes come within ``reach`` of its box; (inf, -1) when there is none. Pairs
+    neither of which moved since they were measured come from ``memo``
+    (:func:`_pair_distances`)."""
     b = bounds[np.searchsorted(everyone, i)]
     near = ((bounds[:, 0] <= b[2] + reach) & (bounds[:, 2] >= b[0] - reach)
             & (bounds[:, 1] <= b[3] + reach) & (bounds[:, 3] >= b[1] - reach) & (everyone != i))
     js = everyone[near]
     if not len(js):
         return np.inf, -1
-    d = shapely.distance(geoms[i], np.array([geoms[j] for j in js], dtype=object))
+    gi = np.empty(len(js), dtype=object)
+    gi[:] = [geoms[i]] * len(js)
+    d = _pair_distances(gi, np.array([geoms[j] for j in js], dtype=object), memo)
     k = int(np.argmin(d))
     return float(d[k]), int(js[k])
 
@@ -654,10 +665,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     angle = np.zeros(n)  # radians about centre[i]: only the gathering turns an element
 
     def transform(g, i):
-        g = shapely.affinity.scale(g, scale[i], scale[i], origin=tuple(centre[i]))
-        if angle[i]:
-            g = shapely.affinity.rotate(g, angle[i], origin=tuple(centre[i]), use_radians=True)
-        return shapely.affinity.translate(g, shift[i][0], shift[i][1])
+        return _moved(g, scale[i], angle[i], centre[i], shift[i][0], shift[i][1])
 
     def place(i):
         geoms[i] = transform(base[i], i)

@@ -19,8 +19,8 @@ small ones the warm-up has not claimed yet.
 Which specialisations? The simulation's are recorded by running a few iterations of a
 tiny packing with every simulation kernel replaced by its plain Python function (the
 argument types are those of the real run: same code, same arrays); the renderer's by
-calling its public wrappers on a tiny input (and the pocket fill's fitting kernel, between
-the two simulations, so). The recording (imports and the tiny run:
+calling its public wrappers on a tiny input; the pocket fill's fitting kernel
+(:func:`_warm_misfit`) is compiled between the two. The recording (imports and the tiny run:
 ~2 s before anything compiles) is done once, at development time, into
 ``warmup_signatures.json`` beside this module (``python -m repulsionpak.warmup
 --write-signatures``); the warm-up reads that file and starts compiling at once. It falls
