@@ -213,6 +213,22 @@ def test_an_ellipse_with_one_radius_is_a_circle(tmp_path, attrs):
     assert _region(path).area == pytest.approx(math.pi * 400, rel=5e-3)  # flattened
 
 
+@pytest.mark.parametrize("root, body, centre, radius", [
+    ('viewBox="0 0 200 100"', '<circle cx="50%" cy="50%" r="40%"/>', (100, 50), 0.4 * math.sqrt(25000)),
+    ('width="200" height="100"', '<circle cx="100" cy="50" r="10%"/>', (100, 50), 0.1 * math.sqrt(25000)),
+    # a nested viewport: its own viewBox is what the percentage refers to
+    ('viewBox="0 0 200 100"', '<svg width="200" height="100" viewBox="0 0 20 20"><circle cx="10" cy="10" '
+     'r="25%"/></svg>', (100, 50), 0.25 * 20 * 5),
+])
+def test_a_circle_radius_in_percent_is_a_share_of_the_normalized_diagonal(tmp_path, root, body, centre, radius):
+    """SVG 2: ``r="40%"`` is 40 % of sqrt((w² + h²)/2) of the viewport, a circle; it was
+    read as 40 % of the width along x and of the height along y (an ellipse)."""
+    cont = _quiet(load_container, _write(tmp_path, "c.svg", _svg(body, root)))
+    b = cont.region.bounds
+    assert ((b[0] + b[2]) / 2, (b[1] + b[3]) / 2) == pytest.approx(centre, abs=1e-6)
+    assert (b[2] - b[0], b[3] - b[1]) == pytest.approx((2 * radius, 2 * radius), rel=1e-6)
+
+
 @pytest.mark.parametrize("radii", ['rx="10"', 'ry="10"', 'rx="auto" ry="10"', 'rx="10" ry="auto"'])
 def test_a_rect_corner_radius_left_out_or_auto_takes_the_other(tmp_path, radii):
     """Browsers round the corners of ``<rect rx="auto" ry="10">`` by 10 both ways; the

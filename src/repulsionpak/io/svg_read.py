@@ -798,6 +798,36 @@ def _shape_sizes(root: ET.Element) -> None:
                     del el.attrib[k]
 
 
+def _circle_percentages(el: ET.Element, size: tuple[float, float]) -> None:
+    """A circle's ``r`` given in percent is a share of its viewport's normalized diagonal,
+    sqrt((w² + h²)/2) (SVG 2, "Units"); svgelements took it as a share of the width along x
+    and of the height along y: ``r="40%"`` in a 200 × 100 viewport became an 80 × 40
+    ellipse. Resolved here to user units, with the viewport of the nearest ``<svg>``
+    (its viewBox, else its width and height)."""
+    for child in el:
+        if not isinstance(child.tag, str):
+            continue
+        name = _local(child.tag)
+        if name == "svg":
+            vb = (child.get("viewBox") or "").replace(",", " ").split()
+            try:
+                inner = (float(vb[2]), float(vb[3])) if len(vb) == 4 else (
+                    _length(child.get("width", "100%"), size[0]), _length(child.get("height", "100%"), size[1]))
+            except ValueError:
+                inner = size
+            _circle_percentages(child, inner if all(math.isfinite(v) and v > 0 for v in inner) else size)
+            continue
+        r = child.get("r")
+        if name == "circle" and r is not None and r.strip().endswith("%"):
+            try:
+                share = float(r.strip()[:-1]) / 100.0
+            except ValueError:
+                share = float("nan")
+            if math.isfinite(share):
+                child.set("r", repr(share * math.sqrt((size[0] ** 2 + size[1] ** 2) / 2.0)))
+        _circle_percentages(child, size)
+
+
 def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
     """Make the tree safe for svgelements: move non-rendered containers into ``<defs>``
     (svgelements would otherwise draw their children), drop ``foreignObject``."""
@@ -1317,6 +1347,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     _check_attributes(path, root_xml)
     notes: set[str] = set()
     _apply_stylesheets(root_xml, notes)
+    _circle_percentages(root_xml, _reference_size(root_xml))  # (before nested viewports become groups)
     _sanitize(path, root_xml, notes)
     _shape_sizes(root_xml)
     fonts_missing = text_to_paths(root_xml, notes)
