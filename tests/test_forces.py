@@ -738,12 +738,72 @@ def test_contact_update_tracks_the_full_query(template):
     rng = np.random.default_rng(0)
     x2 = x + rng.normal(scale=0.05, size=x.shape)
     contact_update(x2, sim.active_skin, model.vert_elem, sim.seg_a, sim.seg_b, sim.seg_next, sim.seg_prev,
-                   model.tris, model.vtri_ptr, model.vtri, 4.0, np.inf, inside, cnt, d2, q, seg)
+                   model.tris, model.vtri_ptr, model.vtri, sim.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
     inside_f, cnt_f, elem_f, d2_f, q_f, _ = full(x2)
     skin = sim.active_skin
     np.testing.assert_array_equal(inside[skin], inside_f[skin])
     has = cnt[skin] > 0
     np.testing.assert_allclose(d2[skin[has], 0], d2_f[skin[has], 0], rtol=1e-9, atol=1e-9)
+
+
+def test_a_vertex_deep_in_a_mesh_is_pulled_out_the_side_it_came_in_by(template):
+    """A square pushed step by step two thirds of the way across another: the vertices of
+    its leading edge, past the other's middle, are nearest to its far side, and pulling
+    them there would complete the crossing (a thin arm through a leg). While a vertex
+    stays inside, the contact state keeps the skin it entered by, through the cheap
+    updates (which also keep it counted as inside when it lies deeper than the triangles
+    at its entry) and the full queries; a fresh query (nothing inside before) takes the
+    nearest side."""
+    model, state = two_square_model(template, (30, 50), (62, 50))
+    sim = Simulator(model, state, SimParams())
+    x = state.x
+    a0, a1 = model.elem_vstart[0], model.elem_vstart[1]
+    b0, b1 = model.elem_vstart[1], model.elem_vstart[2]
+    left, right = x[b0:b1, 0].min(), x[b0:b1, 0].max()
+    width = right - left
+    skin_a = np.arange(a0, a0 + model.elem_nskin[0])
+    x[a0:a1, 0] += left + 0.02 * width - x[skin_a, 0].max()  # A's leading edge just inside B
+    sim.update_contacts(True)
+    for k in range(40):  # then 0.65 of B's width in small moves, a full query every 8th
+        x[a0:a1, 0] += 0.65 * width / 40
+        sim.update_contacts(k % 8 == 7)
+    lead = skin_a[x[skin_a, 0] > x[skin_a, 0].max() - 1e-6]
+    deep = lead[(x[lead, 0] > left + 0.6 * width) & (np.abs(x[lead, 1] - 50) < 0.15 * width)]
+    assert len(deep) > 0
+    for i in deep:
+        assert sim.inside[i]
+        j = int(np.argmin(sim.nb_d2[i, :sim.nb_count[i]]))
+        assert sim.nb_q[i, j, 0] == pytest.approx(left, abs=0.05 * width)  # the way back
+    fresh = Simulator(model, state, SimParams())
+    fresh.update_contacts(True)
+    for i in deep:
+        assert fresh.inside[i]
+        j = int(np.argmin(fresh.nb_d2[i, :fresh.nb_count[i]]))
+        assert fresh.nb_q[i, j, 0] == pytest.approx(right, abs=0.05 * width)  # the nearest side
+
+
+def test_a_resumed_simulation_keeps_the_entry_sides(template):
+    """The entry sides are state: a simulator restored from a snapshot taken while
+    vertices are inside another mesh continues exactly as the uninterrupted one."""
+    def sim_of():
+        model, state = two_square_model(template, (44, 50), (52, 50))  # overlapping
+        sim = Simulator(model, state, SimParams())
+        sim.refresh_growth()
+        return sim
+
+    sim = sim_of()
+    every = sim.params.requery_every
+    for _ in range(every):
+        sim.step()
+    snap = sim.snapshot_state()
+    assert len(snap["inside_idx"]) > 0
+    for _ in range(2 * every):
+        sim.step()
+    again = sim_of()
+    again.restore(snap)
+    for _ in range(2 * every):
+        again.step()
+    np.testing.assert_array_equal(again.state.x, sim.state.x)
 
 
 # --------------------------------------------------------------------------------------

@@ -21,6 +21,8 @@ from .io.svg_write import atomic_write_bytes
 
 FORMAT = "repulsionpak-checkpoint-1"
 _ARRAYS = ("x", "v", "n_grow", "area_history")
+# the contact state of the vertices inside a mesh (absent from older checkpoints)
+_OPTIONAL = ("inside_idx", "inside_nb_count", "inside_nb_elem", "inside_nb_seg")
 
 
 def fingerprint(files: list[Path], params: dict) -> str:
@@ -39,9 +41,10 @@ def save_checkpoint(path: str | Path, states: dict, fp: str) -> None:
     for phase, st in states.items():
         if st is None:
             continue
-        for k in _ARRAYS:
-            arrays[f"{phase}.{k}"] = np.asarray(st[k])
-        meta["phases"][phase] = {k: v for k, v in st.items() if k not in _ARRAYS}
+        for k in _ARRAYS + _OPTIONAL:
+            if k in st:
+                arrays[f"{phase}.{k}"] = np.asarray(st[k])
+        meta["phases"][phase] = {k: v for k, v in st.items() if k not in _ARRAYS + _OPTIONAL}
     buf = io.BytesIO()
     np.savez_compressed(buf, meta=np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8), **arrays)
     atomic_write_bytes(path, buf.getvalue())
@@ -68,5 +71,8 @@ def load_checkpoint(path: str | Path, fp: str | None = None) -> dict:
         st = dict(m)
         for k in _ARRAYS:
             st[k] = data[f"{phase}.{k}"]
+        for k in _OPTIONAL:
+            if f"{phase}.{k}" in data:
+                st[k] = data[f"{phase}.{k}"]
         out[phase] = st
     return out

@@ -109,6 +109,10 @@ def contact_query(x, active, vert_elem,
         e = vert_elem[i]
         px = x[i, 0]
         py = x[i, 1]
+        # a vertex already inside a mesh keeps the way out it came in by (see below)
+        n_old = nb_count[i] if inside[i] else 0
+        old_elem = nb_elem[i, :n_old].copy()
+        old_seg = nb_seg[i, :n_old].copy()
         cx, cy = cell_of(px, py, tox, toy, tinv, tgx, tgy)
         hit = False
         for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
@@ -166,9 +170,20 @@ def contact_query(x, active, vert_elem,
                         ch = seg_order[m]
                         nb_d2[i, slot] = d2
                         nb_seg[i, slot] = chunk_first[ch] + min(int(t * chunk_count[ch]), chunk_count[ch] - 1)
-        # exact closest points: walk along each neighbour's skin from the chunk's segment
+        # exact closest points: walk along each neighbour's skin from the chunk's segment —
+        # or, for a vertex that was inside and still is, from the segment it followed so
+        # far. Its point is then the nearest on the side it entered by (contact_update
+        # follows it locally between queries), not the globally nearest: past the midline
+        # of a thin part that is the far side, and pulling there would complete the
+        # crossing (a thin arm across a leg, with no vertex inside once through).
         for j in range(cnt):
-            best, qx, qy, s = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, nb_seg[i, j], px, py, 64)
+            start = nb_seg[i, j]
+            if hit:
+                for o in range(n_old):
+                    if old_elem[o] == nb_elem[i, j]:
+                        start = old_seg[o]
+                        break
+            best, qx, qy, s = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, start, px, py, 64)
             nb_seg[i, j] = s
             nb_d2[i, j] = best
             nb_q[i, j, 0] = qx
@@ -177,8 +192,8 @@ def contact_query(x, active, vert_elem,
 
 
 @parallel_kernel
-def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris, vtri_ptr, vtri,
-                   near2, far2, inside, nb_count, nb_d2, nb_q, nb_seg):
+def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris, vtri_ptr, vtri, tri_ptr,
+                   near2, far2, inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
     """Cheap refresh of :func:`contact_query`'s results between full queries.
 
     Every stored closest point follows its neighbour's skin by walking from the stored
@@ -189,7 +204,11 @@ def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris,
     only against neighbours whose skin is closer than sqrt(near2) (or any neighbour, for
     a vertex that was inside), and only against the triangles incident to the ends of
     the closest skin segment: between full queries a vertex moves far less than a
-    triangle, so it can only enter (or stay in) a mesh there.
+    triangle, so it can only enter a mesh there. A vertex that was inside and is not in
+    those triangles may lie deeper (a thin part's triangles span its width): it is tested
+    against every triangle of its nearest neighbour (``tri_ptr``: each element's range),
+    so that it does not count as out, and its way out, :func:`contact_query`'s entry
+    side, is not lost.
     """
     for k in prange(active.shape[0]):
         i = active[k]
@@ -218,6 +237,19 @@ def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris,
                         hit = True
                         break
                 if hit:
+                    break
+        if was_inside and not hit and nb_count[i] > 0:
+            j = 0
+            for jj in range(1, nb_count[i]):
+                if nb_d2[i, jj] < nb_d2[i, j]:
+                    j = jj
+            f = nb_elem[i, j]
+            for t in range(tri_ptr[f], tri_ptr[f + 1]):
+                a = tris[t, 0]
+                b = tris[t, 1]
+                c = tris[t, 2]
+                if _inside_triangle(px, py, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1]):
+                    hit = True
                     break
         inside[i] = hit
 

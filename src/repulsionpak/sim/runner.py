@@ -239,13 +239,11 @@ class Simulator:
         self._dt = float(value)
         self._vmax_dt = self.vmax * (self._dt / self.params.dt)
 
-    # -- one iteration -------------------------------------------------------------
-    def step(self) -> float:
-        """Advance one iteration; return the area fraction of the meshes."""
-        m, st, p = self.model, self.state, self.params
-        x, F = st.x, self.F
-        g = self.grid
-        full = st.iteration % p.requery_every == 0
+    def update_contacts(self, full: bool) -> None:
+        """The contact state of every active skin vertex (inside another mesh, the nearest
+        points of the neighbouring skins): a full query (cell lists rebuilt) or the cheap
+        walk that follows the last one (:func:`contact_update`)."""
+        m, x, g = self.model, self.state.x, self.grid
         if full:
             g.fit_triangles(x, m.tris)
             g.rebuild_triangles(x, m.tris, m.tri_elem)
@@ -260,8 +258,16 @@ class Simulator:
                           self.inside, self.nb_count, self.nb_elem, self.nb_d2, self.nb_q, self.nb_seg)
         else:
             contact_update(x, self.active_skin, m.vert_elem, self.seg_a, self.seg_b,
-                           self.seg_next, self.seg_prev, m.tris, m.vtri_ptr, m.vtri, self.near2, self.far2,
-                           self.inside, self.nb_count, self.nb_d2, self.nb_q, self.nb_seg)
+                           self.seg_next, self.seg_prev, m.tris, m.vtri_ptr, m.vtri, self.tri_ptr,
+                           self.near2, self.far2, self.inside, self.nb_count, self.nb_elem, self.nb_d2,
+                           self.nb_q, self.nb_seg)
+
+    # -- one iteration -------------------------------------------------------------
+    def step(self) -> float:
+        """Advance one iteration; return the area fraction of the meshes."""
+        m, st, p = self.model, self.state, self.params
+        x, F = st.x, self.F
+        self.update_contacts(st.iteration % p.requery_every == 0)
         F[:] = 0.0
         # F = F_r + F_e + F_b + F_o  (Eq. 1)
         repulsion_force(x, self.active_skin, self.inside, self.nb_count, self.nb_q,
@@ -498,8 +504,12 @@ class Simulator:
     def snapshot_state(self) -> dict:
         """Everything that evolves during :meth:`run`, as plain arrays and numbers."""
         st = self.state
+        # the vertices inside a mesh keep the skin segment they entered by (contact_query)
+        ins = np.flatnonzero(self.inside)
         return {"x": st.x.copy(), "v": st.v.copy(), "n_grow": st.n_grow.copy(),
                 "area_history": np.asarray(st.area_history, dtype=float),
+                "inside_idx": ins, "inside_nb_count": self.nb_count[ins],
+                "inside_nb_elem": self.nb_elem[ins], "inside_nb_seg": self.nb_seg[ins],
                 "iteration": st.iteration, "dt": self.dt, "settle_left": self.settle_left,
                 "stopped_by": self.stopped_by, "phase": self.phase}
 
@@ -516,6 +526,13 @@ class Simulator:
         self.dt = float(saved["dt"])
         self.settle_left = None if saved["settle_left"] is None else int(saved["settle_left"])
         self.stopped_by = str(saved["stopped_by"])
+        self.inside[:] = False
+        if "inside_idx" in saved:  # (older checkpoints lack it: their resumed run differs a little)
+            ins = np.asarray(saved["inside_idx"], np.int64)
+            self.inside[ins] = True
+            self.nb_count[ins] = saved["inside_nb_count"]
+            self.nb_elem[ins] = saved["inside_nb_elem"]
+            self.nb_seg[ins] = saved["inside_nb_seg"]
         self.refresh_growth()
         self.allow_growth = self.settle_left is None
 
