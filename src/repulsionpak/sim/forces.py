@@ -30,6 +30,15 @@ def _inside_triangle(px, py, ax, ay, bx, by, cx, cy):
 
 
 @njit(cache=True, inline="always")
+def _in_mesh_triangle(x, tris, t, px, py):
+    """Whether (px, py) lies in triangle ``t`` of the meshes (vertex positions ``x``)."""
+    a = tris[t, 0]
+    b = tris[t, 1]
+    c = tris[t, 2]
+    return _inside_triangle(px, py, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1])
+
+
+@njit(cache=True, inline="always")
 def _closest_on_coords(ax, ay, bx, by, px, py):
     """Closest point of segment (a, b) to p: (d², qx, qy, t) with t in [0, 1]."""
     abx = bx - ax
@@ -229,11 +238,7 @@ def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris,
             for end in range(2):
                 v = seg_a[s] if end == 0 else seg_b[s]
                 for m in range(vtri_ptr[v], vtri_ptr[v + 1]):
-                    t = vtri[m]
-                    a = tris[t, 0]
-                    b = tris[t, 1]
-                    c = tris[t, 2]
-                    if _inside_triangle(px, py, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1]):
+                    if _in_mesh_triangle(x, tris, vtri[m], px, py):
                         hit = True
                         break
                 if hit:
@@ -245,10 +250,7 @@ def contact_update(x, active, vert_elem, seg_a, seg_b, seg_next, seg_prev, tris,
                     j = jj
             f = nb_elem[i, j]
             for t in range(tri_ptr[f], tri_ptr[f + 1]):
-                a = tris[t, 0]
-                b = tris[t, 1]
-                c = tris[t, 2]
-                if _inside_triangle(px, py, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1]):
+                if _in_mesh_triangle(x, tris, t, px, py):
                     hit = True
                     break
         inside[i] = hit
