@@ -70,12 +70,14 @@ def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
     ``centre`` (strokes scaled with it), then moved by ``shift``."""
     c = np.asarray(centre, dtype=float)
     t = c + np.asarray(shift, dtype=float)
+    r = scale * np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
     if angle:
-        r = scale * np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
-        paths = tuple(p.transformed(lambda pts: t + (np.asarray(pts) - c) @ r.T) for p in placed.paths)
-    else:
-        r = np.array([[scale, 0.0], [0.0, scale]])
-        paths = tuple(p.transformed(lambda pts: t + (np.asarray(pts) - c) * scale) for p in placed.paths)
+        def f(pts):
+            return t + (np.asarray(pts) - c) @ r.T
+    else:  # (unturned copies keep exactly the coordinates a plain scaling gives)
+        def f(pts):
+            return t + (np.asarray(pts) - c) * scale
+    paths = tuple(p.transformed(f) for p in placed.paths)
     frame = placed.frame
     if frame is not None:  # the same similarity, as a matrix
         m = np.eye(3)
