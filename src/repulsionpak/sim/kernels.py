@@ -23,6 +23,18 @@ ran the heart scene twice as *slowly* as one; :func:`set_threads` therefore sets
 ``GOMP_SPINCOUNT`` (:data:`GOMP_SPINCOUNT`) before numba starts its threading layer, unless
 the user chose ``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` themselves. With it, two threads
 run an iteration 1.4× faster at 1,500 vertices and 1.7× at 3,000 (docs/benchmarks.md).
+
+**Which threading layer.** numba prefers TBB where it finds ``libtbb`` (it comes with
+OpenCV, CGAL and conda environments). Importing this module makes the order OpenMP, then
+numba's own workqueue, then TBB (:func:`choose_threading_layer`), so TBB is never taken
+unless the user names it (``NUMBA_THREADING_LAYER`` or ``NUMBA_THREADING_LAYER_PRIORITY``):
+TBB's ``finalize`` deadlocks at interpreter exit when a parallel kernel ran on a thread
+other than the main one while TBB sees a single core (numba issue #10556), and its idle
+workers ran the heart scene at 10–12 ms an iteration against 0.4 ms on one thread.
+Neither OpenMP nor the workqueue can hang at exit. Where the layer does not suit the
+simulation (the workqueue), an automatic run stays on one thread (:func:`threading_ok`);
+while it runs, :class:`repulsionpak.sim.threadgov.ThreadGovernor` drops to one thread when
+other processes make the second one a burden.
 """
 
 from __future__ import annotations
@@ -37,6 +49,36 @@ from numba import njit
 
 _KERNELS: list["Kernel"] = []
 _parallel = False
+
+#: the threading layers in the order this package lets numba try them (TBB last: never
+#: reached, as the workqueue always loads)
+LAYER_PRIORITY = ("omp", "workqueue", "tbb")
+
+
+def choose_threading_layer() -> bool:
+    """Let numba start OpenMP or its workqueue rather than TBB, unless the user chose a
+    layer (``NUMBA_THREADING_LAYER`` or ``NUMBA_THREADING_LAYER_PRIORITY`` set).
+
+    Returns
+    -------
+    bool
+        True when this call set the order (then also in ``os.environ``, so that the
+        warm-up process and batch workers, which this process starts, choose alike).
+
+    Notes
+    -----
+    Must run before numba starts its threading layer (the first parallel kernel call or
+    :func:`numba.get_num_threads`); it runs when this module is imported. See the module
+    docstring for why not TBB.
+    """
+    if "NUMBA_THREADING_LAYER" in os.environ or "NUMBA_THREADING_LAYER_PRIORITY" in os.environ:
+        return False
+    os.environ["NUMBA_THREADING_LAYER_PRIORITY"] = " ".join(LAYER_PRIORITY)
+    numba.config.THREADING_LAYER_PRIORITY = list(LAYER_PRIORITY)
+    return True
+
+
+choose_threading_layer()
 
 
 class Kernel:
@@ -198,5 +240,5 @@ def cache_is_cold() -> bool:
         return False
 
 
-__all__ = ["Kernel", "parallel_kernel", "set_threads", "uses_parallel_builds", "cache_is_cold",
+__all__ = ["Kernel", "parallel_kernel", "set_threads", "choose_threading_layer", "LAYER_PRIORITY", "uses_parallel_builds", "cache_is_cold",
            "parallel_cached", "parallel_ready", "threading_ok", "GOMP_SPINCOUNT"]
