@@ -413,7 +413,8 @@ def test_styles_inherited_and_invisible_dropped():
     ('stroke-dasharray="1,2,3"', (2, 4, 6, 2, 4, 6), 0, 4),  # an odd list repeats
     ('style="stroke-dasharray:5px 1px;stroke-miterlimit:0.5"', (10, 2), 0, 4),  # limit < 1: invalid
     ('stroke-dasharray="none" stroke-dashoffset="3"', (), 0, 4),
-    ('stroke-dasharray="10%"', (), 0, 4),  # percentages: drawn solid here
+    ('stroke-dasharray="10%"', (20, 20), 0, 4),  # a share of the viewport's diagonal (100)
+    ('stroke-dasharray="5" stroke-dashoffset="15px"', (10, 10), 30, 4),  # a unit on the offset
     ('stroke-dasharray="3 -1"', (), 0, 4),  # invalid: solid, as SVG draws it
     ('stroke-dasharray="0 0"', (), 0, 4),
 ])

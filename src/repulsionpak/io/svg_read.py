@@ -49,6 +49,7 @@ from ..geometry.outline import (
 )
 from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
+from .svg_lengths import resolve_lengths, resolve_transform_origin
 from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
 from .svg_pathdata import NUMBER, path_data_error
 from .svg_text import text_to_paths
@@ -1039,20 +1040,33 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
         el.tag = f"{{{SVG_NS}}}g" if el.tag.startswith("{") else "g"
 
 
+class _Servers(dict):
+    """id -> the colour a paint server's outline is drawn with (``dict``), and in
+    ``approx`` id -> what the packing approximates of that server's paint."""
+
+    approx: dict
+
+
 def _gradient_colours(root: ET.Element) -> dict[str, str]:
-    """id -> colour of the first stop of each gradient (following href templates)."""
+    """id -> colour of the first stop of each gradient (following href templates).
+
+    Patterns and gradients with translucent stops are listed in the result's ``approx``:
+    they are written back as they are, but the packing sees the painted shape as solid."""
     grads = {
         el.get("id"): el
         for el in root.iter()
         if _local(el.tag) in ("linearGradient", "radialGradient") and el.get("id")
     }
-    out: dict[str, str] = {}
+    out = _Servers()
+    out.approx = {}
     for gid, start in grads.items():
         el, seen = start, set()
         while el is not None and id(el) not in seen:
             seen.add(id(el))
             stops = [s for s in el if _local(s.tag) == "stop"]
             if stops:
+                if any(_translucent_stop(st) for st in stops):
+                    out.approx[gid] = "gradient with translucent stops (kept; packed as a solid shape)"
                 s = stops[0]
                 colour = s.get("stop-color")
                 m = re.search(r"stop-color\s*:\s*([^;]+)", s.get("style") or "")
@@ -1071,7 +1085,18 @@ def _gradient_colours(root: ET.Element) -> dict[str, str]:
                     colour = f.strip()
                     break
             out[el.get("id")] = colour
+            out.approx[el.get("id")] = "pattern paint (kept; packed as a solid shape)"
     return out
+
+
+def _translucent_stop(stop: ET.Element) -> bool:
+    """Whether a gradient ``<stop>`` paints with an alpha below 1."""
+    decls = {k: v for k, v, _ in _inline_declarations(stop.get("style"))}
+    op = decls.get("stop-opacity", stop.get("stop-opacity"))
+    colour = str(decls.get("stop-color", stop.get("stop-color")) or "").strip().lower()
+    if op is not None and _float_attr(op.strip().rstrip("%"), 1.0) * (0.01 if op.strip().endswith("%") else 1) < 1:
+        return True
+    return colour == "transparent" or colour.startswith(("rgba", "hsla")) or "/" in colour
 
 
 # --------------------------------------------------------------------------- svgelements layer
@@ -1157,6 +1182,9 @@ def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None,
         fallback = m.group(2).strip() if m else ""
         if m and m.group(1) in gradients:  # kept in the output; the outline uses a colour
             s = gradients[m.group(1)]
+            approx = getattr(gradients, "approx", {}).get(m.group(1))
+            if approx:
+                notes.add(approx)
         elif fallback:
             s = fallback
         else:
@@ -1347,7 +1375,10 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     _check_attributes(path, root_xml)
     notes: set[str] = set()
     _apply_stylesheets(root_xml, notes)
-    _circle_percentages(root_xml, _reference_size(root_xml))  # (before nested viewports become groups)
+    reference = _reference_size(root_xml)
+    _circle_percentages(root_xml, reference)  # (before nested viewports become groups)
+    resolve_lengths(root_xml, reference)
+    resolve_transform_origin(root_xml, reference)
     _sanitize(path, root_xml, notes)
     _shape_sizes(root_xml)
     fonts_missing = text_to_paths(root_xml, notes)

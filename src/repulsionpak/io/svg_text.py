@@ -62,6 +62,10 @@ def _shorthand(value: str) -> dict[str, str]:
                     out["font-style"] = t
                 elif t in ("bold", "bolder", "lighter") or re.fullmatch(r"\d{3}", t):
                     out["font-weight"] = t
+                elif t == "small-caps":
+                    out["font-variant"] = t
+                elif t.endswith(("condensed", "expanded")):
+                    out["font-stretch"] = t
             return out
     return {}
 
@@ -73,7 +77,8 @@ class _Props:
         own: dict[str, str] = {}
         if el is not None:
             for name in ("font-family", "font-size", "font-weight", "font-style", "text-anchor",
-                         "letter-spacing", "word-spacing", "writing-mode"):
+                         "letter-spacing", "word-spacing", "writing-mode", "font-variation-settings",
+                         "font-variant", "font-stretch"):
                 if el.get(name) is not None:
                     own[name] = el.get(name).strip()
             decls = {k: v for k, v, _ in inline_declarations(el.get("style"))}
@@ -84,7 +89,7 @@ class _Props:
         base = parent
         self.size = base.size if base else _DEFAULT_SIZE
         self.family = base.family if base else ["serif"]  # browsers' default font
-        self.weight = base.weight if base else "normal"
+        self.weight = base.weight if base else 400
         self.style = base.style if base else "normal"
         self.anchor = base.anchor if base else "start"
         self.unsupported: set[str] = set()
@@ -103,6 +108,9 @@ class _Props:
             elif name == "text-anchor":
                 self.anchor = v.lower() if v.lower() in ("start", "middle", "end") else self.anchor
             elif name in ("letter-spacing", "word-spacing") and v.lower() not in ("normal", "0", "0px"):
+                self.unsupported.add(name)
+            elif name in ("font-variation-settings", "font-variant", "font-stretch") and v.lower() not in (
+                    "normal", "none", "initial"):
                 self.unsupported.add(name)
             elif name == "writing-mode" and v.lower() not in ("horizontal-tb", "lr", "lr-tb", "rl", "rl-tb"):
                 self.unsupported.add("vertical writing")
@@ -129,17 +137,23 @@ def _font_size(v: str, parent: float) -> float:
     return num * _UNITS.get(unit, 1.0) if num > 0 else parent
 
 
-def _weight(v: str, parent: str) -> str:
+def _weight(v: str, parent: int) -> int:
+    """CSS ``font-weight`` as a number 1-1000 (``bolder``/``lighter`` relative to the
+    parent's, as CSS Fonts 4 has them); matplotlib picks the installed face nearest it."""
     v = v.strip().lower()
-    if v in ("normal", "bold"):
-        return v
+    if v == "normal":
+        return 400
+    if v == "bold":
+        return 700
     if v == "bolder":
-        return "bold"
+        return 400 if parent < 350 else 700 if parent < 550 else 900
     if v == "lighter":
-        return "normal"
-    if re.fullmatch(r"\d{3}", v):
-        return "bold" if int(v) >= 600 else "normal"
-    return parent
+        return 100 if parent < 550 else 400 if parent < 750 else 700
+    try:
+        w = float(v)
+    except ValueError:
+        return parent
+    return int(round(w)) if 1 <= w <= 1000 else parent
 
 
 def _first_length(el: ET.Element, name: str) -> float | None:
@@ -206,21 +220,26 @@ class _Fonts:
         scale = props.size / self._ttp.FONT_SCALE
         with warnings.catch_warnings(record=True) as caught:  # "Glyph N (...) missing from font(s) ..."
             warnings.simplefilter("always")
-            tp = TextPath((0, 0), s, size=props.size, prop=fp)
             font = self._ttp._get_font(fp)
             glyphs = self._ttp.get_glyphs_with_font(font, s, return_new_glyphs_only=False)[0]
             glyph = font.load_char(ord(s[-1]), flags=LoadFlags.NO_HINTING) if glyphs else None
+            # a run of spaces has no outline (matplotlib's TextPath cannot be built for it):
+            # only its advance moves the pen
+            tp = TextPath((0, 0), s, size=props.size, prop=fp) if s.strip() else None
         for w in caught:
             m = re.match(r"Glyph (\d+) ", str(w.message))
             if m:
                 self.missing_glyphs.add(chr(int(m.group(1))))
             else:
                 warnings.warn(w.message, w.category, stacklevel=2)
-        verts = np.array(tp.vertices, dtype=float)
-        verts[:, 1] = -verts[:, 1]
+        if tp is None:
+            verts, codes = np.zeros((0, 2)), np.zeros(0, dtype=np.uint8)
+        else:
+            verts, codes = np.array(tp.vertices, dtype=float), np.asarray(tp.codes)
+            verts[:, 1] = -verts[:, 1]
         if glyph is None:
-            return verts, np.asarray(tp.codes), 0.0
-        return verts, np.asarray(tp.codes), (glyphs[-1][1] + glyph.linearHoriAdvance / 65536.0) * scale
+            return verts, codes, 0.0
+        return verts, codes, (glyphs[-1][1] + glyph.linearHoriAdvance / 65536.0) * scale
 
 
 def _path_data(verts: np.ndarray, codes: np.ndarray) -> str:
@@ -352,11 +371,12 @@ def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve, note
     if not s:
         return
     s = _collapse(s, preserve)
-    if state["first"] and not preserve:
+    if not preserve and (state["first"] or state.get("space")):  # spaces collapse across runs
         s = s.lstrip(" ")
     if not s:
         return
     state["first"] = False
+    state["space"] = s.endswith(" ")
     try:
         verts, codes, advance = fonts.run(s, props)
     except Exception:  # noqa: BLE001  (a glyph FreeType cannot load: the run is left out, said once)
@@ -369,5 +389,12 @@ def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve, note
         verts[:, 0] += state["x"]
         verts[:, 1] += state["y"]
         chunk["items"].append((target, verts, codes))
+    end = state["x"] + advance
+    if state["space"] and not preserve and chunk["anchor"] != "start" and s.strip(" "):
+        # a line's trailing space is not laid out: the anchor sees the chunk without it
+        try:
+            end = state["x"] + fonts.run(s.rstrip(" "), props)[2]
+        except Exception:  # noqa: BLE001
+            pass
     state["x"] += advance
-    chunk["end"] = state["x"]
+    chunk["end"] = end

@@ -1,0 +1,161 @@
+"""The SVG reader draws what browsers draw: lengths, transform-origin, text runs, paint.
+
+Each case is a tiny SVG written here, asserting the geometry a browser gives it.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+
+from repulsionpak.io import load_element
+from repulsionpak.types import Element
+
+
+def _svg(body: str, root: str = 'viewBox="0 0 200 100"') -> str:
+    return (f'<svg xmlns="http://www.w3.org/2000/svg" xmlns:xlink="http://www.w3.org/1999/xlink" '
+            f'{root}>{body}</svg>')
+
+
+def _load(tmp_path: Path, body: str, root: str = 'viewBox="0 0 200 100"', name: str = "e.svg") -> Element:
+    p = tmp_path / name
+    p.write_text(_svg(body, root))
+    return load_element(p)
+
+
+def _bounds(el: Element, i: int | None = None) -> np.ndarray:
+    arts = el.paths if i is None else [el.paths[i]]
+    pts = np.concatenate([p for a in arts for p in a.subpaths])
+    return np.concatenate([pts.min(0), pts.max(0)])
+
+
+def _area(el: Element, i: int = 0) -> float:
+    a = el.paths[i]
+    return shapely.union_all([shapely.Polygon(p) for p in a.subpaths]).area
+
+
+# ----------------------------------------------------------------------------- lengths
+
+
+@pytest.mark.parametrize("attrs, box", [
+    ('x="1em" y="1em" width="4em" height="2em"', (10, 10, 50, 30)),  # font-size 10 on the group
+    ('x="2ex" y="2ex" width="4ex" height="2ex"', (10, 10, 30, 20)),  # ex: half an em
+    ('x="1rem" y="1rem" width="1rem" height="1rem"', (16, 16, 32, 32)),  # the root's 16 px
+    ('x="5vw" y="10vh" width="10vw" height="20vh"', (10, 10, 30, 30)),  # of the 200 x 100 viewport
+    ('x="0" y="0" width="10vmax" height="10vmin"', (0, 0, 20, 10)),
+    ('x="40Q" y="0" width="40Q" height="40Q"', (96 / 2.54, 0, 2 * 96 / 2.54, 96 / 2.54)),  # 40Q = 1 cm
+])
+def test_css_units_on_a_rect_are_browser_lengths(tmp_path, attrs, box):
+    el = _load(tmp_path, f'<g font-size="10"><rect {attrs}/></g>')
+    np.testing.assert_allclose(_bounds(el), box, atol=1e-6)
+
+
+def test_rem_refers_to_the_root_font_size_not_the_element(tmp_path):
+    el = _load(tmp_path, '<rect font-size="64" x="0" y="0" width="2rem" height="1rem"/>',
+               root='viewBox="0 0 200 100" font-size="20"')
+    np.testing.assert_allclose(_bounds(el), (0, 0, 40, 20), atol=1e-6)
+
+
+def test_stroke_width_percent_is_a_share_of_the_normalized_diagonal(tmp_path):
+    el = _load(tmp_path, '<path d="M10 50 H190" stroke="black" stroke-width="10%" fill="none"/>',
+               root='viewBox="0 0 200 200"')
+    assert el.paths[0].style.stroke_width == pytest.approx(20.0)  # was 28.3 (the plain diagonal)
+
+
+@pytest.mark.parametrize("attrs, dashes, offset", [
+    ('stroke-dasharray="5mm 10px"', (5 * 96 / 25.4, 10), 0.0),
+    ('style="stroke-dasharray: 2em 1em; stroke-dashoffset: 1em"', (20, 10), 10.0),
+    ('stroke-dasharray="10" stroke-dashoffset="10%"', (10, 10), 0.1 * (25000 ** 0.5)),  # of sqrt((200² + 100²) / 2)
+])
+def test_dash_lengths_with_units(tmp_path, attrs, dashes, offset):
+    el = _load(tmp_path, f'<path d="M10 50 H190" stroke="black" font-size="10" fill="none" {attrs}/>')
+    st = el.paths[0].style
+    assert st.stroke_dasharray == pytest.approx(dashes)
+    assert st.stroke_dashoffset == pytest.approx(offset)
+
+
+def test_rect_ry_percent_without_rx_is_a_rounded_rect_not_an_ellipse(tmp_path):
+    # ry = 10% of the viewport height (10), rx takes the same length: corners of radius 10
+    el = _load(tmp_path, '<rect x="0" y="0" width="100" height="50" ry="10%"/>')
+    np.testing.assert_allclose(_bounds(el), (0, 0, 100, 50), atol=1e-6)
+    assert _area(el) == pytest.approx(100 * 50 - (4 - np.pi) * 10 ** 2, rel=2e-3)
+
+
+def test_ellipse_rx_percent_without_ry_is_a_circle(tmp_path):
+    el = _load(tmp_path, '<ellipse cx="100" cy="50" rx="10%"/>')  # 10% of the width 200 = 20
+    np.testing.assert_allclose(_bounds(el), (80, 30, 120, 70), atol=1e-3)
+
+
+# ----------------------------------------------------------------------------- transform-origin
+
+
+@pytest.mark.parametrize("origin, centre", [
+    ('transform-origin="center"', (100, 50)),  # the viewport's centre (transform-box: view-box)
+    ('transform-origin="50% 50%"', (100, 50)),
+    ('style="transform-origin: 20px 30px"', (20, 30)),
+    ('transform-origin="right bottom"', (200, 100)),
+    ('transform-origin="bottom right"', (200, 100)),
+    ('transform-origin="left"', (0, 50)),
+])
+def test_transform_origin_moves_the_transform(tmp_path, origin, centre):
+    # rotate(180) about the origin maps (x, y) to 2 * origin - (x, y)
+    el = _load(tmp_path, f'<rect x="10" y="10" width="20" height="10" transform="rotate(180)" {origin}/>')
+    cx, cy = centre
+    np.testing.assert_allclose(_bounds(el), (2 * cx - 30, 2 * cy - 20, 2 * cx - 10, 2 * cy - 10), atol=1e-6)
+
+
+def test_transform_origin_on_a_group(tmp_path):
+    el = _load(tmp_path, '<g transform="scale(2)" transform-origin="100 50"><rect x="90" y="40" width="20" '
+                         'height="20"/></g>')
+    np.testing.assert_allclose(_bounds(el), (80, 30, 120, 70), atol=1e-6)
+
+
+# ----------------------------------------------------------------------------- text runs
+
+
+def test_space_between_tspans_moves_the_next_word(tmp_path):
+    body = ('<text x="10" y="50" font-family="DejaVu Sans" font-size="20"><tspan>ab</tspan>{sep}'
+            '<tspan fill="red">cd</tspan></text>')
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        spaced = _load(tmp_path, body.format(sep=" "), name="spaced.svg")
+    joined = _load(tmp_path, body.format(sep=""), name="joined.svg")
+    assert not [w for w in caught if "could not draw" in str(w.message)]
+    shift = _bounds(spaced, -1)[0] - _bounds(joined, -1)[0]
+    assert shift == pytest.approx(20 * 0.318, abs=0.3)  # DejaVu Sans' space: 0.318 em
+
+
+def test_spaces_collapse_across_tspans(tmp_path):
+    one = _load(tmp_path, '<text x="0" y="50" font-family="DejaVu Sans" font-size="20">ab <tspan>cd</tspan>'
+                          '</text>', name="one.svg")
+    two = _load(tmp_path, '<text x="0" y="50" font-family="DejaVu Sans" font-size="20">ab <tspan> cd</tspan>'
+                          '</text>', name="two.svg")
+    np.testing.assert_allclose(_bounds(one), _bounds(two), atol=1e-6)
+
+
+def test_font_weight_numbers_pick_the_nearest_face(tmp_path):
+    body = '<text x="0" y="50" font-family="DejaVu Sans" font-size="40" font-weight="{}">H</text>'
+    light = _load(tmp_path, body.format(300), name="l.svg")
+    heavy = _load(tmp_path, body.format(650), name="h.svg")  # bold, as a browser picks it
+    bold = _load(tmp_path, body.format("bold"), name="b.svg")
+    assert _area(heavy) == pytest.approx(_area(bold), rel=1e-6)
+    assert _area(heavy) > 1.2 * _area(light)
+
+
+def test_font_variation_settings_is_said_to_be_ignored(tmp_path):
+    with pytest.warns(UserWarning, match="font-variation-settings"):
+        _load(tmp_path, '<text x="0" y="50" font-size="20" font-variation-settings="\'wght\' 700">Hi</text>')
+
+
+# ----------------------------------------------------------------------------- paint
+
+
+def test_pattern_paint_is_said_to_be_packed_as_a_solid_shape(tmp_path):
+    body = ('<pattern id="p" width="10" height="10" patternUnits="userSpaceOnUse"><rect width="5" height="5" '
+            'fill="green"/></pattern><rect width="100" height="100" fill="url(#p)"/>')
+    with pytest.warns(UserWarning, match="pattern paint"):
+        _load(tmp_path, body)
