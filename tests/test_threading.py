@@ -15,6 +15,7 @@ import sys
 import textwrap
 
 import numba
+import numpy as np
 import pytest
 
 from repulsionpak.sim import kernels
@@ -97,3 +98,108 @@ def test_the_users_choice_of_layer_is_kept():
     assert res.returncode == 0, res.stderr
     assert res.stdout.split()[0] == "False"
     assert "['workqueue', 'omp', 'tbb']" in res.stdout
+
+
+# -- the thread governor ----------------------------------------------------------------
+
+from repulsionpak.sim import threadgov  # noqa: E402
+from repulsionpak.sim.threadgov import ThreadGovernor  # noqa: E402
+
+
+def _drive(cost, iterations: int, n: int = 2, start: int = 1, window: int = 32):
+    """Run a governor over ``iterations`` fake steps; ``cost(i, threads)`` is the seconds
+    step ``i`` takes on that many threads. Returns (total seconds, threads per step)."""
+    now = [0.0]
+    gov = ThreadGovernor(n, start, window=window, clock=lambda: now[0])
+    threads, used = start, []
+    for i in range(iterations):
+        gov.begin()
+        now[0] += cost(i, threads)
+        used.append(threads)
+        switch = gov.end()
+        if switch is not None:
+            threads = switch
+    return now[0], np.array(used)
+
+
+def _steps(one: float, many: float, query: float = 5.0, every: int = 32):
+    """Step costs: ``one``/``many`` seconds on one/several threads, a full neighbour query
+    (``query`` times as long) every ``every`` steps."""
+    def cost(i, threads):
+        base = one if threads == 1 else many
+        return base * (query if i % every == 0 else 1.0)
+    return cost
+
+
+def _single(cost, iterations):
+    return sum(cost(i, 1) for i in range(iterations))
+
+
+def test_governor_keeps_the_faster_thread_count_on_an_idle_machine():
+    cost = _steps(one=0.5e-3, many=0.33e-3)  # two threads 1.5x faster
+    total, used = _drive(cost, 9000)
+    assert (used == 2).mean() > 0.97
+    assert total < 0.72 * _single(cost, 9000)
+
+
+def test_governor_leaves_threads_that_are_slower_than_one():
+    # TBB's idle crawl: 10 ms an iteration on two threads, 0.4 ms on one
+    cost = _steps(one=0.4e-3, many=10e-3)
+    total, used = _drive(cost, 9000)
+    assert (used == 2).sum() < 12  # one slow step per probe
+    assert total < 1.25 * _single(cost, 9000)
+
+
+def test_governor_follows_a_neighbour_that_starts_mid_run():
+    # idle for the first 1,500 steps, then a busy neighbour makes two threads 100x slower
+    def cost(i, threads):
+        base = 0.5e-3 if threads == 1 else (0.33e-3 if i < 1500 else 50e-3)
+        return base * (5.0 if i % 32 == 0 else 1.0)
+    total, used = _drive(cost, 9000)
+    after = used[1500:]
+    # the first slow step ends the two-thread run; later probes cost one step each
+    assert (after == 2).sum() <= 1 + 9000 // threadgov.PROBE_FIRST
+    single_beside_neighbour = _single(cost, 9000)
+    assert total < 2.0 * single_beside_neighbour
+    assert total < 1.3 * single_beside_neighbour
+
+
+def test_governor_with_one_thread_never_switches():
+    total, used = _drive(_steps(one=1e-3, many=1e-4), 500, n=1, start=1)
+    assert (used == 1).all()
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs two cores")
+def test_switching_threads_mid_run_gives_the_same_packing(monkeypatch):
+    """Both builds compute the same numbers: a run whose thread count changes every few
+    iterations ends where a one-thread run ends, to the bit."""
+    from repulsionpak import examples
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.pack import pack
+    from repulsionpak.params import params_from_dict
+    from repulsionpak.sim import runner
+
+    cont = load_container(examples.container_file("circle"))
+    els = load_elements(examples.element_files()[:3])
+
+    def params(threads):
+        return params_from_dict({"gap": 12.0, "seed": 3, "placement": {"count": 6},
+                                 "sim": {"max_iterations": 300, "settle_iterations": 20,
+                                         "threads": threads}})
+
+    one = pack(cont, els, params(1))
+
+    class Flipping(ThreadGovernor):
+        def end(self):
+            super().end()
+            self.k = getattr(self, "k", 0) + 1
+            return 2 if self.k % 14 < 7 else 1
+
+    monkeypatch.setattr(runner, "ThreadGovernor", Flipping)
+    monkeypatch.setattr(runner.Simulator, "thread_range", lambda self: (1, 2))
+    try:
+        flipped = pack(cont, els, params(0))
+    finally:
+        kernels.set_threads(1)
+    np.testing.assert_array_equal(flipped.state.x, one.state.x)
+    assert flipped.iterations == one.iterations

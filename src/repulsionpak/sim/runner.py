@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -25,6 +24,8 @@ from .forces import (boundary_force, contact_query, contact_update, corner_candi
 from .grid import Grid, bin_points
 from .integrate import count_inside, euler_step, grow, growth_speed_caps, skin_areas, window_change
 from .kernels import parallel_ready, set_threads
+from .threadgov import WINDOW as GOV_WINDOW
+from .threadgov import ThreadGovernor
 from .model import Model, State, element_ranges
 from .controls import apply_controls, edge_force_stiff
 from .selfintersect import relax_self_intersections
@@ -85,71 +86,6 @@ def skin_topology(m: Model) -> tuple[np.ndarray, ...]:
 THREADS_ENV = "REPULSIONPAK_THREADS"
 
 
-#: :func:`cores_busy_elsewhere` measures over the time since its last sample when that is
-#: between these many seconds (no waiting), else it watches the machine for the first
-BUSY_WINDOW, BUSY_HISTORY = 0.1, 30.0
-
-
-def _cpu_ticks(cpus) -> tuple[int, int] | None:
-    """(all, idle) clock ticks of the CPUs ``cpus`` since boot, from /proc/stat; None
-    where it cannot be read (not Linux)."""
-    total = idle = 0
-    try:
-        with open("/proc/stat") as f:
-            for line in f:
-                if not line.startswith("cpu") or line.startswith("cpu "):
-                    continue
-                name, *vals = line.split()
-                if int(name[3:]) in cpus:
-                    v = [int(x) for x in vals[:8]]
-                    total += sum(v)
-                    idle += v[3] + v[4]  # idle and iowait
-    except (OSError, ValueError, IndexError):
-        return None
-    return total, idle
-
-
-def _cpu_sample():
-    """(ticks of the allowed CPUs, this process's CPU seconds, wall seconds, tick rate),
-    or None where the kernel does not tell (not Linux)."""
-    try:
-        cpus = os.sched_getaffinity(0)
-        hz = os.sysconf("SC_CLK_TCK")
-    except (AttributeError, OSError, ValueError):
-        return None
-    ticks = _cpu_ticks(cpus)
-    if ticks is None or not hz > 0:
-        return None
-    return ticks, time.process_time(), time.perf_counter(), hz
-
-
-_last_sample = _cpu_sample()  # at import: a run's inputs are read and meshed meanwhile
-
-
-def cores_busy_elsewhere(window: float = BUSY_WINDOW) -> float | None:
-    """How many of the cores this process may use other processes kept busy: since the
-    previous sample when that was taken ``window`` to ``BUSY_HISTORY`` seconds ago (at
-    import, before a run's preprocessing; the primary phase, for the secondary one), else
-    over ``window`` seconds from now (this process sleeping). None where the kernel does
-    not tell (not Linux)."""
-    global _last_sample
-    a = _last_sample
-    b = _cpu_sample()
-    if b is None:
-        return None
-    if a is None or not window <= b[2] - a[2] <= BUSY_HISTORY:
-        a = b
-        time.sleep(window)
-        b = _cpu_sample()
-        if b is None:
-            return None
-    _last_sample = b
-    (ta, ia), ca, wa, hz = a
-    (tb, ib), cb, wb, _ = b
-    busy = ((tb - ta) - (ib - ia)) / hz  # core-seconds, every process
-    return max(0.0, busy - (cb - ca)) / (wb - wa)
-
-
 def auto_threads() -> int:
     """The most threads an automatic run may use: ``$REPULSIONPAK_THREADS`` if set, else
     numba's thread count (the cores this process may use)."""
@@ -169,6 +105,7 @@ class Simulator:
     """Advance a packing. ``phase`` is a label ("primary"/"secondary") for snapshots."""
 
     templates: list | None = None  # the model's templates, set by pack() for snapshot renderers
+    governor: ThreadGovernor | None = None  # the thread choice of the last run()
 
     def __init__(self, model: Model, state: State, params: SimParams, phase: str = "primary"):
         self.model, self.state, self.params, self.phase = model, state, params, phase
@@ -369,23 +306,28 @@ class Simulator:
         self.allow_growth = False
 
     def threads(self) -> int:
-        """numba threads for this run: ``params.threads`` if set; else one thread below
-        ``parallel_threshold`` vertices (on small scenes handing work between threads costs
-        more than it saves) or while the parallel builds are not cached yet
-        (:func:`repulsionpak.sim.kernels.parallel_ready`: compiling them takes longer than
-        most runs), else the cores allowed (:func:`auto_threads`) that other processes
-        leave free (:func:`cores_busy_elsewhere`: a thread sharing its core with another
-        busy process holds up every parallel loop; the demo beside one busy Python
-        process took 9.7–10.1 s on two threads, 8.1 s on one)."""
+        """numba threads this run starts on (see :meth:`thread_range`)."""
+        return self.thread_range()[0]
+
+    def thread_range(self) -> tuple[int, int]:
+        """``(start, most)``: the threads this run starts on and the most it may use.
+
+        A chosen count (``sim.threads > 0``) is kept: ``start == most``. An automatic run
+        (``sim.threads = 0``) uses one thread below ``parallel_threshold`` vertices (on
+        small scenes handing work between threads costs more than it saves) or while the
+        parallel builds are not cached or the threading layer does not suit them
+        (:func:`repulsionpak.sim.kernels.parallel_ready`); otherwise it starts on one thread
+        and a :class:`~repulsionpak.sim.threadgov.ThreadGovernor` moves it between one and
+        the cores allowed (:func:`auto_threads`) as measured iteration times say: a
+        thread sharing its core with another busy process holds up every parallel loop, and
+        which processes run changes during a run."""
         if self.params.threads > 0:
-            return min(self.params.threads, numba.config.NUMBA_NUM_THREADS)
+            n = min(self.params.threads, numba.config.NUMBA_NUM_THREADS)
+            return n, n
         limit = auto_threads()
         if limit < 2 or self.model.n_vertices < self.params.parallel_threshold or not parallel_ready():
-            return 1
-        busy = cores_busy_elsewhere()
-        if busy is None:
-            return limit
-        return max(1, min(limit, int(len(os.sched_getaffinity(0)) - busy + 0.5)))
+            return 1, 1
+        return 1, limit
 
     @property
     def n_inside(self) -> int:
@@ -419,7 +361,11 @@ class Simulator:
         """
         p, st = self.params, self.state
         self.refresh_growth()
-        threads = set_threads(self.threads())
+        start, most = self.thread_range()
+        threads = set_threads(start)
+        # a chosen thread count is kept; an automatic one follows the machine's load
+        gov = self.governor = ThreadGovernor(most if p.threads == 0 else 1, start,
+                                             window=p.requery_every * -(-GOV_WINDOW // p.requery_every))
         hist = st.area_history
         w = p.stop_window
         a = hist[-1] if hist else 0.0
@@ -433,7 +379,11 @@ class Simulator:
         self._good = st.copy()
         try:
             while True:
+                gov.begin()
                 a = self.step()
+                switch = gov.end()
+                if switch is not None:
+                    set_threads(switch)
                 if not math.isfinite(a) or (probe >= 0 and not math.isfinite(st.x[probe, 0])):
                     self._recover()
                     continue
