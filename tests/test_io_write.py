@@ -140,7 +140,15 @@ def test_output_structure(tmp_path, container):
     ]
     cont = children[0]
     assert cont.get("data-source") == "container_holes.svg"
-    assert len([p for p in cont if p.get("class") != "container-region"]) == 3
+    drawn = [p for p in cont if p.get("class") != "container-region"]
+    # by default the container is its region's outline, stroke only (it never hides the art)
+    assert [p.get("class") for p in drawn] == ["container-outline"]
+    assert drawn[0].get("fill") == "none" and drawn[0].get("stroke") not in (None, "none")
+    assert drawn[0].get("d") == next(p for p in cont if p.get("class") == "container-region").get("d")
+    as_drawn = tmp_path / "as_drawn.svg"
+    write_packing_svg(as_drawn, container, _placed(), 5.2, container_paint="as-drawn")
+    cont2 = next(c for c in ET.parse(as_drawn).getroot() if c.get("id") == "container")
+    assert len([p for p in cont2 if p.get("class") != "container-region"]) == 3  # its own shapes
     groups = list(children[1])
     assert [g.get("class") for g in groups] == ["element primary", "element secondary"]
     assert (
@@ -226,7 +234,12 @@ def test_round_trip(tmp_path, container):
     assert c2.source == container.source and c2.svg_root == container.svg_root
     assert c2.area == pytest.approx(container.area, rel=1e-6)
     assert c2.region.symmetric_difference(container.region).area < 1e-3
-    assert len(c2.paths) == len(container.paths)
+    assert c2.paths == ()  # the default outline is not the container's own drawing
+    drawn = tmp_path / "rt_as_drawn.svg"
+    write_packing_svg(drawn, container, placed, 5.25, container_paint="as-drawn")
+    c3, _, _ = read_packing_svg(drawn)
+    assert len(c3.paths) == len(container.paths)  # as-drawn: its own shapes come back
+    assert c3.region.symmetric_difference(container.region).area < 1e-3
     assert [p.kind for p in p2] == ["primary", "secondary"]
     assert [p.source for p in p2] == ["cat.svg", "small_cat.svg"]
     assert p2[0].deformation == pytest.approx(0.0123) and p2[1].deformation is None

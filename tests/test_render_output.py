@@ -37,12 +37,14 @@ def packing(tmp_path_factory):
     c = load_container(cont)
     p = pack(c, load_elements(files), Params(seed=2, placement=PlacementParams(count=9)))
     write_packing_svg(out, c, p.placed, p.gap)
+    write_packing_svg(d / "out_as_drawn.svg", c, p.placed, p.gap, container_paint="as-drawn")
     if importlib.util.find_spec("cairosvg") is not None:
         from repulsionpak.render.pdf import write_packing_pdf
 
         write_packing_pdf(pdf, c, p.placed, p.gap)
     rep = {"n_primary": p.n_primary, "n_secondary": p.n_secondary}
-    return {"container": cont, "svg": out, "pdf": pdf, "report": rep, "packing": p}
+    return {"container": cont, "svg": out, "svg_as_drawn": d / "out_as_drawn.svg", "pdf": pdf,
+            "report": rep, "packing": p}
 
 
 def _raster_resvg(svg: str, width: int) -> np.ndarray:
@@ -65,7 +67,8 @@ def _raster_cairo(svg: str, width: int) -> np.ndarray:
 
 
 def test_container_group_holds_the_container_as_drawn(packing):
-    root = ET.parse(packing["svg"]).getroot()
+    """With container_paint="as-drawn" the container's own markup is written."""
+    root = ET.parse(packing["svg_as_drawn"]).getroot()
     group = next(g for g in root.iter(f"{NS}g") if g.get("id") == "container")
     circles = [c for c in group if c.tag == f"{NS}circle"]
     assert len(circles) == 1
@@ -83,10 +86,10 @@ def test_container_group_holds_the_container_as_drawn(packing):
                   and any(g.get("id") == "container" for g in s.groups) == in_container_group]
         return [c.ctrl for s in shapes for c in segments_to_curves(s.segments, s.matrix)]
 
-    a, b = drawn(packing["container"], False), drawn(packing["svg"], True)
+    a, b = drawn(packing["container"], False), drawn(packing["svg_as_drawn"], True)
     assert len(a) == len(b) == 1 and a[0].shape == b[0].shape
     assert np.abs(a[0] - b[0]).max() < 1e-12  # same curves: distance zero
-    cout, placed, info = read_packing_svg(packing["svg"])
+    cout, placed, info = read_packing_svg(packing["svg_as_drawn"])
     ring = np.asarray(cout.paths[0].subpaths[0])
     assert np.abs(np.hypot(ring[:, 0] - 400, ring[:, 1] - 400) - 380).max() < 1e-9
     # the internal outline layer is invisible
@@ -236,7 +239,7 @@ def test_ids_of_use_clones_are_written_once(tmp_path):
     cont = load_container(_write(tmp_path, "c.svg", '<svg xmlns="http://www.w3.org/2000/svg" '
                                  'viewBox="0 0 800 800"><rect id="box" width="400" height="800"/>'
                                  '<use href="#box" x="400"/></svg>'))
-    root = ET.fromstring(packing_svg_string(cont, pas, 2.0))
+    root = ET.fromstring(packing_svg_string(cont, pas, 2.0, container_paint="as-drawn"))
     ids = [e.get("id") for e in root.iter() if e.get("id")]
     assert len(ids) == len(set(ids))
     assert {"box", "tri-e1", "tri-e2"} <= set(ids)

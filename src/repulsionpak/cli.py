@@ -227,14 +227,21 @@ class _StopFlag:
 
 def resolve_params(config: Path | None = None, gap: float | None = None, seed: int | None = None,
                    count: int | None = None, max_iterations: int | None = None, margin: float | None = None,
-                   pocket_fill: bool = True):
+                   pocket_fill: bool = True, container_paint: str | None = None):
     """:class:`Params` from ``--config`` with the options ``--gap``, ``--seed``, ``--count``,
-    ``--max-iterations``, ``--margin`` and ``--no-pocket-fill`` on top, validated; errors
-    name the option. The seed and the gap stay None when neither the config nor the
-    options give them."""
+    ``--max-iterations``, ``--margin``, ``--no-pocket-fill`` and ``--container-paint`` on
+    top, validated; errors name the option. The seed and the gap stay None when neither the
+    config nor the options give them."""
     from .params import Params, load_config
+    from .render.container_paint import CONTAINER_PAINTS
 
     params = load_config(config) if config else Params()
+    if container_paint is not None:
+        if container_paint not in CONTAINER_PAINTS:
+            raise ParameterError(f"--container-paint must be one of {', '.join(CONTAINER_PAINTS)}, "
+                                 f"got {container_paint!r}")
+        params = dataclasses.replace(params, output=dataclasses.replace(params.output,
+                                                                        container_paint=container_paint))
     if gap is not None:
         if not gap > 0:
             raise ParameterError(f"--gap must be a positive number, got {gap:g}")
@@ -285,14 +292,15 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
              margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None,
              movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
-             controls=None, live: dict | None = None) -> dict:
+             controls=None, live: dict | None = None, container_paint: str | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it;
     ``movie`` (.gif or .mp4) the simulation as an animation, a frame every ``movie_every``
     iterations (default: adapted to the run's length), ``movie_size`` pixels along the
     frames' longer side. ``live`` (``{"port": N, "open_browser": bool, "paused": bool}``)
     serves the run in the browser and writes the outputs only at Ctrl-C (see
-    :mod:`repulsionpak.live`)."""
+    :mod:`repulsionpak.live`). ``container_paint`` (``outline``, ``as-drawn``, ``none``;
+    None: the config's, else ``outline``) is how every output draws the container."""
     from .io import load_container
     from .pack import pack
 
@@ -322,7 +330,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         resumed = load_checkpoint(resume)
         if seed is None:  # the seed of the interrupted run
             seed = int(next(iter(resumed.values()))["seed"])
-    params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill)
+    params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill, container_paint)
     if params.seed is None:
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     from .io.svg_read import TooManyPoints
@@ -355,7 +363,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
         files = [container, *_expand(with_manifest_files([*elements, *(secondary or [])]))]
         # the controls (--rotation, --rigid, --stiffness, the manifests' settings) shape the run too
-        fp = fingerprint(files, dict(params.to_dict(), controls=[repr(e.controls) for e in [*elems, *secs]]))
+        # (how the outputs draw the container is no part of the simulation's state)
+        run_params = {k: v for k, v in params.to_dict().items() if k != "output"}
+        fp = fingerprint(files, dict(run_params, controls=[repr(e.controls) for e in [*elems, *secs]]))
         if resume is not None:
             resumed = load_checkpoint(resume, fp)
         if checkpoint is not None:
@@ -424,7 +434,7 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
     from .io import render_png
     from .io.svg_write import atomic_write_bytes
     from .pack import margin_of
-    from .packing_output import invariants, packing_svg_text
+    from .packing_output import container_paint_of, invariants, packing_svg_text, paint_warning
 
     if viewer is not None:
         viewer.drop_removed(packing)
@@ -437,6 +447,11 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
                            sources=[*elems, *secs] if report is not None else None, workers=_fit_workers())
         checks = invariants(packing, metrics)
         stages.stage("writing")
+        hiding = paint_warning(packing)
+        if hiding is not None:
+            import warnings
+
+            warnings.warn(hiding, stacklevel=1)
         text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
         if viewer is not None:  # serve the result until Ctrl-C, then write it
             viewer.finish(packing, metrics, text)
@@ -464,7 +479,7 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
                 not_written.append(str(png))
             else:
                 stages.stage("drawing the picture")
-                render_png(png, cont, packing.placed)
+                render_png(png, cont, packing.placed, container_paint=container_paint_of(packing), gap=g)
     seconds = dict(packing.seconds)
     seconds["render"] = seconds.get("render", 0.0) + (time.perf_counter() - t_eval)
     movie_info = None
@@ -575,6 +590,10 @@ RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of th
 RigidOpt = Annotated[bool, typer.Option("--rigid", help="Elements never deform (rigid bodies).")]
 StiffnessOpt = Annotated[Optional[float], typer.Option(help="Multiplier of the spring constants of the elements.")]
 NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")]
+ContainerPaintOpt = Annotated[Optional[str], typer.Option(
+    "--container-paint", metavar="outline|as-drawn|none",
+    help="How the outputs draw the container: outline (default: its exact shape as a thin stroke, "
+         "never hiding the art), as-drawn (its own fill and stroke, under the art) or none.")]
 
 
 def _movie_path(value: Optional[Path]) -> Optional[Path]:
@@ -624,6 +643,7 @@ def pack(
     port: Annotated[int, typer.Option(help="Port of the --live server (127.0.0.1 only).")] = 8765,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="With --live: only print the URL.")] = False,
     paused: Annotated[bool, typer.Option("--paused", help="With --live: pause at the first frame.")] = False,
+    container_paint: ContainerPaintOpt = None,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -641,7 +661,8 @@ def pack(
                        margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
                        movie=movie, movie_every=movie_every, movie_size=movie_size,
                        controls=cli_controls(rotation, rigid, stiffness),
-                       live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None)
+                       live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None,
+                       container_paint=container_paint)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             if "movie" in rep:
@@ -809,6 +830,7 @@ def batch(
     rotation: RotationOpt = None,
     rigid: RigidOpt = False,
     stiffness: StiffnessOpt = None,
+    container_paint: ContainerPaintOpt = None,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -820,7 +842,8 @@ def batch(
     from .controls import cli_controls
 
     with _errors():
-        base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill)
+        base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill,
+                              container_paint)
         with _BatchProgress(not quiet) as prog, _sigterm_as_interrupt():
             summary = run_batch(container, elements, output, seeds, set_ or [], base, secondary or [],
                                 workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog,
@@ -852,6 +875,7 @@ def demo(
     movie: MovieOpt = None,
     movie_every: MovieEveryOpt = None,
     movie_size: MovieSizeOpt = 600,
+    container_paint: ContainerPaintOpt = None,
     quiet: Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")] = False,
     debug: DebugOpt = False,
 ) -> None:
@@ -865,7 +889,8 @@ def demo(
         png = output.with_suffix(".png")
         rep = run_pack(cfile, examples.element_files(), output, secondary=examples.secondary_files(),
                        gap=examples.DEFAULT_GAP, seed=seed, png=png, progress=not quiet,
-                       movie=movie, movie_every=movie_every, movie_size=movie_size)
+                       movie=movie, movie_every=movie_every, movie_size=movie_size,
+                       container_paint=container_paint)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             if "not_written" not in rep:

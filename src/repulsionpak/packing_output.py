@@ -33,6 +33,7 @@ def packing_svg_text(packing, metrics: dict, checks: dict, debug_layers: bool = 
     and ``data-area-fraction``, the run's metadata (seed, stopping reasons, ``checks``
     from :func:`invariants`) and, with ``debug_layers``, hidden skin outlines.
 
+    The container is drawn as ``packing.params.output.container_paint`` says.
     ``path`` only names the output in error messages.
     """
     seed = packing.params.seed
@@ -42,7 +43,21 @@ def packing_svg_text(packing, metrics: dict, checks: dict, debug_layers: bool = 
             "stopped_by": packing.stopped_by, "invariants": checks}
     debug = {"skins": packing.skins()} if debug_layers else None
     return packing_svg_string(packing.container, packing.placed, packing.gap, attrs=attrs,
-                              debug_layers=debug, partial=packing.partial, metadata=meta, path=path)
+                              debug_layers=debug, partial=packing.partial, metadata=meta, path=path,
+                              container_paint=container_paint_of(packing))
 
 
-__all__ = ["invariants", "packing_svg_text"]
+def container_paint_of(packing) -> str:
+    """How ``packing``'s outputs draw its container (its parameters' ``output`` section)."""
+    return packing.params.output.container_paint
+
+
+def paint_warning(packing) -> str | None:
+    """The warning to give when the container, drawn as-drawn, hides the art (see
+    :func:`repulsionpak.render.container_paint.hiding_warning`); None otherwise."""
+    from .render.container_paint import hiding_warning
+
+    return hiding_warning(packing.container, packing.placed, container_paint_of(packing))
+
+
+__all__ = ["container_paint_of", "invariants", "packing_svg_text", "paint_warning"]

@@ -259,6 +259,17 @@ class VerifyParams:
         "primaries reached 0.151 with 1.25).")
 
 
+@dataclass(frozen=True)
+class OutputParams:
+    """How the written packing looks (SVG, PDF, PNG, the live view, batch's contact sheet)."""
+
+    container_paint: str = _doc(
+        "outline", "-", "How the container is drawn: 'outline' (its exact geometry as a thin "
+        "stroke, no fill, as in the paper's figures: it never hides the art), 'as-drawn' (its own "
+        "markup, fill and stroke, under the art) or 'none' (left out; the invisible region the "
+        "packing is measured with is still written).", choices=("outline", "as-drawn", "none"))
+
+
 #: what :func:`_plain` returns for a value of another type
 _MISMATCH = object()
 
@@ -284,6 +295,8 @@ def _plain(value, base: type):
             return _MISMATCH
     if base is float and isinstance(value, numbers.Real) and not is_bool:
         return float(value)
+    if base is str and isinstance(value, str):
+        return value
     return _MISMATCH
 
 
@@ -297,7 +310,8 @@ def _typed_value(value, tp, where: str, nullable: bool = False):
         raise ParameterError(f"{where} must be set, got None")
     v = _plain(value, base)
     if v is _MISMATCH:
-        raise ParameterError(f"{where} must be {'an' if base is int else 'a'} {base.__name__}, "
+        raise ParameterError(f"{where} must be {'an' if base is int else 'a'} "
+                             f"{'string' if base is str else base.__name__}, "
                              f"got {value!r} ({type(value).__name__})")
     return v
 
@@ -321,6 +335,7 @@ class Params:
     secondary: SecondaryParams = field(default_factory=SecondaryParams)
     render: RenderParams = field(default_factory=RenderParams)
     verify: VerifyParams = field(default_factory=VerifyParams)
+    output: OutputParams = field(default_factory=OutputParams)
 
     def _typed(self) -> "Params":
         """These parameters with every number a plain Python one (see :meth:`validate`);
@@ -436,6 +451,12 @@ class Params:
         for ok, msg in checks:
             if not ok:
                 raise ParameterError(msg)
+        for f in fields(OutputParams):  # the string fields name one of their choices
+            v, choices = getattr(self.output, f.name), f.metadata["choices"]
+            if v not in choices:
+                close = difflib.get_close_matches(str(v), choices, n=1, cutoff=0.5)
+                raise ParameterError(f"output.{f.name} must be one of {', '.join(choices)}, got {v!r}"
+                                     + (f"; did you mean '{close[0]}'?" if close else ""))
         return self
 
     def to_dict(self) -> dict:
@@ -447,7 +468,7 @@ MAX_COUNT = 100_000
 
 _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
              "sim": SimParams, "secondary": SecondaryParams, "render": RenderParams,
-             "verify": VerifyParams}
+             "verify": VerifyParams, "output": OutputParams}
 
 
 def _check_type(value, tp, where: str, source: str):
@@ -462,7 +483,7 @@ def _check_type(value, tp, where: str, source: str):
     except OverflowError:
         raise ConfigError(f"{source}: {where} is too large ({str(value)[:20]}...)") from None
     if v is _MISMATCH:
-        name = getattr(base, "__name__", str(base))
+        name = "string" if base is str else getattr(base, "__name__", str(base))
         article = "an" if name[:1] in "aeiou" else "a"
         raise ConfigError(f"{source}: {where} must be {article} {name}, got {value!r} ({type(value).__name__})")
     return v

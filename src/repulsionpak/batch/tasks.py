@@ -120,7 +120,7 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
     """
     from ..evaluate import evaluate
     from ..pack import margin_of, pack
-    from ..packing_output import invariants, packing_svg_text
+    from ..packing_output import container_paint_of, invariants, packing_svg_text, paint_warning
 
     started, t0, c0 = time.time(), time.perf_counter(), time.thread_time()
     res = JobResult(name=job.name, seed=job.seed, setting=job.setting,
@@ -134,6 +134,9 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
             packing = pack(inputs.container, inputs.elements, params, secondary=inputs.secondary,
                            should_stop=_cancel_probe())
         res.warnings = [" ".join(str(w.message).split()) for w in caught]
+        hiding = paint_warning(packing)  # --container-paint as-drawn over art of its colour
+        if hiding is not None:
+            res.warnings.append(" ".join(hiding.split()))
         res.iterations = dict(packing.iterations)
         if packing.partial:
             raise JobFailed("cancelled before it finished", 130)
@@ -145,7 +148,8 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
         if job.thumbnail_px:
             from ..io.png import png_bytes
 
-            res.thumbnail = png_bytes(inputs.container, packing.placed, size_px=job.thumbnail_px)
+            res.thumbnail = png_bytes(inputs.container, packing.placed, size_px=job.thumbnail_px,
+                                      container_paint=container_paint_of(packing), gap=packing.gap)
         res.metrics = metrics
         if not checks["ok"]:  # written for inspection, like `pack` (exit code 6), never the best
             broken = sorted(k[:-3] for k, v in checks.items() if k.endswith("_ok") and v is False)

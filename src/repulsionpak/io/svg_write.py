@@ -7,7 +7,9 @@ contract)::
     <svg xmlns=... width=.. height=.. viewBox=.. data-gap="5.2" [data-partial="true"] data-*=...>
       <metadata>{"partial": false, ...}</metadata>
       <g id="container" data-source="heart.svg">
-        container outlines (original styles) ...
+        the container as ``container_paint`` draws it: its region's outline
+        (``<path class="container-outline" fill="none" stroke=...>``, the default), its own
+        shapes in their original styles (``as-drawn``), or nothing (``none``)
         <path class="container-region" fill="none" stroke="none" fill-rule="evenodd" d="..."/>
       </g>
       <g id="elements">
@@ -18,8 +20,9 @@ contract)::
     </svg>
 
 The invisible ``container-region`` path stores the exact region (holes included) so
-:func:`read_packing_svg` gets the container back even when its outlines were drawn as
-separate shapes. Output is deterministic and written atomically.
+:func:`read_packing_svg` gets the container back however it was drawn (a
+``container-outline`` is not read as the container's own drawing). Output is
+deterministic and written atomically.
 """
 
 from __future__ import annotations

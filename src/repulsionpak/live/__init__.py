@@ -35,7 +35,8 @@ class LiveRun:
         if not 0 <= int(port) <= 65535:
             raise ParameterError(f"--port must be in 0..65535, got {port}")
         gap = float(params.gap)
-        self.controller = LiveController(container, gap, params.render, external_stop=external_stop)
+        self.controller = LiveController(container, gap, params.render, external_stop=external_stop,
+                                         container_paint=params.output.container_paint)
         self.controller.paused = bool(paused)  # from the first frame on
         self.server = LiveServer(self.controller, port, token=token)
         self.open_browser = open_browser

@@ -34,9 +34,13 @@ class LiveController:
     """
 
     def __init__(self, container, gap: float, render_params=None,
-                 max_fps: float = 30.0, external_stop: Callable[[], bool] | None = None):
+                 max_fps: float = 30.0, external_stop: Callable[[], bool] | None = None,
+                 container_paint: str = "outline"):
+        from ..render.container_paint import check_paint
+
         self.container = container
         self.gap = float(gap)
+        self.container_paint = check_paint(container_paint)
         self.render_params = render_params
         self.unit = SimFrame.for_region(container.region).unit
         self.min_interval = 1.0 / max_fps
@@ -125,14 +129,27 @@ class LiveController:
         return st
 
     def scene(self) -> dict:
-        """Container rings and view box (container units) for the page."""
+        """Container rings and view box (container units) for the page, and how to draw
+        the container (``paint``, as the outputs do): ``outline`` with its ``colour`` and
+        ``width`` (container units), ``as-drawn`` with ``markup`` (the output's container
+        group), or ``none``."""
+        from ..render.container_paint import outline_colour, outline_width
+
         rings = []
         for poly in getattr(self.container.region, "geoms", [self.container.region]):
             rings.append(np.round(np.asarray(poly.exterior.coords)[:-1], 3).tolist())
             rings += [np.round(np.asarray(r.coords)[:-1], 3).tolist() for r in poly.interiors]
         minx, miny, maxx, maxy = self.container.bounds
         pad = 0.02 * max(maxx - minx, maxy - miny)
-        return {"type": "scene", "rings": rings, "gap": self.gap,
+        paint = {"paint": self.container_paint}
+        if self.container_paint == "outline":
+            paint.update(colour=outline_colour(self.container),
+                         width=outline_width(self.container, self.gap))
+        elif self.container_paint == "as-drawn":
+            from ..render.svg import container_lines
+
+            paint["markup"] = "\n".join(container_lines(self.container, "as-drawn", 0.0, indent=""))
+        return {"type": "scene", "rings": rings, "gap": self.gap, **paint,
                 "viewBox": [minx - pad, miny - pad, maxx - minx + 2 * pad, maxy - miny + 2 * pad]}
 
     def estimates(self) -> dict:
@@ -382,7 +399,8 @@ class LiveController:
                             params=self.render_params)
         return packing_svg_string(self.container, placed, self.gap,
                                   attrs={"iteration": str(sim.state.iteration)}, partial=True,
-                                  metadata={"generator": "repulsionpak live view", "phase": self.phase})
+                                  metadata={"generator": "repulsionpak live view", "phase": self.phase},
+                                  container_paint=self.container_paint)
 
 
 __all__ = ["LiveController"]

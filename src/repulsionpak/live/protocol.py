@@ -14,7 +14,8 @@ The float block starts at byte 20 (a multiple of 4), so a page reads it as
 ``new Float32Array(buffer, 20, 2 * n)`` without copying.
 
 JSON messages from the server carry a ``type``: ``scene`` (container rings and view box,
-once per connection), ``layout`` (per-element point counts, kinds, pinned/removed flags;
+and how the container is drawn: ``paint`` ``outline`` with ``colour`` and ``width``,
+``as-drawn`` with ``markup``, or ``none``; once per connection), ``layout`` (per-element point counts, kinds, pinned/removed flags;
 whenever the set of elements changes), ``status`` (iteration, paused, phase, estimated
 area fraction and median gap, ``done`` and ``stopped_by`` at the end). Commands from the
 page are JSON objects with a ``cmd``: ``pause``, ``resume``, ``step`` (``n``), ``move``

@@ -14,6 +14,8 @@ from ..errors import OutputError, ParameterError
 from ..types import ArtPath, Container, PlacedArt
 from ..io.svg_read import RegionTooComplex, rings_to_region
 from ..io.svg_write import atomic_write_bytes
+from .container_paint import check_paint, outline_colour, outline_width
+from .frame import packing_frame
 
 __all__ = ["contact_sheet_png", "png_bytes", "render_png"]
 
@@ -137,15 +139,23 @@ def render_png(
     size_px: int = 1200,
     background: str | None = "white",
     show_container: bool = True,
+    container_paint: str = "outline",
+    gap: float | None = None,
 ) -> None:
     """Render the packing to a PNG whose longer side is ``size_px`` pixels.
 
-    Tight to the container's bounds plus a 2 % margin, y down, equal aspect, no axes.
-    Fill rules are honoured (evenodd fills are rebuilt as oriented polygons, since
-    matplotlib fills by winding); stroke widths are in data units. ``background``
-    None or ``"none"`` gives a transparent image. Deterministic; written atomically.
+    The frame is the SVG's (:func:`~repulsionpak.render.frame.packing_frame`: the
+    container file's viewBox, grown where the drawing reaches past it; without one, the
+    drawing plus a 2 % margin), y down, equal aspect, no axes. The container is drawn as
+    ``container_paint`` says (``"outline"``: its region as a thin stroke of
+    :func:`~repulsionpak.render.container_paint.outline_width` for ``gap``; ``"as-drawn"``:
+    its own shapes; ``"none"``), nothing with ``show_container`` False. Fill rules are
+    honoured (evenodd fills are rebuilt as oriented polygons, since matplotlib fills by
+    winding); stroke widths are in data units. ``background`` None or ``"none"`` gives a
+    transparent image. Deterministic; written atomically.
     """
-    atomic_write_bytes(path, png_bytes(container, placed, size_px, background, show_container, path=path))
+    atomic_write_bytes(path, png_bytes(container, placed, size_px, background, show_container, path=path,
+                                       container_paint=container_paint, gap=gap))
 
 
 def png_bytes(
@@ -155,8 +165,13 @@ def png_bytes(
     background: str | None = "white",
     show_container: bool = True,
     path: str | Path = "<png>",
+    container_paint: str = "outline",
+    gap: float | None = None,
 ) -> bytes:
     """The PNG file :func:`render_png` writes, as bytes (``path`` only names it in errors)."""
+    check_paint(container_paint)
+    if not show_container:
+        container_paint = "none"
     try:
         size_px = int(size_px)
     except (TypeError, ValueError):
@@ -172,14 +187,13 @@ def png_bytes(
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    x0, y0, x1, y1 = container.bounds
-    if not all(math.isfinite(v) for v in (x0, y0, x1, y1)):
+    if not all(math.isfinite(v) for v in container.bounds):
         raise OutputError(
             f"{path}: the container has non-finite bounds; nothing was rendered"
         )
-    w, h = max(x1 - x0, 1e-12), max(y1 - y0, 1e-12)
-    m = 0.02 * max(w, h)
-    x0, y0, w, h = x0 - m, y0 - m, w + 2 * m, h + 2 * m
+    stroke_w = outline_width(container, gap)
+    x0, y0, w, h = packing_frame(container, placed, container_paint, stroke_w).view
+    w, h = max(w, 1e-12), max(h, 1e-12)
     if w >= h:
         W, H = size_px, max(1, round(size_px * h / w))
     else:
@@ -212,25 +226,34 @@ def png_bytes(
         "equal"
     )  # data and pixel aspect agree, so the axes keep the whole figure
 
-    if show_container:
-        if container.paths:
-            for art in container.paths:
-                _draw_art(ax, art, 1.0, pt_per_unit)
-        else:
-            from matplotlib.patches import PathPatch
-            from matplotlib.path import Path as MPath
+    if container_paint == "as-drawn" and container.paths:
+        for art in container.paths:
+            _draw_art(ax, art, 1.0, pt_per_unit)
+    elif container_paint != "none":  # the outline (also as-drawn's, for a container without shapes)
+        from matplotlib.patches import PathPatch
+        from matplotlib.path import Path as MPath
 
-            for poly in shapely.get_parts(container.region):
-                if isinstance(poly, shapely.Polygon) and not poly.is_empty:
-                    for ring in [poly.exterior, *poly.interiors]:
-                        ax.add_artist(  # not add_patch: the limits are set, no data-limit update
-                            PathPatch(
-                                MPath(np.asarray(ring.coords)),
-                                facecolor="none",
-                                edgecolor="black",
-                                linewidth=0.8,
-                            )
+        if container_paint == "outline":
+            # at least a pixel wide: a thumbnail still shows it
+            colour, width = outline_colour(container), max(stroke_w * pt_per_unit, 72.0 / _DPI)
+        else:  # as the SVG writer's outline of a container without shapes
+            x0c, y0c, x1c, y1c = container.bounds
+            colour, width = "#000000", math.hypot(x1c - x0c, y1c - y0c) / 1000 * pt_per_unit
+        for poly in shapely.get_parts(container.region):
+            if isinstance(poly, shapely.Polygon) and not poly.is_empty:
+                for ring in [poly.exterior, *poly.interiors]:
+                    pts = np.asarray(ring.coords)
+                    codes = np.full(len(pts), MPath.LINETO, dtype=MPath.code_type)
+                    codes[0], codes[-1] = MPath.MOVETO, MPath.CLOSEPOLY
+                    ax.add_artist(  # not add_patch: the limits are set, no data-limit update
+                        PathPatch(
+                            MPath(pts, codes),
+                            facecolor="none",
+                            edgecolor=colour,
+                            linewidth=width,
+                            joinstyle="round",
                         )
+                    )
     for pa in placed:
         for art in pa.paths:
             _draw_art(ax, art, pa.stroke_scale, pt_per_unit)

@@ -1,13 +1,16 @@
-"""Write the packing SVG: the container as drawn, every copy's art as smooth curves.
+"""Write the packing SVG: the container (an outline by default), every copy's art as smooth curves.
 
 Structure (the output contract; docs/evaluation.md describes how it is read)::
 
     <svg xmlns=... width=.. height=.. viewBox=.. data-gap="5.2" [data-partial="true"] data-*=...>
       <metadata>{"partial": false, ...}</metadata>
       <g id="container" data-source="heart.svg">
-        [<defs> the container's gradients and patterns </defs>]
-        the container's own shapes (<circle>, <path> ...) with their attributes and
-        composed transforms, exactly as drawn
+        container_paint "outline" (default): the region's exact outline, stroke only
+          <path class="container-outline" fill="none" stroke=.. stroke-width=.. d="..."/>
+        container_paint "as-drawn": [<defs> its gradients and patterns </defs>] the
+          container's own shapes (<circle>, <path> ...) with their attributes and composed
+          transforms, exactly as drawn
+        container_paint "none": nothing drawn
         <path class="container-region" fill="none" stroke="none" fill-rule="evenodd" d="..."/>
       </g>
       <g id="elements">
@@ -21,8 +24,9 @@ Structure (the output contract; docs/evaluation.md describes how it is read)::
     </svg>
 
 The invisible ``container-region`` path stores the exact region (holes included) so
-:func:`~repulsionpak.io.svg_write.read_packing_svg` gets the container back even when its
-outlines were drawn as separate shapes. Placed art with curves (``ArtPath.source``) is
+:func:`~repulsionpak.io.svg_write.read_packing_svg` gets the container back however it is
+drawn. The root's page attributes are the container file's, its viewBox grown where the
+drawing reaches past it (:func:`~repulsionpak.render.frame.packing_frame`). Placed art with curves (``ArtPath.source``) is
 written as those curves (compact relative path data); art without them as polylines.
 Output is deterministic and written atomically.
 """
@@ -41,12 +45,13 @@ import shapely
 
 from ..errors import OutputError
 from ..io.svg_write import atomic_write_bytes, format_number
-from ..io.svg_read import ROOT_VIEW_ATTRS
 from ..types import ArtPath, Container, PlacedArt, Style
+from .container_paint import check_paint, outline_colour, outline_width
 from .curves import decimals_for, path_data
+from .frame import packing_frame
 from .paint import CopyPaint, matrix_attr
 
-__all__ = ["packing_svg_string", "write_packing_svg"]
+__all__ = ["container_lines", "packing_svg_string", "write_packing_svg"]
 
 SVG_NS = "http://www.w3.org/2000/svg"
 _DEFAULT_STYLE = Style()
@@ -231,26 +236,45 @@ def _json_safe(obj):
     return str(obj)
 
 
-def _view(container: Container) -> list[tuple[str, str]]:
-    root = dict(container.svg_root or {})
-    out = []
-    if (
-        root.get("viewBox") is None
-        and root.get("width") is None
-        and root.get("height") is None
-    ):
-        x0, y0, x1, y1 = container.bounds
-        w, h = x1 - x0, y1 - y0
-        m = 0.02 * max(w, h) if max(w, h) > 0 else 1.0
-        vb = [x0 - m, y0 - m, w + 2 * m, h + 2 * m]
-        out.append(("width", format_number(vb[2])))
-        out.append(("height", format_number(vb[3])))
-        out.append(("viewBox", " ".join(format_number(v) for v in vb)))
-        return out
-    for key in ROOT_VIEW_ATTRS:  # the input's page mapping: the output overlays it
-        if root.get(key) is not None:
-            out.append((key, str(root[key])))
-    return out
+def container_lines(container: Container, container_paint: str, stroke_width: float,
+                    ids: set | None = None, rings=None, indent: str = "  ") -> list[str]:
+    """The ``<g id="container">`` of the output, as lines.
+
+    ``container_paint``: ``"outline"`` (the region's outline, ``stroke_width`` wide, in
+    :func:`~repulsionpak.render.container_paint.outline_colour`), ``"as-drawn"`` (the
+    container's own shapes and paint servers; a container without shapes gets a black
+    outline of 1/1000 of its diagonal) or ``"none"``; always followed by the invisible
+    ``container-region`` path. ``ids``: the ids written so far (updated).
+    """
+    rings, closed = rings if rings is not None else _region_rings(container.region)
+    region_d = _path_d(rings, closed)
+    inner = indent + "  "
+    lines = [f'{indent}<g id="container"{_attrs([("data-source", container.source)])}>']
+    if container_paint == "as-drawn":
+        servers = getattr(container, "paint_servers", None) or {}
+        if servers:
+            lines.append(f"{inner}<defs>" + "".join(servers[k] for k in sorted(servers)) + "</defs>")
+        for art in container.paths:
+            line = _container_shape_xml(art, inner, ids)
+            if line:
+                lines.append(line)
+        if not container.paths and region_d:
+            x0, y0, x1, y1 = container.bounds
+            diag = math.hypot(x1 - x0, y1 - y0) or 1.0
+            lines.append(
+                f'{inner}<path class="container-outline" fill="none" stroke="#000000" stroke-width="{_fmt_g(diag / 1000)}" fill-rule="evenodd" d={quoteattr(region_d)}/>'
+            )
+    elif container_paint == "outline" and region_d:
+        lines.append(
+            f'{inner}<path class="container-outline" fill="none" stroke="{outline_colour(container)}" '
+            f'stroke-width="{_fmt_g(stroke_width)}" stroke-linejoin="round" fill-rule="evenodd" d={quoteattr(region_d)}/>'
+        )
+    if region_d:
+        lines.append(
+            f'{inner}<path class="container-region" fill="none" stroke="none" fill-rule="evenodd" d={quoteattr(region_d)}/>'
+        )
+    lines.append(f"{indent}</g>")
+    return lines
 
 
 def packing_svg_string(
@@ -262,10 +286,29 @@ def packing_svg_string(
     partial: bool = False,
     metadata: dict | None = None,
     path: str | Path = "<output>",
+    container_paint: str = "outline",
 ) -> str:
-    """The packing SVG as a string (see module docstring); deterministic."""
+    """The packing SVG as a string (see module docstring); deterministic.
+
+    ``container_paint``: ``"outline"`` (the container's region as a thin stroke, no
+    fill), ``"as-drawn"`` (its own shapes and paint) or ``"none"`` (only the invisible
+    region). ``path`` only names the output in error messages.
+    """
     gap = float(gap)
-    root_attrs = [("xmlns", SVG_NS), *_view(container), ("data-gap", repr(gap))]
+    check_paint(container_paint)
+    for pa in placed:  # before anything measures the art
+        for art in pa.paths:
+            _check_finite(path, art.subpaths, f"element {pa.source}")
+            if art.source is not None:
+                _check_finite(path, [c.ctrl.reshape(-1, 2) for c in art.source.curves],
+                              f"element {pa.source}")
+    for art in container.paths:
+        _check_finite(path, art.subpaths, "the container")
+    rings, closed = _region_rings(container.region)
+    _check_finite(path, rings, "the container region")
+    stroke_w = outline_width(container, gap)
+    frame = packing_frame(container, placed, container_paint, stroke_w)
+    root_attrs = [("xmlns", SVG_NS), *frame.root_attrs, ("data-gap", repr(gap))]
     if partial:
         root_attrs.append(("data-partial", "true"))
     for key, value in (attrs or {}).items():
@@ -285,31 +328,11 @@ def packing_svg_string(
         f"  <metadata>{escape(json.dumps(meta, sort_keys=True, separators=(', ', ': ')))}</metadata>"
     )
 
-    # container: its shapes as drawn
+    # container: drawn as container_paint says, then its exact region (invisible)
     ids: set[str] = set()  # the shapes' ids written so far
-    lines.append(f'  <g id="container"{_attrs([("data-source", container.source)])}>')
+    lines.extend(container_lines(container, container_paint, stroke_w, ids, rings=(rings, closed)))
     x0, y0, x1, y1 = container.bounds
     diag = math.hypot(x1 - x0, y1 - y0) or 1.0
-    servers = getattr(container, "paint_servers", None) or {}
-    if servers:
-        lines.append("    <defs>" + "".join(servers[k] for k in sorted(servers)) + "</defs>")
-    for art in container.paths:
-        _check_finite(path, art.subpaths, "the container")
-        line = _container_shape_xml(art, "    ", ids)
-        if line:
-            lines.append(line)
-    rings, closed = _region_rings(container.region)
-    _check_finite(path, rings, "the container region")
-    region_d = _path_d(rings, closed)
-    if not container.paths and region_d:
-        lines.append(
-            f'    <path class="container-outline" fill="none" stroke="#000000" stroke-width="{_fmt_g(diag / 1000)}" fill-rule="evenodd" d={quoteattr(region_d)}/>'
-        )
-    if region_d:
-        lines.append(
-            f'    <path class="container-region" fill="none" stroke="none" fill-rule="evenodd" d={quoteattr(region_d)}/>'
-        )
-    lines.append("  </g>")
 
     # elements
     lines.append('  <g id="elements">')
@@ -331,10 +354,6 @@ def packing_svg_string(
         decimals = decimals_for(tol) if tol else 6
         body = []
         for art in pa.paths:
-            _check_finite(path, art.subpaths, f"element {pa.source}")
-            if art.source is not None:
-                _check_finite(path, [c.ctrl.reshape(-1, 2) for c in art.source.curves],
-                              f"element {pa.source}")
             line = _art_path_xml(art, pa.stroke_scale, "      ", paint, suffix, decimals, ids)
             if line:
                 body.append((art.style.layers, line))
@@ -370,17 +389,20 @@ def write_packing_svg(
     debug_layers: dict[str, list[np.ndarray]] | None = None,
     partial: bool = False,
     metadata: dict | None = None,
+    container_paint: str = "outline",
 ) -> None:
     """Write the packing as SVG in the container's coordinate system (atomic, deterministic).
 
     ``gap`` goes to ``data-gap``; ``attrs`` become further root ``data-*`` attributes;
     ``debug_layers`` maps a layer name to polygons ((K, 2) arrays) drawn in hidden
     groups; ``partial`` marks an interrupted run (``data-partial="true"``);
-    ``metadata`` is stored as JSON in ``<metadata>``. Raises OutputError if the
-    directory does not exist or the file cannot be written.
+    ``metadata`` is stored as JSON in ``<metadata>``; ``container_paint`` is
+    ``"outline"``, ``"as-drawn"`` or ``"none"`` (see :func:`packing_svg_string`). Raises
+    OutputError if the directory does not exist or the file cannot be written.
     """
     text = packing_svg_string(
-        container, placed, gap, attrs, debug_layers, partial, metadata, path=path
+        container, placed, gap, attrs, debug_layers, partial, metadata, path=path,
+        container_paint=container_paint,
     )
     atomic_write_bytes(path, text.encode("utf-8"))
 

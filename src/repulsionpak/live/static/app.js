@@ -23,9 +23,18 @@
     let d = "";
     for (const ring of m.rings) d += "M" + ring.map((p) => p[0] + " " + p[1]).join("L") + "Z";
     contLayer.innerHTML = "";
-    const p = document.createElementNS(NS, "path");
-    p.setAttribute("d", d); p.setAttribute("fill-rule", "evenodd");
-    contLayer.appendChild(p);
+    // the container as the outputs draw it (--container-paint): the page's own outline
+    // never hides the elements; "as-drawn" shows the container's own markup under them
+    if (m.paint === "as-drawn" && m.markup) {
+      const doc = new DOMParser().parseFromString(
+        '<svg xmlns="http://www.w3.org/2000/svg">' + m.markup + "</svg>", "image/svg+xml");
+      for (const c of Array.from(doc.documentElement.childNodes)) contLayer.appendChild(document.importNode(c, true));
+    } else if (m.paint !== "none") {
+      const p = document.createElementNS(NS, "path");
+      p.setAttribute("d", d); p.setAttribute("fill-rule", "evenodd"); p.setAttribute("class", "outline");
+      p.setAttribute("fill", "none"); p.setAttribute("stroke", m.colour || "#2d3142");
+      contLayer.appendChild(p);
+    }
   }
 
   function onLayout(m) {
