@@ -137,13 +137,13 @@ def test_spaces_collapse_across_tspans(tmp_path):
     np.testing.assert_allclose(_bounds(one), _bounds(two), atol=1e-6)
 
 
-def test_font_weight_numbers_pick_the_nearest_face(tmp_path):
-    body = '<text x="0" y="50" font-family="DejaVu Sans" font-size="40" font-weight="{}">H</text>'
-    light = _load(tmp_path, body.format(300), name="l.svg")
-    heavy = _load(tmp_path, body.format(650), name="h.svg")  # bold, as a browser picks it
-    bold = _load(tmp_path, body.format("bold"), name="b.svg")
-    assert _area(heavy) == pytest.approx(_area(bold), rel=1e-6)
-    assert _area(heavy) > 1.2 * _area(light)
+def test_font_weight_bolder_is_relative_to_the_parent_weight(tmp_path):
+    body = '<g font-weight="{}"><text x="0" y="50" font-family="DejaVu Sans" font-size="40" font-weight="{}">H</text></g>'
+    light_bolder = _load(tmp_path, body.format(300, "bolder"), name="l.svg")  # 300 -> 400: regular
+    regular = _load(tmp_path, body.format(400, "normal"), name="r.svg")
+    bold = _load(tmp_path, body.format(400, 650), name="b.svg")  # the bold face, as a browser picks it
+    assert _area(light_bolder) == pytest.approx(_area(regular), rel=1e-6)
+    assert _area(bold) > 1.2 * _area(regular)
 
 
 def test_font_variation_settings_is_said_to_be_ignored(tmp_path):
@@ -159,3 +159,55 @@ def test_pattern_paint_is_said_to_be_packed_as_a_solid_shape(tmp_path):
             'fill="green"/></pattern><rect width="100" height="100" fill="url(#p)"/>')
     with pytest.warns(UserWarning, match="pattern paint"):
         _load(tmp_path, body)
+
+
+# ----------------------------------------------------------------------------- baselines, decorations
+
+
+def _dejavu_metrics():
+    from matplotlib.font_manager import FontProperties, findfont
+    from matplotlib.ft2font import FT2Font
+
+    f = FT2Font(findfont(FontProperties(family="DejaVu Sans")))
+    return f.ascender / f.units_per_EM, f.descender / f.units_per_EM
+
+
+_TEXT = '<text x="10" y="60" font-family="DejaVu Sans" font-size="20" {}>Hx</text>'
+
+
+@pytest.mark.parametrize("attrs, down", [
+    ('dominant-baseline="hanging"', lambda a, d: 0.8 * a * 20),
+    ('dominant-baseline="central"', lambda a, d: (a + d) / 2 * 20),
+    ('style="dominant-baseline: text-before-edge"', lambda a, d: a * 20),
+    ('dominant-baseline="hanging" alignment-baseline="text-after-edge"', lambda a, d: d * 20),
+    ('dominant-baseline="mathematical"', lambda a, d: 0.5 * a * 20),
+])
+def test_baselines_move_the_run(tmp_path, attrs, down):
+    plain = _load(tmp_path, _TEXT.format(""), name="plain.svg")
+    moved = _load(tmp_path, _TEXT.format(attrs), name="moved.svg")
+    a, d = _dejavu_metrics()
+    np.testing.assert_allclose(_bounds(moved) - _bounds(plain), [0, down(a, d), 0, down(a, d)], atol=1e-3)  # (path data has 6 digits)
+
+
+@pytest.mark.parametrize("shift, up", [("10", 10.0), ("-50%", -10.0), ("2mm", 2 * 96 / 25.4)])
+def test_baseline_shift_on_a_tspan(tmp_path, shift, up):
+    body = ('<text x="10" y="60" font-family="DejaVu Sans" font-size="20">H<tspan baseline-shift="{}">'
+            '<tspan>H</tspan></tspan></text>')
+    plain = _load(tmp_path, body.format("baseline"), name="plain.svg")
+    moved = _load(tmp_path, body.format(shift), name="moved.svg")
+    def by_x(el):  # [first H, second H]
+        return sorted((_bounds(el, i) for i in range(len(el.paths))), key=lambda b: b[0])
+
+    (p1, p2), (m1, m2) = by_x(plain), by_x(moved)
+    assert m2[1] - p2[1] == pytest.approx(-up, abs=1e-3)
+    assert m1[1] == pytest.approx(p1[1], abs=1e-9)  # the first H stays
+
+
+def test_underline_and_line_through_are_bars_across_the_run(tmp_path):
+    plain = _load(tmp_path, _TEXT.format(""), name="plain.svg")
+    under = _load(tmp_path, _TEXT.format('text-decoration="underline line-through"'), name="u.svg")
+    pb, ub = _bounds(plain), _bounds(under)
+    assert ub[3] > 60 + 1.0 and pb[3] <= 60 + 1e-6  # the underline reaches below the baseline
+    geom = shapely.union_all([shapely.Polygon(p) for p in under.paths[0].subpaths if len(p) >= 3])
+    probe = shapely.LineString([(ub[0] + 0.5, 0), (ub[0] + 0.5, 100)])  # left of the H's stem
+    assert geom.intersection(probe).length > 0.5  # the bars start where the run starts

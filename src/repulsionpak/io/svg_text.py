@@ -28,6 +28,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from .svg_text_metrics import BASELINES, baseline_offset, decoration_bars, metrics_of, shift_item
 from .svg_xml import inline_declarations
 from .svg_xml import local_name as _local
 
@@ -78,24 +79,41 @@ class _Props:
         if el is not None:
             for name in ("font-family", "font-size", "font-weight", "font-style", "text-anchor",
                          "letter-spacing", "word-spacing", "writing-mode", "font-variation-settings",
-                         "font-variant", "font-stretch"):
+                         "font-variant", "font-stretch", "dominant-baseline", "alignment-baseline",
+                         "baseline-shift", "text-decoration"):
                 if el.get(name) is not None:
                     own[name] = el.get(name).strip()
             decls = {k: v for k, v, _ in inline_declarations(el.get("style"))}
             if "font" in decls:
                 own.update(_shorthand(decls["font"]))
             own.update({k: v for k, v in decls.items() if k.startswith(("font-", "text-anchor", "letter-",
-                                                                         "word-", "writing-"))})
+                                                                         "word-", "writing-", "dominant-",
+                                                                         "alignment-", "baseline-",
+                                                                         "text-decoration"))})
         base = parent
         self.size = base.size if base else _DEFAULT_SIZE
         self.family = base.family if base else ["serif"]  # browsers' default font
         self.weight = base.weight if base else 400
         self.style = base.style if base else "normal"
         self.anchor = base.anchor if base else "start"
+        self.dominant = base.dominant if base else "auto"  # inherited
+        self.alignment = "auto"  # not inherited
+        # baseline-shift: not inherited, but the shifts of nested tspans add up (the <text>'s own
+        # is not applied, as in Chrome and resvg)
+        tspan = el is not None and _local(el.tag) in _TEXT_LIKE
+        self.shifts = base.shifts if base and tspan else ()
+        self.decorations = base.decorations if base else ()  # drawn across every descendant's text
         self.unsupported: set[str] = set()
         for name, v in own.items():
             if v.lower() == "inherit":
                 continue
+            if name == "dominant-baseline" and v.lower() in BASELINES:
+                self.dominant = self.dominant if v.lower() == "no-change" else v.lower()
+            elif name == "alignment-baseline" and v.lower() in BASELINES:
+                self.alignment = v.lower()
+            elif name == "text-decoration":
+                kinds = tuple(k for k in v.lower().split() if k in ("underline", "overline", "line-through"))
+                self.decorations = tuple(dict.fromkeys(self.decorations + kinds))
             if name == "font-size":
                 self.size = _font_size(v, self.size)
             elif name == "font-family":
@@ -114,6 +132,10 @@ class _Props:
                 self.unsupported.add(name)
             elif name == "writing-mode" and v.lower() not in ("horizontal-tb", "lr", "lr-tb", "rl", "rl-tb"):
                 self.unsupported.add("vertical writing")
+        if tspan and own.get("baseline-shift") is not None:
+            item = shift_item(own["baseline-shift"], self.size)
+            if item is not None:
+                self.shifts = self.shifts + (item,)
 
 
 def _font_size(v: str, parent: float) -> float:
@@ -208,6 +230,14 @@ class _Fonts:
             if named and not installed:  # the font the warning names
                 self.fallback = get_font(self._findfont(fp, fallback_to_default=True)).family_name
             self._cache[key] = fp
+        return self._cache[key]
+
+    def metrics(self, props: _Props):
+        """The :class:`~.svg_text_metrics.FontMetrics` of the face ``props`` draws with."""
+        fp = self.prop(props)
+        key = ("metrics", id(fp))
+        if key not in self._cache:
+            self._cache[key] = metrics_of(self._ttp._get_font(fp))
         return self._cache[key]
 
     def run(self, s: str, props: _Props) -> tuple[np.ndarray, np.ndarray, float]:
@@ -385,9 +415,17 @@ def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve, note
     chunk = pieces[-1]
     if chunk["start"] is None:
         chunk["start"] = state["x"]
+    y = state["y"]
+    if props.shifts or props.dominant not in ("auto", "alphabetic") or props.alignment != "auto" \
+            or props.decorations:
+        m = fonts.metrics(props)
+        y += baseline_offset(m, props.size, props.dominant, props.alignment, props.shifts)
+        if props.decorations and advance > 0:
+            bars, bar_codes = decoration_bars(m, props.size, props.decorations, 0.0, advance, 0.0)
+            verts, codes = np.concatenate([verts, bars]), np.concatenate([codes, bar_codes])
     if len(verts):
         verts[:, 0] += state["x"]
-        verts[:, 1] += state["y"]
+        verts[:, 1] += y
         chunk["items"].append((target, verts, codes))
     end = state["x"] + advance
     if state["space"] and not preserve and chunk["anchor"] != "start" and s.strip(" "):
