@@ -104,6 +104,9 @@ def _summary(scene, run: dict | None, error: str | None, seconds: float) -> dict
         "distortion_primary": (d.get("by_kind") or {}).get("primary"),
         "scp_q0": m["scp"]["q0"] if m.get("scp") else None,
         "scp_at_half_gap": m["scp_at_half_gap"], "scp_ratio": m["scp_ratio"],
+        "n_primary": m["n_primary"], "n_secondary": m["n_secondary"],
+        "area_fraction_primary": m.get("area_fraction_primary"), "scp_ratio_primary": m.get("scp_ratio_primary"),
+        "smallest_secondary_rel": m.get("smallest_secondary_rel"),
         "scp_pixel_size": m["scp"]["pixel_size"] if m.get("scp") else None,
         "promises": m["promises"],
         "per_element": {"source": m["sources"], "gap": g["values"], "edge": e["values"],
@@ -202,29 +205,39 @@ def promise_status(r: dict) -> dict[str, bool | None]:
 
 
 def table(results: list[dict]) -> str:
-    head = ("| scene | category | container | scale | n | gap | median gap/gap | p10 gap/gap | overlap | "
-            "outside | min edge/gap (n < margin) | distortion p95 | primaries alone: p95 / max | "
-            "Q_s(gap/2)/Q_s(0) | area fraction | seconds | promises kept |")
-    lines = [head, "|" + " --- |" * 3 + " ---: |" * 14]
+    head = ("| scene | category | container | scale | n (primaries + copies) | gap | median gap/gap | p10 gap/gap | "
+            "overlap | outside | min edge/gap (n < margin) | distortion p95 | primaries alone: p95 / max | "
+            "Q_s(gap/2)/Q_s(0) | area fraction | primaries alone: area / Q_s ratio | smallest copy / median primary | "
+            "seconds | promises kept |")
+    lines = [head, "|" + " --- |" * 3 + " ---: |" * 16]
     for r in results:
         if r.get("error"):
             first = r["error"].splitlines()[0].replace("|", "\\|")
             lines.append(f"| {r['name']} | {r['category']} | {r['container']} | {r['scale']:g} | {r['count']} | "
-                         f"{r['gap']:g} | error: {first} | | | | | | | | | {r['seconds']:.1f} | 0/{len(PROMISES)} |")
+                         f"{r['gap']:g} | error: {first} | | | | | | | | | | | {r['seconds']:.1f} | 0/{len(PROMISES)} |")
             continue
         p = r["promises"]
         st = promise_status(r)
         dcell, dok = _distortion_cell(p)
         kept = sum(1 for v in st.values() if v)
         lines.append(
-            f"| {r['name']} | {r['category']} | {r['container']} | {r['scale']:g} | {r['n_elements']} | "
+            f"| {r['name']} | {r['category']} | {r['container']} | {r['scale']:g} | {_counts(r)} | "
             f"{r['gap']:g} | {_f(r['gap_median_rel'])}{_mark(st['gap_median'])} | "
             f"{_f(r['gap_p10_rel'])}{_mark(st['gap_p10'])} | {_f(r['overlap_rel'], 6)}{_mark(st['overlap'])} | "
             f"{_f(r['outside_rel'], 6)}{_mark(st['outside'])} | "
             f"{_f(r['edge_min_rel'])} ({r['edge_n_below_margin']}){_mark(st['edge_margin'])} | "
             f"{dcell}{_mark(dok)} | {_primary_cell(r)} | {_f(r['scp_ratio'])}{_mark(st['scp_ratio'])} | "
-            f"{_f(r['area_fraction'])} | {r['seconds']:.1f} | {kept}/{len(PROMISES)} |")
+            f"{_f(r['area_fraction'])} | {_f(r.get('area_fraction_primary'))} / {_f(r.get('scp_ratio_primary'))} | "
+            f"{_f(r.get('smallest_secondary_rel'))} | {r['seconds']:.1f} | {kept}/{len(PROMISES)} |")
     return "\n".join(lines)
+
+
+def _counts(r: dict) -> str:
+    """``P + S`` primaries and pocket copies (the element count alone in summaries of
+    runs made before evaluate() counted them apart)."""
+    if r.get("n_primary") is None:
+        return str(r["n_elements"])
+    return f"{r['n_primary']} + {r['n_secondary']}"
 
 
 def totals(results: list[dict]) -> str:

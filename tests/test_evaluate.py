@@ -505,3 +505,29 @@ def test_area_fraction_unites_only_elements_that_meet(monkeypatch):
     assert got == pytest.approx(want, rel=1e-12)
     assert united == [2]  # the overlapping pair only
     assert evaluate_mod.area_fraction(region, []) == 0.0
+
+
+def test_primaries_alone_and_the_smallest_copy():
+    """evaluate() measures the primaries without the pocket copies (area fraction and
+    Q_s(gap/2)/Q_s(0) of their art only) and the smallest copy against the median
+    primary (square roots of art areas); every earlier key stays."""
+    cont = Container("c.svg", box(0, 0, 100, 100))
+    prim = [box(5, 5, 45, 45), box(55, 5, 95, 45), box(5, 55, 35, 85)]  # sizes 40, 40, 30
+    sec = [box(60, 60, 68, 68), box(75, 75, 87, 87)]  # sizes 8 and 12
+    placed = placed_from(prim + sec, kinds=["primary"] * 3 + ["secondary"] * 2)
+    r = ev.evaluate(cont, placed, gap=4.0, grid=400)
+    assert r["n_primary"] == 3 and r["n_secondary"] == 2
+    assert r["area_fraction"] == pytest.approx((1600 + 1600 + 900 + 64 + 144) / 1e4)
+    assert r["area_fraction_primary"] == pytest.approx(4100 / 1e4)
+    assert r["median_primary_size"] == pytest.approx(40.0)
+    assert r["smallest_secondary_rel"] == pytest.approx(8.0 / 40.0)
+    alone = ev.evaluate(cont, placed[:3], gap=4.0, grid=400)
+    assert r["scp_ratio_primary"] == pytest.approx(alone["scp_ratio"])
+    assert r["scp_ratio_primary"] > r["scp_ratio"]  # the copies sit in the largest void
+    assert alone["smallest_secondary_rel"] is None
+    quick = ev.evaluate(cont, placed, gap=4.0, grid=400, with_scp=False)
+    assert quick["scp_ratio_primary"] is None and quick["area_fraction_primary"] == r["area_fraction_primary"]
+    assert ev.evaluate(cont, placed, gap=4.0, grid=400, with_scp=False,
+                       primary_scp=True)["scp_ratio_primary"] == pytest.approx(r["scp_ratio_primary"])
+    table = ev.format_table(r)
+    assert "primaries alone: area fraction" in table and "0.2000" in table

@@ -97,14 +97,59 @@ def test_small_holes_are_left_alone(ring_scene):
     assert HoleLibrary.of([dataclasses.replace(elems[0], controls=ElementControls(weight=0.0))]) is None
 
 
-def test_pack_fills_holes_by_default_and_not_without_pocket_fill(ring_scene):
-    assert Params().secondary.fill_holes and Params().secondary.fill_leftover
+def test_holes_are_filled_only_when_asked(ring_scene):
+    """A designer never wants a logo inside a logo: the holes stay empty by default
+    (``--fill-holes`` asks for them), the leftover pockets are filled."""
+    assert not Params().secondary.fill_holes and Params().secondary.fill_leftover
     from repulsionpak.cli import resolve_params
 
     off = resolve_params(pocket_fill=False).secondary
     assert not off.fill_holes and not off.fill_leftover and not off.auto
     with pytest.raises((ConfigError, ParameterError)):
         params_from_dict({"secondary": {"hole_min_radius": 0}})
+    with pytest.raises((ConfigError, ParameterError)):
+        params_from_dict({"secondary": {"min_size": -0.1}})
+
+
+def test_leftover_fill_keeps_out_of_holes_unless_asked(tmp_path):
+    """fill_pockets: the middle of a ring is a hole of its art, not a pocket: no copy goes
+    there unless ``into_holes`` (the octocat got a YouTube logo in its belly)."""
+    (tmp_path / "disc.svg").write_text(scenes.element_svg("disc"))
+    ring = shapely.Point(200, 100).buffer(90, 64).difference(shapely.Point(200, 100).buffer(60, 64))
+    d = " ".join("M" + " L".join(f"{x:.3f} {y:.3f}" for x, y in np.asarray(r.coords)) + " Z"
+                 for r in (ring.exterior, *ring.interiors))
+    (tmp_path / "ring.svg").write_text(
+        f'<svg xmlns="http://www.w3.org/2000/svg" width="600" height="200"><path fill-rule="evenodd" d="{d}"/></svg>')
+    (tmp_path / "box.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" width="600" height="200">'
+                                      '<path d="M0 0H600V200H0Z"/></svg>')
+    cont = load_container(tmp_path / "box.svg")
+    host = load_element(tmp_path / "ring.svg")
+    placed = [PlacedArt(host.source, "primary", host.paths)]
+    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
+    hole = shapely.Polygon(ring.interiors[0])
+    for into, expect_inside in ((False, False), (True, True)):
+        extra = fill_pockets(placed, lib, cont.region, 10.0, 5.0, np.random.default_rng(0), min_radius=5.0,
+                             into_holes=into)
+        inside = [e for e in extra if hole.contains(e.art)]
+        assert extra and bool(inside) is expect_inside, (into, len(inside))
+        assert all(shapely.distance(e.art, placed[0].art) >= 10.0 for e in extra)
+
+
+def test_leftover_copies_are_never_below_the_size_floor(tmp_path):
+    """fill_pockets with ``min_size``: the corners and the narrow ends of a pocket that took
+    specks (copies a few gaps across beside 100-unit ones) get nothing smaller than the
+    floor (the square root of a copy's art area, container units)."""
+    _, specks = _fill_strip(tmp_path, 640, '<circle cx="320" cy="100" r="95"/>')
+    sizes = sorted(math.sqrt(g.area) for g in specks)
+    assert sizes[0] < 0.5 * sizes[-1]  # without a floor: small copies in the corners
+    floor = 0.8 * sizes[-1]
+    (tmp_path / "strip.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" width="640" height="200">'
+                                        '<path d="M0 40H640V160H0Z"/><circle cx="320" cy="100" r="95"/></svg>')
+    cont = load_container(tmp_path / "strip.svg")
+    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
+    kept = fill_pockets([], lib, cont.region, 10.0, 5.0, np.random.default_rng(0), min_radius=5.0, min_size=floor)
+    assert kept and all(math.sqrt(e.art.area) >= floor for e in kept)
+    _assert_gap_and_margin(cont, [e.art for e in kept])
 
 
 def test_copies_in_a_pinched_hole_keep_the_gap_from_each_other(tmp_path):

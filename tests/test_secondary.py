@@ -220,3 +220,38 @@ def test_a_narrow_band_with_one_primary_gets_its_pockets_filled(tmp_path):
     gs = gap_statistics([p.art for p in packing.placed])
     assert 0.9 <= gs["median"] / 30.0 <= 1.1
     assert packing.verification.ok
+
+
+def test_automatic_copies_keep_the_size_floor():
+    """Without --secondary no pocket copy is smaller than ``secondary.min_size`` (0.2) of
+    the median primary, sizes being the square root of the art's area; without the floor
+    the same scene gets specks (the test can fail)."""
+    import dataclasses
+
+    from repulsionpak import pack
+    from repulsionpak.params import Params, PlacementParams
+    from repulsionpak.secondary import art_size, size_floor
+    from repulsionpak.types import Container
+
+    region = shapely.box(0, 0, 300, 200)
+    el = _bar_element(60.0, 12.0)
+    base = Params(gap=4.0, seed=2, placement=PlacementParams(count=8))
+    rel = {}
+    for share in (0.0, 0.2):
+        p = dataclasses.replace(base, secondary=dataclasses.replace(base.secondary, min_size=share))
+        packing = pack(Container("box.svg", region), [el], p)
+        prim = [art_size(q.art) for q in packing.placed if q.kind == "primary"]
+        sec = [art_size(q.art) for q in packing.placed if q.kind == "secondary"]
+        assert sec and packing.verification.ok
+        rel[share] = min(sec) / float(np.median(prim))
+        if share:
+            assert min(sec) >= size_floor(prim, share) * (1 - 1e-9)
+    assert rel[0.0] < 0.2 <= rel[0.2], rel
+
+
+def test_size_floor_is_a_share_of_the_median():
+    from repulsionpak.secondary import art_size, size_floor
+
+    assert size_floor([10.0, 30.0, 20.0], 0.2) == pytest.approx(4.0)
+    assert size_floor([], 0.2) == 0.0 and size_floor([10.0], 0.0) == 0.0
+    assert art_size(shapely.box(0, 0, 4, 9)) == pytest.approx(6.0)

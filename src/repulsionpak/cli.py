@@ -290,7 +290,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              report: Path | None = None, png: Path | None = None, count: int | None = None,
              max_iterations: int | None = None, progress: bool = True, debug_layers: bool = False,
              checkpoint: Path | None = None, checkpoint_every: int = 500, resume: Path | None = None,
-             margin: float | None = None, pocket_fill: bool = True, pdf: Path | None = None,
+             margin: float | None = None, pocket_fill: bool = True, fill_holes: bool = False,
+             pdf: Path | None = None,
              movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
              controls=None, live: dict | None = None, container_paint: str | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
@@ -333,6 +334,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill, container_paint)
     if params.seed is None:
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
+    if fill_holes and pocket_fill:  # --fill-holes: copies go into the holes of the art too
+        params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, fill_holes=True))
     from .io.svg_read import TooManyPoints
     from .pack import CONTAINER_TOLERANCE, check_fineness, default_gap
 
@@ -444,7 +447,8 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
         stages.stage("measuring")
         # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
         metrics = evaluate(cont, packing.placed, g, with_scp=False, margin=margin_of(params, g),
-                           sources=[*elems, *secs] if report is not None else None, workers=_fit_workers())
+                           sources=[*elems, *secs] if report is not None else None, workers=_fit_workers(),
+                           primary_scp=report is not None)  # the primaries' Q_s ratio: for the report
         checks = invariants(packing, metrics)
         stages.stage("writing")
         hiding = paint_warning(packing)
@@ -508,6 +512,9 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
         "gap": g, "gap_stats": metrics["gap"], "seed": params.seed,
         "outside_area": metrics["outside_area"], "edge": metrics["edge"],
         "distortion": metrics["distortion"],
+        # the primaries without the pocket copies, and the smallest copy (evaluate())
+        **{k: metrics[k] for k in ("area_fraction_primary", "scp_ratio_primary", "median_primary_size",
+                                   "smallest_secondary_rel")},
         "partial": packing.partial,
         "stopped_by": dict(packing.stopped_by, **({"outputs": "interrupted"} if not_written else {})),
         "invariants": checks,
@@ -623,6 +630,9 @@ def pack(
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
     margin: MarginOpt = None,
     no_pocket_fill: NoPocketFillOpt = False,
+    fill_holes: Annotated[bool, typer.Option(
+        "--fill-holes", help="Also put pocket copies in the holes of elements (a ring's middle, a letter's "
+        "counter, the inside of a logo); off by default.")] = False,
     config: ConfigOpt = None,
     report: Annotated[Optional[Path], typer.Option(help="Write a JSON report here.")] = None,
     png: Annotated[Optional[Path], typer.Option(help="Also render the packing to this PNG.")] = None,
@@ -658,7 +668,7 @@ def pack(
         rep = run_pack(container, elements, output, secondary, gap, seed, config, report, png,
                        count, max_iterations, progress=not quiet, debug_layers=debug_layers,
                        checkpoint=checkpoint, checkpoint_every=checkpoint_every, resume=resume,
-                       margin=margin, pocket_fill=not no_pocket_fill, pdf=pdf,
+                       margin=margin, pocket_fill=not no_pocket_fill, fill_holes=fill_holes, pdf=pdf,
                        movie=movie, movie_every=movie_every, movie_size=movie_size,
                        controls=cli_controls(rotation, rigid, stiffness),
                        live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None,

@@ -534,6 +534,7 @@ def evaluate(
     sources=None,
     margin: float | None = None,
     workers: int = 1,
+    primary_scp: bool | None = None,
 ) -> dict:
     """All metrics of a packing as a JSON-serialisable dict (as ``repulsionpak evaluate --json`` prints it).
 
@@ -546,6 +547,15 @@ def evaluate(
     ``scp_at_half_gap`` = Q_s(gap/2) and ``scp_ratio`` = Q_s(gap/2)/Q_s(0).
     With ``with_scp=False`` the three SCP entries are ``None`` (the raster and its
     distance transform are the slow part; ``pack`` reports do without them).
+
+    What the primaries do alone (the pocket copies hide a loose packing from the
+    measures above, which count every copy): ``area_fraction_primary`` (the primaries'
+    art only), ``scp_ratio_primary`` = Q_s(gap/2)/Q_s(0) with only the primaries' art
+    (``None`` without SCP; ``primary_scp`` True computes it even with ``with_scp=False``,
+    default: as ``with_scp``), ``median_primary_size`` (the median primary's size, the
+    square root of its art's area, container units; ``None`` without primaries) and
+    ``smallest_secondary_rel``, the smallest secondary copy's size over it (``None``
+    without primaries or secondaries).
 
     Issue 10's art-only measurements (:mod:`repulsionpak.metrics`):
     ``outside_area`` (art area outside the container, exact), ``edge`` {min, margin,
@@ -594,6 +604,8 @@ def evaluate(
         s = scp(region, geoms, grid=grid, gap=gap)
         q_half = _q_at(s, 0.5 * gap)
         q0 = s["q"][0] if s["q"] else None
+    alone = _primaries_alone(region, geoms, [p.kind for p in placed], gap, grid,
+                             with_scp if primary_scp is None else primary_scp)
     return {
         "area_fraction": float(af),
         "overlap_area": overlap_area(geoms),
@@ -621,6 +633,29 @@ def evaluate(
         "scp": s,
         "scp_at_half_gap": q_half,
         "scp_ratio": (q_half / q0) if (q_half is not None and q0) else None,
+        **alone,
+    }
+
+
+def _primaries_alone(region, geoms: list, kinds: list[str], gap: float, grid: int, with_scp: bool) -> dict:
+    """The keys of :func:`evaluate` that measure the primaries without the pocket copies:
+    ``area_fraction_primary``, ``scp_ratio_primary`` (None unless ``with_scp``),
+    ``median_primary_size`` and ``smallest_secondary_rel`` (sizes: the square root of
+    the art's area)."""
+    prim = [g for g, k in zip(geoms, kinds) if k == "primary"]
+    sizes = [float(np.sqrt(g.area)) for g in prim]
+    sec = [float(np.sqrt(g.area)) for g, k in zip(geoms, kinds) if k != "primary"]
+    median = float(np.median(sizes)) if sizes else None
+    ratio = None
+    if with_scp and prim:
+        sp = scp(region, prim, grid=grid, gap=gap)
+        q0 = sp["q"][0] if sp["q"] else None
+        ratio = _q_at(sp, 0.5 * gap) / q0 if q0 else None
+    return {
+        "area_fraction_primary": float(area_fraction(region, prim)) if prim else 0.0,
+        "scp_ratio_primary": ratio,
+        "median_primary_size": median,
+        "smallest_secondary_rel": (min(sec) / median) if (sec and median) else None,
     }
 
 
@@ -722,6 +757,10 @@ def format_table(result: dict) -> str:
         rows.append(("Q_s(gap/2)", _fmt(result["scp_at_half_gap"])))
     if result.get("scp_ratio") is not None:
         rows.append(("Q_s(gap/2) / Q_s(0)", _fmt(result["scp_ratio"])))
+    if "area_fraction_primary" in result:
+        rows.append(("primaries alone: area fraction", _fmt(result.get("area_fraction_primary"))))
+        rows.append(("primaries alone: Q_s(gap/2) / Q_s(0)", _fmt(result.get("scp_ratio_primary"))))
+        rows.append(("smallest secondary / median primary (√area)", _fmt(result.get("smallest_secondary_rel"))))
     gap = g.get("requested")
     if gap and s.get("r"):
         for f in (0.25, 0.75, 1.0):

@@ -118,11 +118,12 @@ FIT_SHRINK, FIT_STEPS = 0.998, 6
 
 
 def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, min_radius: float,
-              render: RenderParams, trials: int):
+              render: RenderParams, trials: int, min_area: float = 0.0):
     """One undeformed copy inside the polygon ``part`` (a free region: everything in it is
     at least the gap from all art), centred on its largest inscribed circle and scaled up
-    until it touches the edge, the largest of ``trials`` random picks; (copy, its art
-    area) or None when the circle is below ``min_radius`` or nothing fits."""
+    until it touches the edge, the largest of ``trials`` random picks; (copy, its art)
+    or None when the circle is below ``min_radius`` or nothing of at least ``min_area``
+    of art (container units², the size floor squared) fits."""
     line = shapely.maximum_inscribed_circle(part, 0.01 * gap)
     at = np.asarray(line.coords[0])
     r = float(line.length)
@@ -147,7 +148,7 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
         area = lo * lo * g0.area
         if best is None or area > best[0]:
             best = (area, lo, k, angle)
-    if best is None:
+    if best is None or best[0] < min_area:
         return None
     _, s, k, angle = best
     e = library.elements[k]
@@ -158,17 +159,18 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
         copy = PlacedArt(e.source, "secondary", paths, stroke_scale=s, deformation=0.0,
                          paint_servers=dict(e.paint_servers), frame=m, tolerance=tol)
         if part.contains(copy.art):
-            return copy, copy.art
+            return (copy, copy.art) if copy.art.area >= min_area else None
         s *= FIT_SHRINK
     return None
 
 
 def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: np.random.Generator,
                min_radius: float, depth: int = 2, render: RenderParams = RenderParams(),
-               trials: int = 6, limit: int | None = None) -> list[PlacedArt]:
+               trials: int = 6, limit: int | None = None, min_size: float = 0.0) -> list[PlacedArt]:
     """Copies of ``library`` elements in the holes of ``placed`` (see the module
     docstring), at most ``limit``; returns the new copies only. ``min_radius``: the smallest inscribed
-    circle of a hole's free part that gets a copy (container units). Copies keep
+    circle of a hole's free part that gets a copy (container units); ``min_size``: the
+    smallest copy (square root of its art's area, container units). Copies keep
     1.005 × the gap from their hosts: the writer rounds their curves by at most a fifth
     of their tolerance, itself at most 0.02 gap."""
     geoms = [p.art for p in placed]
@@ -182,7 +184,7 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
         if level >= depth:
             continue
         for hole, islands in _holes(host):
-            if hole.area < math.pi * min_radius ** 2:
+            if hole.area < max(math.pi * min_radius ** 2, min_size ** 2):
                 continue
             free = hole.buffer(-keep)
             for g in islands:  # the host's own art inside the hole keeps the gap too
@@ -201,7 +203,7 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
                     continue
                 if limit is not None and len(out) >= limit:
                     break
-                got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
+                got = _fit_copy(part, library, gap, rng, min_radius, render, trials, min_size ** 2)
                 if got is None:
                     continue
                 copy, g = got
@@ -246,9 +248,19 @@ def _dilation(g, reach: float):
     return robust_union_all(_dilated([g], reach))
 
 
+def _shells(g):
+    """``g`` with its holes filled (the union of its polygons' outer rings); ``g`` itself
+    when it has none."""
+    parts = shapely.get_parts(g)
+    if not any(len(p.interiors) for p in parts if isinstance(p, shapely.Polygon)):
+        return g
+    return robust_union_all([shapely.Polygon(p.exterior) for p in parts if isinstance(p, shapely.Polygon)])
+
+
 def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,
                  rng: np.random.Generator, min_radius: float, render: RenderParams = RenderParams(),
-                 trials: int = 6, limit: int | None = None) -> list[PlacedArt]:
+                 trials: int = 6, limit: int | None = None, min_size: float = 0.0,
+                 into_holes: bool = False) -> list[PlacedArt]:
     """Undeformed copies in what is left of the negative space after the verification:
     the container shrunk by the edge margin, minus every element's art dilated by the
     gap, split into its connected pockets; each pocket whose largest inscribed circle is
@@ -260,32 +272,36 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     pocket, and 64 copies left Q_s(gap/2)/Q_s(0) at 0.604.)
     These pockets are the room an element left when the verification had to drop it, or
     that the simulated pocket fill did not reach; every copy is a gap from all art and
-    the margin from the edge by construction. Returns the new copies only, at most ``limit``."""
+    the margin from the edge by construction. Returns the new copies only, at most ``limit``.
+    ``min_size`` (container units): no copy smaller (:func:`repulsionpak.secondary.art_size`)
+    is placed. ``into_holes`` false: the holes of the art (a ring's middle, the inside of
+    a logo) are not pockets; :func:`fill_holes` fills them when asked."""
     keep = 1.005 * gap
     eps = 0.01 * gap
     # a buffer with 4 segments per quarter circle is inscribed in the true one (its chords
     # come within cos(π/16) ≈ 0.98 of the radius at corners): widen it to cover it
     reach = (keep + eps) / math.cos(math.pi / 16)
-    geoms = [shapely.simplify(p.art, eps) for p in placed]
+    geoms = [shapely.simplify(p.art if into_holes else _shells(p.art), eps) for p in placed]
     taken = robust_union_all(_dilated(geoms, reach))
     free = overlay(shapely.difference, shapely.buffer(region, -(1.005 * margin)), taken)
     if free.is_empty:
         return []
     parts = [q for q in getattr(free, "geoms", [free]) if isinstance(q, shapely.Polygon)]
-    parts = [q for q in parts if q.area >= math.pi * min_radius ** 2]
+    least = max(math.pi * min_radius ** 2, min_size ** 2)  # a piece smaller holds no copy
+    parts = [q for q in parts if q.area >= least]
     parts.sort(key=lambda q: -q.area)
     out: list[PlacedArt] = []
     for pocket in parts:
         todo = [pocket]  # the pocket, then every piece a copy leaves of it, largest first
         while todo and (limit is None or len(out) < limit):
             part = todo.pop(0)
-            got = _fit_copy(part, library, gap, rng, min_radius, render, trials)
+            got = _fit_copy(part, library, gap, rng, min_radius, render, trials, min_size ** 2)
             if got is None:
                 continue
             copy, g = got
             out.append(copy)
-            rest = overlay(shapely.difference, part, _dilation(g, reach))
+            rest = overlay(shapely.difference, part, _dilation(g if into_holes else _shells(g), reach))
             todo += [q for q in getattr(rest, "geoms", [rest])
-                     if isinstance(q, shapely.Polygon) and not q.is_empty and q.area >= math.pi * min_radius ** 2]
+                     if isinstance(q, shapely.Polygon) and not q.is_empty and q.area >= least]
             todo.sort(key=lambda q: -q.area)
     return out

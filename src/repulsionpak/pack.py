@@ -310,7 +310,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       seconds={"preprocess": t1 - t0, "primary": t2 - t1, "secondary": 0.0},
                       stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction)
     user_cap = params.secondary.max_count  # a bound on every secondary copy, the fills' too
-    if not secondary and params.secondary.auto:
+    auto = not secondary and params.secondary.auto  # pockets get copies of the primaries
+    if auto:
         secondary = elements  # the pockets get small copies of the primaries (sec. 9)
         # at most 10 copies per primary, but never fewer than AUTO_FILL_MIN: a narrow
         # container's default count can be one or two primaries, whose band of pockets
@@ -326,7 +327,7 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, candidates=1))
         packing.params = params
     if secondary and res.stopped_by != "interrupted":
-        from .secondary import add_secondary  # noqa: PLC0415  (issue: secondary phase)
+        from .secondary import add_secondary, mesh_primary_sizes, size_floor  # noqa: PLC0415
 
         primary_state = dict(sim.snapshot_state(), done=True, area=res.area_fraction)  # frozen from now on
         stage("placing secondary copies")
@@ -334,7 +335,8 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
                       on_checkpoint=(None if on_checkpoint is None else
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"),
-                      snapshot_every=snapshot_every)
+                      snapshot_every=snapshot_every,
+                      min_size=size_floor(mesh_primary_sizes(packing), params.secondary.min_size) if auto else 0.0)
     t3 = time.perf_counter()
     stage("mapping the art")
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
@@ -365,6 +367,12 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         packing.stopped_by["verify"] = "interrupted"  # a partial packing (exit 130), promises kept
     packing.seconds["verify"] = time.perf_counter() - t4
     sec = params.secondary
+    floor = 0.0
+    if auto and sec.min_size > 0:  # the floor on the mapped art: copies pressed below it go
+        from .secondary import art_size, size_floor  # noqa: PLC0415
+
+        floor = size_floor([art_size(q.art) for q in packing.placed if q.kind == "primary"], sec.min_size)
+        packing.placed = [q for q in packing.placed if q.kind == "primary" or art_size(q.art) >= floor]
     if (sec.fill_holes or sec.fill_leftover) and secondary and not packing.partial:
         from .holes import HoleLibrary, fill_holes, fill_pockets  # noqa: PLC0415
 
@@ -374,14 +382,15 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
             stage("filling pockets")
             packing.placed = packing.placed + fill_pockets(
                 packing.placed, library, container.region, gap, margin_of(params, gap), rng,
-                sec.hole_min_radius * gap, params.render, limit=_room(user_cap, packing.placed))
+                sec.hole_min_radius * gap, params.render, limit=_room(user_cap, packing.placed),
+                min_size=floor, into_holes=sec.fill_holes)
             packing.seconds["leftover"] = time.perf_counter() - t5
         if library is not None and sec.fill_holes:  # the holes of the art are pockets too (holes.py)
             t5 = time.perf_counter()
             stage("filling holes")
             packing.placed = packing.placed + fill_holes(
                 packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render,
-                limit=_room(user_cap, packing.placed))
+                limit=_room(user_cap, packing.placed), min_size=floor)
             packing.seconds["holes"] = time.perf_counter() - t5
     packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0

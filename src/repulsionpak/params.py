@@ -184,10 +184,18 @@ class SecondaryParams:
         "pockets. None: every element for the automatic fill (copies of the primaries), 1 for "
         "secondaries given with --secondary (the designer's mix, assigned at random as in the paper). "
         "Not with designer controls.")
+    min_size: float = _doc(
+        0.2, "× median primary size", "Smallest automatic pocket copy (no --secondary given): a copy's "
+        "size is the square root of its art's area (the ink it puts down, whatever its shape or "
+        "orientation; a bounding circle would count a whisker or a tail as size), and no copy is "
+        "placed, or kept after the verification, below this share of the median primary's. "
+        "Secondaries given with --secondary are the designer's and are sized by their pockets only "
+        "(0 = no floor).")
     fill_holes: bool = _doc(
-        True, "-", "Put an undeformed secondary copy in every hole of the packed art (a ring's "
-        "middle, a letter's counter) that can hold one a gap away from its edge; part of the pocket "
-        "fill (off with it).")
+        False, "-", "Put undeformed secondary copies in the holes of the packed art (a ring's "
+        "middle, a letter's counter, the inside of a logo) that can hold one a gap away from its "
+        "edge (CLI --fill-holes); off: holes stay empty, as a designer expects of a logo or a "
+        "letter. Part of the pocket fill (off with it).")
     fill_leftover: bool = _doc(
         True, "-", "After the verification, every pocket of the negative space still wide enough "
         "to hold a circle of hole_min_radius a gap from all art (room left by an element the "
@@ -430,6 +438,7 @@ class Params:
             (sec.candidates is None or sec.candidates >= 1, "secondary.candidates must be >= 1"),
             (0 < sec.initial_fraction <= 1, "secondary.initial_fraction must be in (0, 1]"),
             (sec.hole_min_radius > 0, "secondary.hole_min_radius must be > 0"),
+            (0 <= sec.min_size <= 1, "secondary.min_size must be in [0, 1] (× the median primary's size)"),
             (0 <= sec.hole_depth <= 10, "secondary.hole_depth must be in [0, 10]"),
             (1e-7 <= self.render.curve_tolerance <= 0.05, "render.curve_tolerance must be in [1e-7, 0.05]"),
             # a looser fit eats into the gap, and the checks' flattening of it (a tenth of the

@@ -205,14 +205,57 @@ def _first_misfit(dist, x0, y0, h, sx, sy, q, scales, offset):  # pragma: no cov
     return out
 
 
+def art_size(geom) -> float:
+    """An element's size: the square root of its art's area (container units).
+
+    Notes
+    -----
+    The ink a copy puts down decides whether it reads as a shape or as a speck, whatever
+    its outline: a bounding circle would count a mouse's whiskers or a sword's length as
+    size, and a copy that is mostly whisker would pass any floor on it."""
+    return float(np.sqrt(max(float(geom.area), 0.0)))
+
+
+def mesh_primary_sizes(packing) -> np.ndarray:
+    """:func:`art_size` of every primary at the end of the primary phase (container units),
+    from its mesh: the template's art size × the mesh's growth (RMS radius of its vertices
+    about their mean, over the template's at its nominal scale). (P,) in element order.
+
+    Notes
+    -----
+    The secondary phase runs before any art is mapped; the estimate only chooses which
+    pockets get a copy. The final floor is set again on the mapped art
+    (:func:`size_floor`)."""
+    m, st, fr = packing.model, packing.state, packing.frame
+    out = []
+    for e in range(m.n_elements):
+        if m.kind[e] != "primary":
+            continue
+        t = packing.templates[int(m.template_index[e])]
+        v = st.x[m.elem_vstart[e]:m.elem_vstart[e + 1]] * fr.unit
+        r_now = float(np.sqrt(((v - v.mean(axis=0)) ** 2).sum(axis=1).mean()))
+        r_nom = float(np.sqrt(((t.verts - t.verts.mean(axis=0)) ** 2).sum(axis=1).mean()))
+        out.append(np.sqrt(t.outline.area) * t.scale * (r_now / r_nom if r_nom > 0 else 1.0))
+    return np.asarray(out, dtype=float)
+
+
+def size_floor(primary_sizes, share: float) -> float:
+    """The smallest pocket copy allowed: ``share`` × the median of ``primary_sizes``
+    (container units); 0 without primaries or with ``share`` 0."""
+    sizes = np.asarray(primary_sizes, dtype=float)
+    return float(share * np.median(sizes)) if share > 0 and len(sizes) else 0.0
+
+
 def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator,
                   on_snapshot: Callable[[Snapshot], None] | None = None,
                   should_stop: Callable[[], bool] | None = None,
                   on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 0,
-                  saved: dict | None = None, snapshot_every: int = 25) -> int:
+                  saved: dict | None = None, snapshot_every: int = 25, min_size: float = 0.0) -> int:
     """Run the secondary phase on ``packing`` in place; returns the number of elements added.
 
-    ``on_checkpoint(state)`` / ``saved``: as in :func:`repulsionpak.pack.pack`, for this phase."""
+    ``on_checkpoint(state)`` / ``saved``: as in :func:`repulsionpak.pack.pack`, for this phase.
+    ``min_size`` (container units): pockets whose best fitted copy is smaller
+    (:func:`art_size` at its nominal scale) get none."""
     p = packing.params
     sp = p.secondary
     gap = packing.gap
@@ -244,6 +287,16 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
         cand = assign[:, None]
     angles, scales, assign = _fit_to_pockets(pockets, outlines, cand, ctrls if controlled else None,
                                              p.preprocess.skin_offset * gap, p.placement.rotate, rng)
+    if min_size > 0:  # no specks: a pocket too small for a copy of the floor's size stays empty
+        # a copy may grow past its fit (to sim.max_size, where its neighbours leave room):
+        # one fitted that far below the floor may still end above it; those that do not
+        # are dropped after the verification (pack.py)
+        size = np.sqrt([outlines[int(i)].area for i in assign]) * scales * p.sim.max_size
+        keep = size >= min_size
+        seeds, angles, scales, assign = seeds[keep], angles[keep], scales[keep], assign[keep]
+        if len(seeds) == 0:
+            packing.stopped_by["secondary"] = "no_pockets"
+            return 0
     # one template per element and size class (factor SIZE_STEP): every copy's skin is
     # built for about its own final size, so it keeps about half a gap around its art
     # however small or large its pocket is

@@ -95,13 +95,35 @@ def _fill_geometry(path: ArtPath) -> shapely.Geometry:
         # only a larger subpath can contain a smaller one's region
         inside &= areas < areas[j]
         winding[inside] += signs[j]
+    return _polygonal(_compose(polys, order, winding != 0))
+
+
+def _compose(polys: list, order: np.ndarray, fill: np.ndarray) -> shapely.Geometry:
+    """``polys`` united (``fill[i]``) or cut out, one after the other in ``order``, as few
+    set operations: an operation needs to wait only for the earlier ones of the other
+    kind whose bounding boxes meet its own (two unions, or two cuts, commute; a union
+    and a cut of disjoint regions too). Each is given the first level after those; every
+    level is one union of its fills then one cut of its holes. The same region as the
+    operations one by one, which cost quadratic time in the number of subpaths (a line
+    of text of 148 glyph contours: 0.15 s per copy, most of a pocket fill of text)."""
+    n = len(order)
+    box = np.asarray(shapely.bounds(np.asarray(polys, dtype=object)))[order]
+    kind = np.asarray(fill, dtype=bool)[order]
+    level = np.zeros(n, dtype=np.int64)
+    for k in range(1, n):
+        b = box[:k]
+        meets = ((b[:, 0] <= box[k, 2]) & (b[:, 2] >= box[k, 0]) & (b[:, 1] <= box[k, 3])
+                 & (b[:, 3] >= box[k, 1]) & (kind[:k] != kind[k]))
+        level[k] = level[:k][meets].max() + 1 if meets.any() else 0
     out = Polygon()
-    for i in order:
-        if winding[i] != 0:
-            out = shapely.union(out, polys[i])
-        else:
-            out = shapely.difference(out, polys[i])
-    return _polygonal(out)
+    for lv in range(int(level.max()) + 1 if n else 0):
+        adds = [polys[order[k]] for k in np.flatnonzero((level == lv) & kind)]
+        cuts = [polys[order[k]] for k in np.flatnonzero((level == lv) & ~kind)]
+        if adds:
+            out = shapely.union(out, adds[0] if len(adds) == 1 else shapely.union_all(adds))
+        if cuts:
+            out = shapely.difference(out, cuts[0] if len(cuts) == 1 else shapely.union_all(cuts))
+    return out
 
 
 def _stroke_geometry(path: ArtPath, width: float) -> shapely.Geometry:
