@@ -211,3 +211,32 @@ def test_underline_and_line_through_are_bars_across_the_run(tmp_path):
     geom = shapely.union_all([shapely.Polygon(p) for p in under.paths[0].subpaths if len(p) >= 3])
     probe = shapely.LineString([(ub[0] + 0.5, 0), (ub[0] + 0.5, 100)])  # left of the H's stem
     assert geom.intersection(probe).length > 0.5  # the bars start where the run starts
+
+
+# ----------------------------------------------------------------------------- single bugs
+
+
+def test_s_after_t_starts_at_the_current_point(tmp_path):
+    # the S's first control is the current point (80, 30), not the T's reflected control
+    el = _load(tmp_path, '<path d="M 30 100 T 80 30 S 120 100 170 100" fill="none" stroke="black"/>',
+               root='viewBox="0 0 200 200"')
+    np.testing.assert_allclose(_bounds(el), (30, 30, 170, 100), atol=1e-6)
+
+
+def test_rgb_with_fractional_channels_paints_the_shape(tmp_path):
+    el = _load(tmp_path, '<rect width="50" height="50" fill="rgb(0.8, 127.5, 14.2)"/>')
+    assert el.paths[0].style.fill == "#01800e"
+
+
+def test_display_none_on_the_root_is_said_plainly(tmp_path):
+    from repulsionpak.errors import InputError
+
+    with pytest.raises(InputError, match='display="none"'):
+        _load(tmp_path, '<rect width="50" height="50"/>', root='viewBox="0 0 200 100" display="none"')
+
+
+def test_use_cycle_skips_only_the_use(tmp_path):
+    body = '<g id="g1"><use href="#g1" x="20"/><rect x="20" y="20" width="60" height="60"/></g>'
+    with pytest.warns(UserWarning, match="drawing itself"):
+        el = _load(tmp_path, body)
+    np.testing.assert_allclose(_bounds(el), (20, 20, 80, 80), atol=1e-9)

@@ -295,7 +295,14 @@ class ClipResolver:
         pts = [p for sh in self._owners.get(id(ref), []) for p, _ in self._flat_shape(sh)]
         return _bbox_in(pts, ref.matrix)
 
-    def _resolve(self, clip_id: str, matrix: np.ndarray, bbox_fn, depth: int):
+    def _resolve(self, clip_id: str, matrix: np.ndarray, bbox_fn, depth: int, chain: tuple = ()):
+        if clip_id in chain:  # a cycle: the link that closes it is left out, as browsers (and
+            if ("cycle", clip_id) not in self._missing:  # resvg) drop a recursive clip-path
+                self._missing.add(("cycle", clip_id))
+                self.warn(f"clip-path url(#{clip_id}) refers back to itself; that reference is "
+                          "ignored (as browsers do)")
+            return None
+        chain = chain + (clip_id,)
         if depth > MAX_CLIP_DEPTH:
             raise InputError(
                 self.path,
@@ -325,14 +332,14 @@ class ClipResolver:
             if ch.clip_id is not None and not g.is_empty:
                 pts = [p for p, _ in subs]
                 sub = self._resolve(ch.clip_id, cm, lambda pts=pts, cm=cm: _bbox_in(pts, cm),
-                                    depth + 1)
+                                    depth + 1, chain)
                 if sub is not None:
                     g = shapely.intersection(g, sub)
             if not g.is_empty:
                 parts.append(g)
         out = _polygonal(shapely.union_all(parts)) if parts else shapely.Polygon()
         if cd.clip_id_of_clip is not None and not out.is_empty:
-            sub = self._resolve(cd.clip_id_of_clip, matrix, bbox_fn, depth + 1)
+            sub = self._resolve(cd.clip_id_of_clip, matrix, bbox_fn, depth + 1, chain)
             if sub is not None:
                 out = _polygonal(shapely.intersection(out, sub))
         return out

@@ -53,6 +53,7 @@ from .svg_lengths import resolve_lengths, resolve_transform_origin
 from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
 from .svg_pathdata import NUMBER, path_data_error
 from .svg_text import text_to_paths
+from .svg_xml import drop_use_cycles, integer_rgb_colours
 from .svg_xml import inline_declarations as _inline_declarations
 from .svg_xml import local_name as _local
 
@@ -1261,6 +1262,24 @@ def _dots(segments: list, style: Style) -> list:
     return out
 
 
+def _smooth_controls(segments: list) -> list:
+    """SVG reflects the previous control point for ``S`` only after a cubic (``C``/``S``)
+    and for ``T`` only after a quadratic (``Q``/``T``); otherwise the first control point
+    is the current point. svgelements reflected any previous control (an ``S`` after a
+    ``T`` bent away from the curve): corrected here, in place."""
+    import svgelements as se
+
+    prev = None
+    for seg in segments:
+        if getattr(seg, "smooth", False) and seg.start is not None:
+            if isinstance(seg, se.CubicBezier) and not isinstance(prev, se.CubicBezier):
+                seg.control1 = se.Point(seg.start)
+            elif isinstance(seg, se.QuadraticBezier) and not isinstance(prev, se.QuadraticBezier):
+                seg.control = se.Point(seg.start)
+        prev = seg
+    return segments
+
+
 def _det_scale(mat: np.ndarray) -> float:
     """The length scale of the (3, 3) affine ``mat``: sqrt(|det|) of its linear part."""
     return math.sqrt(abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0]))
@@ -1371,10 +1390,13 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     import svgelements as se
 
     root_xml = parse_xml_hardened(path, data)
+    notes: set[str] = set()
+    if drop_use_cycles(root_xml, _href):
+        notes.add("<use> drawing itself (that use skipped, as in browsers)")
     _check_tree(path, root_xml)
     _check_attributes(path, root_xml)
-    notes: set[str] = set()
     _apply_stylesheets(root_xml, notes)
+    integer_rgb_colours(root_xml)
     reference = _reference_size(root_xml)
     _circle_percentages(root_xml, reference)  # (before nested viewports become groups)
     resolve_lengths(root_xml, reference)
@@ -1421,6 +1443,12 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
 
     doc = se.SVG.parse(io.BytesIO(clean), reify=False, on_error="ignore")
     if not isinstance(doc, se.SVG):
+        display = root_xml.get("display")
+        for name, v, _ in _inline_declarations(root_xml.get("style")):
+            display = v if name == "display" else display
+        if (display or "").strip().lower() == "none":
+            raise InputError(path, 'the root <svg> has display="none", so nothing is drawn (as in browsers); '
+                                   "remove it to use the art")
         raise InputError(path, "does not contain an <svg> document")
     root_tf = doc.values.get("transform") or ""
     vb = doc.viewbox_transform if doc.viewbox is not None else ""
@@ -1478,7 +1506,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
                     style = dataclasses.replace(style, fill=None)
                 if layers:
                     style = dataclasses.replace(style, layers=layers)
-                segs = _dots(list(child.segments(transformed=False)), style)
+                segs = _dots(_smooth_controls(list(child.segments(transformed=False))), style)
                 own_clips = clip_refs(child.values.get("clip-path"), mat, notes)
                 vis = str(child.values.get("visibility", "visible")).strip().lower()
                 shapes.append(
