@@ -232,3 +232,25 @@ def test_default_gap_follows_the_width_of_long_thin_containers():
     # a thin ring 30 wide and 1000 across: 1.2, not 10
     ring = Container(source="ring", region=Point(0, 0).buffer(500, 256).difference(Point(0, 0).buffer(470, 256)))
     assert default_gap(ring) == pytest.approx(1.2, rel=1e-2)
+
+
+def test_default_gap_leaves_room_for_the_count_asked():
+    import dataclasses
+
+    from repulsionpak.pack import default_gap
+    from repulsionpak.params import Params
+    from repulsionpak.placement import estimate_count
+    from repulsionpak.types import Container
+
+    poster = Container(source="poster", region=shapely.box(0, 0, 1000, 1500))
+    placement = Params().placement
+    assert default_gap(poster) == pytest.approx(15.0)
+    assert default_gap(poster, placement) == pytest.approx(15.0)  # no count: as before
+    many = dataclasses.replace(placement, count=1000)
+    g = default_gap(poster, many)
+    # 1,000 elements element_size gaps across fill the poster's area
+    assert g == pytest.approx((1000 * 1500 / 1000) ** 0.5 / placement.element_size, rel=1e-3)
+    free = dataclasses.replace(placement, count=None)
+    assert estimate_count(poster.region.area, g, free) == 1000
+    few = dataclasses.replace(placement, count=10)  # few elements: the 1 % gap stays
+    assert default_gap(poster, few) == pytest.approx(15.0)

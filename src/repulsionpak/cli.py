@@ -350,7 +350,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     except TooManyPoints:  # a gap far too fine for the container flattens it to millions of points
         check_fineness(load_container(container), params.gap, params)  # says so, if that is why
         raise
-    g = params.gap if params.gap is not None else default_gap(cont)
+    g = params.gap if params.gap is not None else default_gap(cont, params.placement)
     if tol is None:
         cont = load_container(container, tolerance=CONTAINER_TOLERANCE * g)
     params = dataclasses.replace(params, gap=g)

@@ -14,7 +14,7 @@ import shapely
 from .blas import with_one_blas_thread
 from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
-from .params import Params
+from .params import Params, PlacementParams
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
 from .preprocess import Outline, Template, build_template, outline_of
 from .render import is_convex, placed_art, rest_art, skin_polygons
@@ -63,17 +63,37 @@ class Packing:
         return skin_polygons(self.model, self.state, self.frame)
 
 
-def default_gap(container: Container) -> float:
-    """1% of the container's larger side, at most 4% of the widest circle it holds, to 4
-    significant digits (a readable data-gap).
+def default_gap(container: Container, placement: PlacementParams | None = None) -> float:
+    """The gap of a run that names none.
 
-    The cap only binds on containers much longer than wide: a 20:1 strip got a gap of a
-    fifth of its height from its length, and held 3 elements. The example containers
-    keep 1% of their larger side."""
+    Parameters
+    ----------
+    container : Container
+    placement : PlacementParams, optional
+        With a ``count``, the gap is also at most the one at which that many elements are
+        ``element_size`` gaps across (the inverse of :func:`repulsionpak.placement.estimate_count`).
+
+    Returns
+    -------
+    float
+        1% of the container's larger side, at most 4% of the widest circle it holds (and
+        at most the count's gap), to 4 significant digits (a readable data-gap).
+
+    Notes
+    -----
+    The circle cap only binds on containers much longer than wide: a 20:1 strip got a gap
+    of a fifth of its height from its length, and held 3 elements. The count cap binds
+    when many elements are asked for: 1,000 copies in a 1000 × 1500 poster at a gap of 15
+    could be 24 units across at most, 1.6 gaps, and covered a fifth of it. The example
+    containers keep 1% of their larger side.
+    """
     minx, miny, maxx, maxy = container.bounds
     gap = 0.01 * max(maxx - minx, maxy - miny)
     circle = shapely.maximum_inscribed_circle(container.region, 1e-3 * gap)
-    return float(f"{min(gap, 0.04 * 2 * circle.length):.4g}")
+    gap = min(gap, 0.04 * 2 * circle.length)
+    if placement is not None and placement.count:
+        gap = min(gap, math.sqrt(container.region.area / placement.count) / placement.element_size)
+    return float(f"{gap:.4g}")
 
 
 def bend_limits(templates, template_index, sim) -> np.ndarray:
@@ -162,7 +182,7 @@ def checked_gap(container: Container, elements: Sequence[Element], params: Param
     error when it cannot work; also refuses an empty element list."""
     if not elements:
         raise ParameterError("no elements given")
-    gap = params.gap if params.gap is not None else default_gap(container)
+    gap = params.gap if params.gap is not None else default_gap(container, params.placement)
     minx, miny, maxx, maxy = container.bounds
     if gap * 4 >= min(maxx - minx, maxy - miny):
         raise ParameterError(f"the gap ({gap:g}) is absurdly large for a container of "

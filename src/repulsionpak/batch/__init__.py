@@ -86,7 +86,7 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
     settings = [parse_set(s) for s in sets]
     make_jobs(base, seed_list, settings)  # all parameter errors before any work
     if base.gap is None:  # as pack: the default gap comes from the container's size
-        base = dataclasses.replace(base, gap=default_gap(load_container(container)))
+        base = dataclasses.replace(base, gap=default_gap(load_container(container), base.placement))
     jobs = make_jobs(base, seed_list, settings, thumbnail_size(len(seed_list) * _n_combos(settings)))
     cont = load_container(container, tolerance=_tolerance(jobs))
     from ..io.manifest import load_element_args
