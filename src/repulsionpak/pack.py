@@ -18,8 +18,10 @@ from .params import Params, PlacementParams
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
 from .preprocess import Outline, Template, build_template, outline_of
 from .render import is_convex, placed_art, rest_art, skin_polygons
+from .room import room_of
 from .sim.model import Model, SimFrame, State, build_model
 from .sim.runner import Simulator, Snapshot
+from .sizing import UNEVEN_SHARE, is_even, narrow_share, plan_sizes
 from .types import Container, Element, PlacedArt
 from .verify import Verification, straighten, verify_and_repair
 
@@ -232,6 +234,9 @@ def prepare(container: Container, elements: Sequence[Element], params: Params,
     """
     gap = checked_gap(container, elements, params)
     outlines: list[Outline] = [outline_of(e) for e in elements]
+    planned = room_placement(container, outlines, gap, params, rng)
+    if planned is not None:
+        return planned[0], planned[1], gap
     count = estimate_count(container.area, gap, params.placement)
     assignment = assign_elements(len(elements), count, rng)
     scale = final_scale(outlines, assignment, container.area, params.preprocess.skin_offset * gap,
@@ -239,6 +244,46 @@ def prepare(container: Container, elements: Sequence[Element], params: Params,
     templates = [build_template(o, scale, gap, params.preprocess) for o in outlines]
     placement = place(templates, assignment, container.region, params.placement, rng)
     return templates, placement, gap
+
+
+def room_placement(container: Container, outlines: Sequence[Outline], gap: float, params: Params,
+                   rng: np.random.Generator) -> tuple[list[Template], Placement] | None:
+    """The primaries sized and counted by the room the container has (:mod:`repulsionpak.sizing`),
+    or None where the paper's placement applies: ``placement.follow_room`` off, an even
+    container (one region, nearly all of it at least ``element_size`` gaps wide), or a
+    given count in a single region or in regions that are all wide (a tenth or less of the
+    container narrower than the size the count gives: the paper's blue noise shares it out
+    by area, as well as the room's policy measured on the suite's two-region scenes).
+
+    Returns the templates (one per library element and size class: a copy's skin is built
+    for about its own size) and the placement (one common shrink, so every copy starts at
+    the same share of its nominal size)."""
+    pl = params.placement
+    if not pl.follow_room:
+        return None
+    if pl.count is not None and len(shapely.get_parts(container.region)) <= 1:
+        return None
+    base = pl.element_size * gap if pl.count is None else math.sqrt(container.area / pl.count)
+    room = room_of(container.region, gap)
+    if is_even(room, base) or (pl.count is not None and (
+            len(room.parts) <= 1 or narrow_share(room, base) < UNEVEN_SHARE)):
+        return None
+    pl_base = pl if pl.count is None else dataclasses.replace(pl, element_size=base / gap)
+    plan = plan_sizes(room, outlines, gap, params.preprocess.skin_offset * gap, pl_base, rng, count=pl.count)
+    if len(plan.position) == 0:
+        return None
+    keys: dict[tuple[int, float], int] = {}
+    templates: list[Template] = []
+    assignment = np.empty(len(plan.position), np.int64)
+    for k, (lib, s) in enumerate(zip(plan.library, plan.scale)):
+        key = (int(lib), float(s))
+        if key not in keys:
+            keys[key] = len(templates)
+            templates.append(build_template(outlines[int(lib)], float(s), gap, params.preprocess))
+        assignment[k] = keys[key]
+    placement = place(templates, assignment, container.region, pl, rng, angle_fn=lambda a: plan.angle,
+                      positions=plan.position)
+    return templates, placement
 
 
 def _check_arguments(container, elements, secondary, params) -> None:

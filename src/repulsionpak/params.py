@@ -63,6 +63,16 @@ class PlacementParams:
         "(12 until November 28; 15 covers more on 48 of the 53 suite scenes, see docs/quality.md).")
     initial_fraction: float = _doc(
         0.075, "-", "Share of the container area the skins occupy at the start (paper: 5–10%).")
+    follow_room: bool = _doc(
+        True, "-", "Size and count the primaries from the room the container has (its separate "
+        "regions and their local width, repulsionpak.sizing) when it is uneven: several regions, or "
+        "a tenth of it narrower than element_size gaps. A round container is placed as in the paper.")
+    width_share: float = _doc(
+        1.0, "-", "When the primaries follow the room, the size an element aims for where the container "
+        "is w wide is min(element_size gaps, width_share × w): 1 packs one row across a band.")
+    min_element_size: float = _doc(
+        3.0, "× gap", "A region narrower than this (its largest inscribed circle) gets no primary of "
+        "its own when the primaries follow the room; the pocket fill may still put small copies there.")
     target_fraction: float = _doc(
         0.86, "-", "Share of the container area the skins are expected to fill at the end; "
         "fixes the scale at which skins are built so the final art gap matches the requested gap.")
@@ -409,6 +419,8 @@ class Params:
             (pl.candidates_per_point >= 1, "placement.candidates_per_point must be >= 1"),
             (pl.max_vertices >= 1, "placement.max_vertices must be >= 1"),
             (pl.element_size > 0, "placement.element_size must be > 0"),
+            (pl.min_element_size > 0, "placement.min_element_size must be > 0"),
+            (pl.width_share > 0, "placement.width_share must be > 0"),
             (0 < pl.initial_fraction < pl.target_fraction <= 1,
              "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),
             (s.dt > 0 and s.dt <= 0.5, "sim.dt must be in (0, 0.5]"),

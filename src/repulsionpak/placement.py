@@ -103,18 +103,21 @@ def placed_vertices(t: Template, position: np.ndarray, angle: float, shrink: flo
 
 
 def place(templates: Sequence[Template], assignment: np.ndarray, region, params: PlacementParams,
-          rng: np.random.Generator, angle_fn=None) -> Placement:
+          rng: np.random.Generator, angle_fn=None, positions: np.ndarray | None = None) -> Placement:
     """Blue-noise positions, random orientations, and a common shrink so the skins cover
     ``initial_fraction`` of the container without overlapping each other (sec. 4).
-    ``angle_fn(angles)`` (designer controls) may replace the random orientations."""
+    ``angle_fn(angles)`` (designer controls) may replace the random orientations; given
+    ``positions`` ((count, 2), e.g. :func:`repulsionpak.sizing.spread`'s) replace the blue noise."""
     count = len(assignment)
     skin_total = sum(templates[i].skin_area for i in assignment)
     shrink = float(np.sqrt(params.initial_fraction * region.area / skin_total))
-    mean_r = float(np.mean([templates[i].radius for i in assignment])) * shrink
-    inner = shapely.buffer(region, -0.5 * mean_r)
-    if inner.is_empty or inner.area < 0.2 * region.area:
-        inner = region
-    positions = blue_noise(inner, count, rng, params.candidates_per_point)
+    if positions is None:
+        mean_r = float(np.mean([templates[i].radius for i in assignment])) * shrink
+        inner = shapely.buffer(region, -0.5 * mean_r)
+        if inner.is_empty or inner.area < 0.2 * region.area:
+            inner = region
+        positions = blue_noise(inner, count, rng, params.candidates_per_point)
+    positions = np.asarray(positions, float)
     angles = rng.uniform(0.0, 2 * np.pi, count) if params.rotate else np.zeros(count)
     if angle_fn is not None:
         angles = angle_fn(angles)
