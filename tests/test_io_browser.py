@@ -240,3 +240,73 @@ def test_use_cycle_skips_only_the_use(tmp_path):
     with pytest.warns(UserWarning, match="drawing itself"):
         el = _load(tmp_path, body)
     np.testing.assert_allclose(_bounds(el), (20, 20, 80, 80), atol=1e-9)
+
+
+# ----------------------------------------------------------------------------- markers
+
+
+def test_marker_content_is_clipped_to_its_box(tmp_path):
+    # a 40 x 40 square in a 10 x 10 marker box: browsers show only the box's quarter square
+    el = _load(tmp_path, '<marker id="m" markerWidth="10" markerHeight="10" markerUnits="userSpaceOnUse">'
+                         '<rect x="-20" y="-20" width="40" height="40" fill="red"/></marker>'
+                         '<path d="M20 50 H180" stroke="black" stroke-width="2" fill="none" '
+                         'marker-end="url(#m)"/>')
+    red = [i for i, a in enumerate(el.paths) if a.style.fill == "#ff0000"]
+    assert len(red) == 1
+    np.testing.assert_allclose(_bounds(el, red[0]), (180, 50, 190, 60), atol=1e-6)
+
+
+def test_marker_clipped_to_its_viewbox_and_visible_overflow_is_not(tmp_path):
+    body = ('<marker id="m" markerWidth="4" markerHeight="4" viewBox="0 0 10 10" refX="5" refY="5" {o}>'
+            '<circle cx="5" cy="5" r="8" fill="blue"/></marker>'
+            '<path d="M20 50 H100" stroke="black" stroke-width="5" fill="none" marker-start="url(#m)"/>')
+    el = _load(tmp_path, body.format(o=""), name="hidden.svg")
+    blue = [i for i, a in enumerate(el.paths) if a.style.fill == "#0000ff"][0]
+    # the 10 x 10 viewBox fills 4 x 4 stroke widths (20 px), centred on the start
+    np.testing.assert_allclose(_bounds(el, blue), (10, 40, 30, 60), atol=1e-6)
+    el = _load(tmp_path, body.format(o='overflow="visible"'), name="visible.svg")
+    blue = [i for i, a in enumerate(el.paths) if a.style.fill == "#0000ff"][0]
+    np.testing.assert_allclose(_bounds(el, blue), (4, 34, 36, 66), atol=0.05)  # r 8 * 2 = 16
+
+
+_DOT = ('<marker id="m" markerWidth="4" markerHeight="4" refX="2" refY="2" markerUnits="userSpaceOnUse" '
+        'overflow="visible" {a}><rect width="4" height="4" fill="red"/></marker>')
+
+
+def _red_centres(el: Element) -> list[tuple[float, float]]:
+    out = []
+    for a in el.paths:
+        if a.style.fill == "#ff0000":
+            for p in a.subpaths:
+                out.append(tuple(np.round((p.min(0) + p.max(0)) / 2, 6)))
+    return sorted(set(out))
+
+
+def test_markers_on_a_circle_and_a_rect(tmp_path):
+    el = _load(tmp_path, _DOT.format(a="") + '<circle cx="100" cy="50" r="40" fill="none" stroke="black" '
+                                             'marker-mid="url(#m)"/>')
+    assert _red_centres(el) == [(60, 50), (100, 10), (100, 90), (140, 50)]
+    el = _load(tmp_path, _DOT.format(a="") + '<rect x="10" y="20" width="50" height="30" fill="none" '
+                                             'stroke="black" marker-start="url(#m)"/>', name="r.svg")
+    assert _red_centres(el) == [(10, 20)]
+
+
+def test_marker_orient_in_turns_and_the_marker_attribute_ignored(tmp_path):
+    body = ('<marker id="m" markerWidth="10" markerHeight="10" markerUnits="userSpaceOnUse" orient="0.25turn">'
+            '<rect width="10" height="2" fill="red"/></marker>')
+    el = _load(tmp_path, body + '<path d="M50 50 H150" stroke="black" fill="none" marker-start="url(#m)"/>')
+    red = [i for i, a in enumerate(el.paths) if a.style.fill == "#ff0000"][0]
+    np.testing.assert_allclose(_bounds(el, red), (48, 50, 50, 60), atol=1e-6)  # turned a quarter
+    el = _load(tmp_path, body + '<path d="M50 50 H150" stroke="black" fill="none" marker="url(#m)"/>',
+               name="attr.svg")
+    assert not [a for a in el.paths if a.style.fill == "#ff0000"]  # a CSS shorthand only
+
+
+def test_marker_percent_sizes_and_use_of_outside_content(tmp_path):
+    el = _load(tmp_path, '<defs><rect id="sq" width="100" height="100" fill="red"/></defs>'
+                         '<marker id="m" markerWidth="10%" markerHeight="20%" markerUnits="userSpaceOnUse">'
+                         '<use href="#sq"/></marker>'
+                         '<path d="M50 50 H150" stroke="black" fill="none" marker-start="url(#m)"/>')
+    red = [i for i, a in enumerate(el.paths) if a.style.fill == "#ff0000"]
+    assert len(red) == 1  # the use finds #sq; the box is 10 % of 200 by 20 % of 100
+    np.testing.assert_allclose(_bounds(el, red[0]), (50, 50, 70, 70), atol=1e-6)

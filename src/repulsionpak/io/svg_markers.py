@@ -8,7 +8,9 @@ and the end, the bisector of the two tangents at a middle vertex; ``auto-start-r
 a fixed angle), scaled by the stroke width (``markerUnits="strokeWidth"``, the default)
 and by its ``viewBox`` into ``markerWidth`` × ``markerHeight`` (``preserveAspectRatio``).
 ``context-fill`` and ``context-stroke`` take the referring shape's paint. The content is
-not clipped to the marker's viewport (``overflow: hidden``); most arrowheads fit in it.
+clipped to the marker's box (``overflow`` is ``hidden`` by default): :func:`clip_box` is
+that box in the content's coordinates, the ``viewBox`` (or ``0 0 markerWidth
+markerHeight`` without one), as resvg and Chrome clip it.
 
 :func:`marker_ids` tells which markers a shape uses, :func:`placements` where their
 copies go, and :func:`marker_svg` writes a marker's content as a small SVG document whose
@@ -25,14 +27,76 @@ import numpy as np
 
 from .svg_clip import url_id
 
-__all__ = ["MARKABLE", "marker_ids", "placements", "marker_svg"]
+__all__ = ["MARKABLE", "clip_box", "drop_marker_attribute", "marker_ids", "placements", "marker_svg",
+           "resolve_marker_lengths", "resolve_overflow_inherit"]
 
-#: the shapes markers are drawn on (SVG 2: path, line, polyline, polygon)
-MARKABLE = ("Path", "SimpleLine", "Polyline", "Polygon")
+#: the shapes markers are drawn on (SVG 2: every basic shape; a circle or an ellipse from
+#: its rightmost point through the bottom, a rect from its top-left corner clockwise)
+MARKABLE = ("Path", "SimpleLine", "Polyline", "Polygon", "Circle", "Ellipse", "Rect")
+_ANGLE_UNITS = {"deg": 1.0, "grad": 0.9, "rad": 180.0 / math.pi, "turn": 360.0}
+_ABSOLUTE = {"": 1.0, "px": 1.0, "pt": 4.0 / 3.0, "pc": 16.0, "mm": 96.0 / 25.4, "cm": 96.0 / 2.54,
+             "in": 96.0}
 _KINDS = ("marker-start", "marker-mid", "marker-end")
 #: attributes of <marker> itself that are not presentation attributes its content inherits
 _OWN = {"id", "refX", "refY", "markerWidth", "markerHeight", "markerUnits", "orient", "viewBox",
         "preserveAspectRatio", "overflow", "class"}
+
+
+def drop_marker_attribute(root: ET.Element) -> None:
+    """Remove ``marker="..."`` attributes: ``marker`` is a CSS shorthand only (in ``style``
+    or a style sheet), not a presentation attribute, and browsers ignore it there."""
+    for el in root.iter():
+        if isinstance(el.tag, str) and "marker" in el.attrib:
+            del el.attrib["marker"]
+
+
+def resolve_overflow_inherit(root: ET.Element) -> None:
+    """Give each ``<marker overflow="inherit">`` its parent's ``overflow`` (``visible``,
+    CSS's initial value, when no ancestor sets one), in place."""
+    def walk(el, inherited: str):
+        own = _overflow(el, None)
+        value = inherited if own in (None, "inherit") else own
+        if own == "inherit" and _local_tag(el) == "marker":
+            el.set("overflow", value)
+            if "style" in el.attrib:
+                el.set("style", ";".join(d for d in el.get("style").split(";")
+                                         if d.split(":")[0].strip().lower() != "overflow"))
+        for c in el:
+            if isinstance(c.tag, str):
+                walk(c, value)
+
+    walk(root, "visible")
+
+
+def _local_tag(el) -> str:
+    return el.tag.rsplit("}", 1)[-1]
+
+
+def resolve_marker_lengths(marker: ET.Element, viewport: tuple[float, float]) -> None:
+    """Rewrite ``refX``, ``refY``, ``markerWidth``, ``markerHeight`` given with a unit or
+    in percent (of the viewport's width for x and width, its height for y and height)
+    as plain numbers, in place."""
+    for name, ref in (("refX", viewport[0]), ("markerWidth", viewport[0]),
+                      ("refY", viewport[1]), ("markerHeight", viewport[1])):
+        m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Z%]*)\s*",
+                         str(marker.get(name, "")))
+        if m is None:
+            continue
+        unit = m.group(2).lower()
+        if unit == "%":
+            marker.set(name, repr(float(m.group(1)) * ref / 100.0))
+        elif unit in _ABSOLUTE:
+            marker.set(name, repr(float(m.group(1)) * _ABSOLUTE[unit]))
+
+
+def _orient_angle(orient: str) -> float:
+    """A fixed ``orient`` angle in radians (``deg``, ``grad``, ``rad``, ``turn`` or a
+    plain number of degrees; 0 when invalid, as browsers do)."""
+    m = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)([a-z]*)", orient.strip().lower())
+    if m is None or (m.group(2) and m.group(2) not in _ANGLE_UNITS):
+        return 0.0
+    deg = float(m.group(1)) * _ANGLE_UNITS.get(m.group(2) or "deg", 1.0)
+    return math.radians(deg) if math.isfinite(deg) else 0.0
 
 
 def marker_ids(values) -> dict[str, str]:
@@ -117,6 +181,39 @@ def _viewbox(el) -> np.ndarray:
     return np.array([[m.a, m.c, m.e], [m.b, m.d, m.f], [0.0, 0.0, 1.0]])
 
 
+def _overflow(el, default: str | None = "hidden") -> str | None:
+    value = el.get("overflow")
+    for decl in str(el.get("style") or "").split(";"):
+        k, _, v = decl.partition(":")
+        if k.strip().lower() == "overflow":
+            value = v
+    return str(value).strip().lower() if value else default
+
+
+def clip_box(marker: ET.Element) -> tuple[float, float, float, float] | None:
+    """``(x0, y0, x1, y1)``: the box ``marker``'s content is clipped to, in the content's
+    coordinates (those of :func:`placements`' matrices); None when ``overflow`` is
+    ``visible`` or ``auto``.
+
+    Notes
+    -----
+    ``overflow`` is ``hidden`` on a marker by default (UA style sheet), so an arrowhead
+    drawn past its box is cut there. With a ``viewBox`` the box is the ``viewBox``
+    rectangle (where ``preserveAspectRatio`` leaves room around it, Chrome and resvg
+    still cut at the ``viewBox``); without one it is ``markerWidth`` × ``markerHeight``
+    from the content's origin.
+    """
+    if _overflow(marker) in ("visible", "auto"):
+        return None
+    try:
+        vb = [float(x) for x in re.split(r"[\s,]+", (marker.get("viewBox") or "").strip()) if x]
+    except ValueError:
+        vb = []
+    if len(vb) == 4 and vb[2] > 0 and vb[3] > 0:
+        return vb[0], vb[1], vb[0] + vb[2], vb[1] + vb[3]
+    return 0.0, 0.0, _number(marker, "markerWidth", 3.0), _number(marker, "markerHeight", 3.0)
+
+
 def placements(segs, marker: ET.Element, kind: str, stroke_width: float) -> list[np.ndarray]:
     """(3, 3) matrices from ``marker``'s content coordinates to the shape's local ones,
     one per vertex it is drawn on (``kind``: marker-start, -mid or -end)."""
@@ -149,10 +246,7 @@ def placements(segs, marker: ET.Element, kind: str, stroke_width: float) -> list
             else:  # the bisector of the two directions
                 a = math.atan2(math.sin(a_in) + math.sin(a_out), math.cos(a_in) + math.cos(a_out))
         else:
-            try:
-                a = math.radians(float(orient.removesuffix("deg")))
-            except ValueError:
-                a = 0.0
+            a = _orient_angle(orient)
         c, s = math.cos(a), math.sin(a)
         place = np.array([[c * k, -s * k, p[0]], [s * k, c * k, p[1]], [0.0, 0.0, 1.0]])
         shift = np.array([[1.0, 0.0, -ref[0]], [0.0, 1.0, -ref[1]], [0.0, 0.0, 1.0]])
@@ -164,13 +258,28 @@ def _svg_matrix(m: np.ndarray) -> str:
     return "matrix(" + " ".join(repr(float(v)) for v in (m[0, 0], m[1, 0], m[0, 1], m[1, 1], m[0, 2], m[1, 2])) + ")"
 
 
-def marker_svg(marker: ET.Element, matrices: list[np.ndarray], context_fill: str, context_stroke: str) -> bytes:
+def marker_svg(marker: ET.Element, matrices: list[np.ndarray], context_fill: str, context_stroke: str,
+               by_id: dict | None = None) -> bytes:
     """A small SVG document drawing ``marker``'s content once per matrix (content ->
     the file's user units), its own presentation attributes inherited, ``context-fill``
-    and ``context-stroke`` replaced by the referring shape's paints."""
+    and ``context-stroke`` replaced by the referring shape's paints. ``by_id``: the
+    file's elements by id, so that a ``<use>`` in the marker finds what it draws."""
     ns = "http://www.w3.org/2000/svg"
     inherited = {k: v for k, v in marker.attrib.items() if k not in _OWN and not k.startswith("{")}
     body = "".join(ET.tostring(c, encoding="unicode") for c in marker if isinstance(c.tag, str))
+    if by_id:  # what a <use> inside the marker draws lives elsewhere in the file
+        own = {e.get("id") for e in marker.iter() if isinstance(e.tag, str)}
+        wanted, seen, defs = [marker], set(), []
+        while wanted:
+            for e in wanted.pop().iter():
+                href = e.get("{http://www.w3.org/1999/xlink}href") or e.get("href") if isinstance(e.tag, str) else None
+                key = href[1:] if href and href.startswith("#") else None
+                if key and key not in own and key not in seen and key in by_id:
+                    seen.add(key)
+                    defs.append(by_id[key])
+                    wanted.append(by_id[key])
+        if defs:
+            body += "<defs>" + "".join(ET.tostring(d, encoding="unicode") for d in defs) + "</defs>"
     body = body.replace("context-stroke", context_stroke).replace("context-fill", context_fill)
     attrs = "".join(f' {k}="{_escape(v)}"' for k, v in inherited.items())
     attrs = attrs.replace("context-stroke", context_stroke).replace("context-fill", context_fill)

@@ -48,9 +48,11 @@ from ..geometry.outline import (
     relative_thickness,
 )
 from ..types import ArtPath, Container, CurveSubpath, Element, Style
-from .svg_clip import ClipResolver, clip_art, clip_defs, clip_refs, hoist_clip_paths, polygon_rings
+from .svg_clip import (ClipChild, ClipDef, ClipRef, ClipResolver, clip_art, clip_defs, clip_refs,
+                       hoist_clip_paths, polygon_rings)
 from .svg_lengths import resolve_lengths, resolve_transform_origin
-from .svg_markers import MARKABLE, marker_ids, marker_svg, placements
+from .svg_markers import (MARKABLE, clip_box, drop_marker_attribute, marker_ids, marker_svg, placements,
+                          resolve_marker_lengths, resolve_overflow_inherit)
 from .svg_pathdata import NUMBER, path_data_error
 from .svg_text import text_to_paths
 from .svg_xml import drop_use_cycles, integer_rgb_colours
@@ -1399,6 +1401,11 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     integer_rgb_colours(root_xml)
     reference = _reference_size(root_xml)
     _circle_percentages(root_xml, reference)  # (before nested viewports become groups)
+    drop_marker_attribute(root_xml)
+    resolve_overflow_inherit(root_xml)
+    for el in root_xml.iter():
+        if isinstance(el.tag, str) and _local(el.tag) == "marker":
+            resolve_marker_lengths(el, reference)
     resolve_lengths(root_xml, reference)
     resolve_transform_origin(root_xml, reference)
     _sanitize(path, root_xml, notes)
@@ -1517,7 +1524,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
                     for kind, mid in markers.items():
                         for sh in marker_shapes(mid, kind, child, segs, mat, style, op):
                             shapes.append(dataclasses.replace(
-                                sh, groups=groups, clips=clips + own_clips,
+                                sh, groups=groups, clips=clips + own_clips + sh.clips,
                                 hidden=sh.hidden or vis in ("hidden", "collapse"),
                                 style=dataclasses.replace(sh.style, layers=layers) if layers else sh.style))
             elif isinstance(child, (se.Group, se.Use)):
@@ -1540,10 +1547,16 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
             elif isinstance(child, se.Image):
                 notes.add("image")
 
+    marker_clips: dict[str, ClipDef] = {}  # the boxes markers are clipped to
+
     @functools.cache
     def markers_by_id() -> dict:  # built when a shape first uses a marker
         return {el.get("id"): el for el in root_xml.iter()
                 if isinstance(el.tag, str) and _local(el.tag) == "marker" and el.get("id")}
+
+    @functools.cache
+    def elements_by_id() -> dict:
+        return {el.get("id"): el for el in root_xml.iter() if isinstance(el.tag, str) and el.get("id")}
 
     def marker_shapes(mid, kind, child, segs, mat, style, op) -> list[SvgShape]:
         """The shapes ``kind`` (marker-start/-mid/-end) ``mid`` puts on ``child`` (see
@@ -1555,18 +1568,32 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
         mats = [mat @ t for t in placements(segs, el, kind, _stroke_width(child))]
         if not mats:
             return []
-        data = marker_svg(el, mats, style.fill or "none", style.stroke or "none")
-        mdoc = se.SVG.parse(io.BytesIO(data), reify=False, on_error="ignore")
+        box = clip_box(el)
+        if box is not None and not (box[2] > box[0] and box[3] > box[1]):
+            return []  # a zero-size marker box draws nothing
+        clip_id = f"\0marker#{mid}"  # not an XML id: cannot collide with the file's
+        if box is not None and clip_id not in marker_clips:
+            x0, y0, x1, y1 = box
+            rect = se.Path(f"M{x0!r},{y0!r} H{x1!r} V{y1!r} H{x0!r} Z")
+            marker_clips[clip_id] = ClipDef(clip_id, False, [ClipChild(list(rect.segments()), np.eye(3))])
         out: list[SvgShape] = []
-        for c in mdoc.elements():
-            if not isinstance(c, se.Shape):
-                continue
-            cm = _matrix_to_np(c.transform)
-            cst = _style_of(c, op * _clamp01(_float_attr(own(c).get("opacity"), 1.0)), _det_scale(cm),
-                            vp_scale, gradients, notes)
-            vis = str(c.values.get("visibility", "visible")).strip().lower()
-            out.append(SvgShape(list(c.segments(transformed=False)), cm, cst, False, own(c),
-                                hidden=vis in ("hidden", "collapse"), node=c))
+        for m in mats:  # one placement at a time: each copy has its own clip box
+            data = marker_svg(el, [m], style.fill or "none", style.stroke or "none", elements_by_id())
+            mdoc = se.SVG.parse(io.BytesIO(data), reify=False, on_error="ignore")
+            box_ref = (ClipRef(clip_id, m),) if box is not None else ()
+            for c in mdoc.elements():
+                if isinstance(c, se.Image):
+                    notes.add("image")
+                if not isinstance(c, se.Shape):
+                    continue
+                if marker_ids(c.values):
+                    notes.add("markers on the content of a marker (not drawn)")
+                cm = _matrix_to_np(c.transform)
+                cst = _style_of(c, op * _clamp01(_float_attr(own(c).get("opacity"), 1.0)), _det_scale(cm),
+                                vp_scale, gradients, notes)
+                vis = str(c.values.get("visibility", "visible")).strip().lower()
+                out.append(SvgShape(list(c.segments(transformed=False)), cm, cst, False, own(c),
+                                    clips=box_ref, hidden=vis in ("hidden", "collapse"), node=c))
         return out
 
     root_own = own(doc)
@@ -1575,6 +1602,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     root_op = _clamp01(_float_attr(root_own.get("opacity"), 1.0))
     walk(doc, root_op, False, (), root_clips, ((0, root_op),) if root_op < 1.0 else ())
     defs = clip_defs(doc, inv_viewport, notes) if any(s.clips for s in shapes) else {}
+    defs.update(marker_clips)
     if notes:
         warn(path, "skipped unsupported content: " + ", ".join(sorted(notes)))
     sv = np.linalg.svd(_matrix_to_np(viewport)[:2, :2], compute_uv=False)

@@ -362,6 +362,11 @@ def _convert(root: ET.Element, texts: list[ET.Element], notes: set[str]) -> str 
 
 def _as_group(el: ET.Element, ns: str) -> ET.Element:
     attrs = {k: v for k, v in el.attrib.items() if k not in _POSITION_ATTRS}
+    if _local(el.tag) == "text":  # markers are not drawn on text: not on the glyph outlines either
+        if "style" in attrs:
+            attrs["style"] = ";".join(d for d in attrs["style"].split(";")
+                                      if not d.split(":")[0].strip().lower().startswith("marker"))
+        attrs.update({k: "none" for k in ("marker-start", "marker-mid", "marker-end")})
     g = ET.Element(ns + "g", attrs)
     g.tail = el.tail if _local(el.tag) == "text" else None
     return g
