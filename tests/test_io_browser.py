@@ -310,3 +310,26 @@ def test_marker_percent_sizes_and_use_of_outside_content(tmp_path):
     red = [i for i, a in enumerate(el.paths) if a.style.fill == "#ff0000"]
     assert len(red) == 1  # the use finds #sq; the box is 10 % of 200 by 20 % of 100
     np.testing.assert_allclose(_bounds(el, red[0]), (50, 50, 70, 70), atol=1e-6)
+
+
+# ----------------------------------------------------------------------------- viewports
+
+
+def test_use_size_replaces_the_nested_svg_size_and_clips(tmp_path):
+    # the svg is 80 x 80 at (40, 40); the use makes it 100 x 150: the circle is cut there
+    el = _load(tmp_path, '<defs><svg id="s" x="40" y="40" width="80" height="80">'
+                         '<circle cx="100" cy="100" r="120" fill="green"/></svg></defs>'
+                         '<use href="#s" width="100" height="150"/>', root='viewBox="0 0 200 200"')
+    np.testing.assert_allclose(_bounds(el), (40, 40, 140, 190), atol=1e-6)
+
+
+def test_symbol_without_viewbox_is_clipped_to_the_use_size(tmp_path):
+    el = _load(tmp_path, '<symbol id="s"><rect x="20" y="20" width="160" height="160"/></symbol>'
+                         '<use href="#s" x="10" width="100" height="100"/>', root='viewBox="0 0 200 200"')
+    np.testing.assert_allclose(_bounds(el), (30, 20, 110, 100), atol=1e-6)
+
+
+def test_percentages_inside_a_nested_svg_refer_to_it(tmp_path):
+    el = _load(tmp_path, '<svg x="50" y="50" width="100" height="100">'
+                         '<rect x="10%" y="20%" width="50%" height="50%"/></svg>', root='viewBox="0 0 200 200"')
+    np.testing.assert_allclose(_bounds(el), (60, 70, 110, 120), atol=1e-6)

@@ -43,6 +43,15 @@ _GEOMETRY = ("x", "y", "width", "height", "r", "cx", "cy", "x1", "y1", "x2", "y2
 #: painting properties (attribute or style) rewritten whatever their unit: percentages of
 #: the diagonal, and dash lists svgelements reads as numbers only
 _PAINT_LENGTHS = ("stroke-width", "stroke-dashoffset", "stroke-dasharray")
+#: percentages svgelements resolves against the root viewport: rewritten inside a nested
+#: one (attribute, 0 for the viewport's width, 1 for its height)
+_PERCENT_GEOMETRY = {
+    "rect": (("x", 0), ("y", 1), ("width", 0), ("height", 1)),
+    "circle": (("cx", 0), ("cy", 1)),
+    "ellipse": (("cx", 0), ("cy", 1)),
+    "line": (("x1", 0), ("y1", 1), ("x2", 0), ("y2", 1)),
+    "use": (("x", 0), ("y", 1)),
+}
 _SVG_UNITS = {"", "px", "pt", "pc", "mm", "cm", "in", "%"}
 
 
@@ -188,6 +197,12 @@ def resolve_lengths(root: ET.Element, reference: tuple[float, float]) -> None:
                 px = _px(v, ctx, 0.0)
                 if px is not None:
                     el.set(attr, _fmt(px))
+        if vp != reference and name in _PERCENT_GEOMETRY:  # svgelements takes the root's
+            for attr, axis in _PERCENT_GEOMETRY[name]:
+                v = el.get(attr)
+                m = _LENGTH.fullmatch(v) if v is not None else None
+                if m and m.group(2) == "%":
+                    el.set(attr, _fmt(float(m.group(1)) / 100.0 * vp[axis]))
         if name in ("rect", "ellipse"):
             _radii(el, ctx)
         for attr in _PAINT_LENGTHS:

@@ -55,6 +55,7 @@ from .svg_markers import (MARKABLE, clip_box, drop_marker_attribute, marker_ids,
                           resolve_marker_lengths, resolve_overflow_inherit)
 from .svg_pathdata import NUMBER, path_data_error
 from .svg_text import text_to_paths
+from .svg_use import expand_viewport_uses
 from .svg_xml import drop_use_cycles, integer_rgb_colours
 from .svg_xml import inline_declarations as _inline_declarations
 from .svg_xml import local_name as _local
@@ -878,7 +879,6 @@ def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
             p.remove(el)
             if el not in quiet:
                 notes.add("foreignObject")
-    _symbol_viewports(root)
     _nested_svgs_to_groups(root)
     if to_move:
         defs = ET.SubElement(root, f"{{{SVG_NS}}}defs")
@@ -960,49 +960,6 @@ def _wrap_in_viewport(root: ET.Element, parent: ET.Element, el: ET.Element, tran
     return g
 
 
-def _symbol_viewports(root: ET.Element) -> None:
-    """Scale ``<use>`` of a ``<symbol>`` that has a viewBox into the use's viewport.
-
-    The use's ``x``, ``y``, ``width`` and ``height`` (default 100 %) are the viewport the
-    symbol's viewBox is fitted into (``preserveAspectRatio``), as browsers draw it;
-    svgelements only translates by ``x``, ``y``. Each such use is wrapped in a ``<g>``
-    carrying its transform, the translation and the viewBox scaling, and keeps only its
-    reference and styles (which the symbol's content inherits).
-    """
-    import svgelements as se
-
-    symbols = {el.get("id"): el for el in root.iter() if _local(el.tag) == "symbol" and el.get("id")}
-    if not symbols:
-        return
-    ref_w, ref_h = _reference_size(root)
-    parent = {c: p for p in root.iter() for c in p}
-    ids = _document_ids(root)
-    for use in [e for e in root.iter() if _local(e.tag) == "use"]:
-        ref = _href(use)
-        sym = symbols.get(ref[1:]) if ref and ref.startswith("#") else None
-        vb = (sym.get("viewBox") or "").replace(",", " ").split() if sym is not None else []
-        if len(vb) != 4 or use not in parent:
-            continue
-        try:
-            vbx, vby, vbw, vbh = (float(v) for v in vb)
-        except ValueError:
-            continue
-        x, y = _length(use.get("x", "0"), ref_w), _length(use.get("y", "0"), ref_h)
-        w, h = _length(use.get("width", "100%"), ref_w), _length(use.get("height", "100%"), ref_h)
-        if not (all(math.isfinite(v) for v in (x, y, w, h, vbx, vby, vbw, vbh))
-                and vbw > 0 and vbh > 0 and w > 0 and h > 0):
-            continue
-        tf = se.Viewbox.viewbox_transform(x, y, w, h, vbx, vby, vbw, vbh, sym.get("preserveAspectRatio"))
-        own = use.get("transform")
-        for k in ("x", "y", "width", "height", "transform"):
-            use.attrib.pop(k, None)
-        if _clips_its_viewport(sym):  # the viewport clips, in the use's own coordinates
-            outer = _wrap_in_viewport(root, parent[use], use, own, (x, y, w, h), ids)
-            _wrap_in_viewport(root, outer, use, tf, None)
-        else:
-            _wrap_in_viewport(root, parent[use], use, f"{own} {tf}" if own else tf, None)
-
-
 def _nested_svgs_to_groups(root: ET.Element) -> None:
     """Turn nested ``<svg>`` elements into ``<g transform=...>``.
 
@@ -1011,21 +968,31 @@ def _nested_svgs_to_groups(root: ET.Element) -> None:
     """
     import svgelements as se
 
-    ref_w, ref_h = _reference_size(root)
     parent = {c: p for p in root.iter() for c in p}
     nested = [e for e in root.iter() if e is not root and _local(e.tag) == "svg"]
     ids = _document_ids(root) if nested else set()
-    for el in nested:
+    inner_size = {root: _reference_size(root)}  # the user space size each viewport makes
+
+    def outer_size(el):
+        p = parent.get(el)
+        while p is not None and p not in inner_size:
+            p = parent.get(p)
+        return inner_size[p if p is not None else root]
+
+    for el in nested:  # (outermost first: root.iter() is in document order)
+        ref_w, ref_h = outer_size(el)
         x = _length(el.get("x", "0"), ref_w)
         y = _length(el.get("y", "0"), ref_h)
         w = _length(el.get("width", "100%"), ref_w)
         h = _length(el.get("height", "100%"), ref_h)
         vb = (el.get("viewBox") or "").replace(",", " ").split()
         tf = f"translate({x!r}, {y!r})"
+        inner_size[el] = (w, h) if all(math.isfinite(v) and v > 0 for v in (w, h)) else (ref_w, ref_h)
         if len(vb) == 4 and all(math.isfinite(v) for v in (x, y, w, h)):
             try:
                 vbx, vby, vbw, vbh = (float(v) for v in vb)
                 if vbw > 0 and vbh > 0 and w > 0 and h > 0:
+                    inner_size[el] = (vbw, vbh)
                     tf = se.Viewbox.viewbox_transform(
                         x, y, w, h, vbx, vby, vbw, vbh, el.get("preserveAspectRatio")
                     )
@@ -1399,6 +1366,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     _check_attributes(path, root_xml)
     _apply_stylesheets(root_xml, notes)
     integer_rgb_colours(root_xml)
+    expand_viewport_uses(root_xml)  # (before lengths: percentages refer to the new viewports)
     reference = _reference_size(root_xml)
     _circle_percentages(root_xml, reference)  # (before nested viewports become groups)
     drop_marker_attribute(root_xml)
