@@ -333,3 +333,23 @@ def test_percentages_inside_a_nested_svg_refer_to_it(tmp_path):
     el = _load(tmp_path, '<svg x="50" y="50" width="100" height="100">'
                          '<rect x="10%" y="20%" width="50%" height="50%"/></svg>', root='viewBox="0 0 200 200"')
     np.testing.assert_allclose(_bounds(el), (60, 70, 110, 120), atol=1e-6)
+
+
+# ----------------------------------------------------------------------------- context paint
+
+
+def test_context_fill_in_use_takes_the_use_paint(tmp_path):
+    el = _load(tmp_path, '<defs><rect id="r" width="50" height="50" fill="context-fill" stroke="context-stroke"/>'
+                         '</defs><use href="#r" fill="#00ff00" stroke="#0000ff"/>'
+                         '<rect x="100" width="10" height="10" fill="context-fill" stroke="#ff0000"/>')
+    assert (el.paths[0].style.fill, el.paths[0].style.stroke) == ("#00ff00", "#0000ff")
+    # no context element: context-fill paints nothing (the rect is only stroked)
+    assert el.paths[1].style.fill is None and el.paths[1].style.stroke == "#ff0000"
+
+
+def test_context_fill_with_a_pattern_is_said_to_be_approximated(tmp_path):
+    with pytest.warns(UserWarning, match="pattern paint"):
+        _load(tmp_path, '<pattern id="p" width="10" height="10" patternUnits="userSpaceOnUse">'
+                        '<rect width="5" height="5" fill="red"/></pattern>'
+                        '<defs><rect id="r" width="50" height="50" fill="context-fill"/></defs>'
+                        '<use href="#r" fill="url(#p)"/>')

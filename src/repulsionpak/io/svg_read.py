@@ -1254,12 +1254,27 @@ def _det_scale(mat: np.ndarray) -> float:
     return math.sqrt(abs(mat[0, 0] * mat[1, 1] - mat[0, 1] * mat[1, 0]))
 
 
+def _context_paint(raw, context: tuple) -> str | None:
+    """``raw`` with ``context-fill``/``context-stroke`` replaced by the context element's
+    paint (``context``: its resolved fill and stroke strings; ``none`` without one, as
+    browsers paint it)."""
+    key = str(raw).strip().lower() if raw is not None else ""
+    if key == "context-fill":
+        return context[0] or "none"
+    if key == "context-stroke":
+        return context[1] or "none"
+    return raw
+
+
 def _style_of(
-    shape, opacity: float, det_scale: float, vp_scale: float, gradients, notes
+    shape, opacity: float, det_scale: float, vp_scale: float, gradients, notes, context: tuple = (None, None)
 ) -> Style:
+    """The :class:`Style` of an svgelements shape; ``context``: the fill and stroke (paint
+    strings) ``context-fill`` and ``context-stroke`` stand for (of the ``<use>`` the shape
+    is drawn by)."""
     values = shape.values
-    fill, fill_alpha = _paint(values.get("fill", "black"), gradients, notes)
-    stroke, stroke_alpha = _paint(values.get("stroke", "none"), gradients, notes)
+    fill, fill_alpha = _paint(_context_paint(values.get("fill", "black"), context), gradients, notes)
+    stroke, stroke_alpha = _paint(_context_paint(values.get("stroke", "none"), context), gradients, notes)
     sw = _stroke_width(shape)
     if "non-scaling-stroke" in str(values.get("vector-effect", "")):  # lengths in the viewport's units
         to_user = (lambda v: v / vp_scale) if vp_scale > 0 else (lambda v: v)
@@ -1459,7 +1474,8 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
 
     layer_keys = itertools.count(1)  # tells the translucent groups of this file apart
 
-    def walk(node, opacity: float, hole: bool, groups: tuple, clips: tuple = (), layers: tuple = ()):
+    def walk(node, opacity: float, hole: bool, groups: tuple, clips: tuple = (), layers: tuple = (),
+             context: tuple = (None, None)):
         for child in node:
             if isinstance(child, se.Shape):
                 attrs = own(child)
@@ -1476,7 +1492,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
                 mat = _matrix_to_np(m)
                 det_scale = _det_scale(mat)
                 op = opacity * _clamp01(_float_attr(attrs.get("opacity"), 1.0))
-                style = _style_of(child, op, det_scale, vp_scale, gradients, notes)
+                style = _style_of(child, op, det_scale, vp_scale, gradients, notes, context)
                 if isinstance(child, se.SimpleLine):  # a line has no inside: never filled
                     style = dataclasses.replace(style, fill=None)
                 if layers:
@@ -1490,7 +1506,9 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
                 )
                 if markers:  # drawn after the shape, with its opacity, groups and clips
                     for kind, mid in markers.items():
-                        for sh in marker_shapes(mid, kind, child, segs, mat, style, op):
+                        paints = tuple(str(_context_paint(child.values.get(k, d), context) or "none")
+                                       for k, d in (("fill", "black"), ("stroke", "none")))
+                        for sh in marker_shapes(mid, kind, child, segs, mat, paints, op):
                             shapes.append(dataclasses.replace(
                                 sh, groups=groups, clips=clips + own_clips + sh.clips,
                                 hidden=sh.hidden or vis in ("hidden", "collapse"),
@@ -1509,7 +1527,12 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
                     notes,
                 )
                 inner = layers + ((next(layer_keys), group_op),) if group_op < 1.0 else layers
-                walk(child, op, hole or _is_hole(attrs), groups + (attrs,), clips + own_clips, inner)
+                inner_context = context
+                if isinstance(child, se.Use):  # the context element of context-fill/-stroke
+                    inner_context = tuple(_context_paint(child.values.get(k, d), context)
+                                          for k, d in (("fill", "black"), ("stroke", "none")))
+                walk(child, op, hole or _is_hole(attrs), groups + (attrs,), clips + own_clips, inner,
+                     inner_context)
             elif isinstance(child, se.Text):
                 notes.add("text")
             elif isinstance(child, se.Image):
@@ -1526,7 +1549,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
     def elements_by_id() -> dict:
         return {el.get("id"): el for el in root_xml.iter() if isinstance(el.tag, str) and el.get("id")}
 
-    def marker_shapes(mid, kind, child, segs, mat, style, op) -> list[SvgShape]:
+    def marker_shapes(mid, kind, child, segs, mat, paints, op) -> list[SvgShape]:
         """The shapes ``kind`` (marker-start/-mid/-end) ``mid`` puts on ``child`` (see
         :mod:`.svg_markers`), in file user units."""
         el = markers_by_id().get(mid)
@@ -1546,7 +1569,7 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
             marker_clips[clip_id] = ClipDef(clip_id, False, [ClipChild(list(rect.segments()), np.eye(3))])
         out: list[SvgShape] = []
         for m in mats:  # one placement at a time: each copy has its own clip box
-            data = marker_svg(el, [m], style.fill or "none", style.stroke or "none", elements_by_id())
+            data = marker_svg(el, [m], *(p.replace('"', "'") for p in paints), elements_by_id())
             mdoc = se.SVG.parse(io.BytesIO(data), reify=False, on_error="ignore")
             box_ref = (ClipRef(clip_id, m),) if box is not None else ()
             for c in mdoc.elements():
