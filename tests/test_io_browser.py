@@ -353,3 +353,34 @@ def test_context_fill_with_a_pattern_is_said_to_be_approximated(tmp_path):
                         '<rect width="5" height="5" fill="red"/></pattern>'
                         '<defs><rect id="r" width="50" height="50" fill="context-fill"/></defs>'
                         '<use href="#r" fill="url(#p)"/>')
+
+
+# ----------------------------------------------------------------------------- refused before, drawn by browsers
+
+
+def test_negative_ellipse_radius_falls_back_to_auto(tmp_path):
+    el = _load(tmp_path, '<ellipse cx="100" cy="50" rx="-30" ry="40"/>')
+    np.testing.assert_allclose(_bounds(el), (60, 10, 140, 90), atol=0.1)  # rx auto = ry
+
+
+def test_funciri_with_spaces_finds_the_gradient(tmp_path):
+    el = _load(tmp_path, '<linearGradient id="g"><stop offset="0" stop-color="#00ff00"/></linearGradient>'
+                         '<rect width="50" height="50" fill="  url(  #g   )  "/>')
+    assert el.paths[0].style.fill == "#00ff00"
+
+
+def test_switch_skips_an_unknown_child(tmp_path):
+    el = _load(tmp_path, '<switch><random/><rect width="50" height="50" fill="#00ff00"/>'
+                         '<rect width="60" height="60" fill="#ff0000"/></switch>')
+    assert [a.style.fill for a in el.paths] == ["#00ff00"]
+
+
+def test_tref_draws_the_referenced_characters_and_display_none_does_not_advance(tmp_path):
+    fam = 'font-family="DejaVu Sans" font-size="20"'
+    ref = _load(tmp_path, f'<text {fam} x="10" y="50">AB</text>', name="ref.svg")
+    el = _load(tmp_path, f'<defs><text id="t">AB</text></defs><text {fam} x="10" y="50">'
+                         '<tref href="#t"/><tspan display="none">WWW</tspan></text>', name="tref.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)
+    el = _load(tmp_path, f'<text {fam} x="10" y="50">A<tspan display="none">WWW</tspan>B</text>',
+               name="none.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=0.01)  # (two runs: no kerning pair)

@@ -772,6 +772,11 @@ def _auto(value: str | None) -> bool:
     return value is None or value.strip().lower() in ("", "auto")
 
 
+def _negative_length(value) -> bool:
+    m = re.match(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)", str(value)) if value is not None else None
+    return bool(m) and float(m.group(1)) < 0
+
+
 def _shape_sizes(root: ET.Element) -> None:
     """Give circles, ellipses and rects the sizes SVG 2 gives them where an attribute is
     missing: an ellipse's ``rx`` or ``ry`` left out (or ``auto``) takes the other's value,
@@ -786,7 +791,8 @@ def _shape_sizes(root: ET.Element) -> None:
         if name == "circle" and el.get("r") is None and not _styled(el, "r"):
             el.set("r", "0")
         elif name == "ellipse" and not (_styled(el, "rx") or _styled(el, "ry")):
-            rx, ry = el.get("rx"), el.get("ry")
+            # a negative radius is an error: the property falls back to auto (SVG 2)
+            rx, ry = (None if _negative_length(el.get(k)) else el.get(k) for k in ("rx", "ry"))
             if _auto(rx) and _auto(ry):
                 el.set("rx", "0")
                 el.set("ry", "0")
@@ -868,7 +874,9 @@ def _sanitize(path, root: ET.Element, notes: set[str]) -> None:
             # a <switch> draws its first child whose conditions hold; we support no
             # extension (Illustrator puts its private data first, under requiredExtensions)
             kids = [c for c in el if isinstance(c.tag, str)]
-            first = next((c for c in kids if c.get("requiredExtensions") is None), None)
+            first = next((c for c in kids if c.get("requiredExtensions") is None
+                          and c.tag.startswith(f"{{{SVG_NS}}}") == el.tag.startswith(f"{{{SVG_NS}}}")
+                          and _local(c.tag) in _GROUPING | _GRAPHICS | {"foreignObject"}), None)
             for c in kids:
                 if c is not first:
                     to_drop.append(c)
@@ -1148,7 +1156,7 @@ def _paint(raw, gradients: dict[str, str], notes: set[str]) -> tuple[str | None,
     if not s or s.lower() == "none":
         return None, 1.0
     if s.lower().startswith("url("):
-        m = re.match(r"url\(\s*['\"]?#([^)'\"]+)['\"]?\s*\)\s*(.*)$", s, re.IGNORECASE)
+        m = re.match(r"url\(\s*['\"]?\s*#([^)'\"\s]+)\s*['\"]?\s*\)\s*(.*)$", s, re.IGNORECASE)
         fallback = m.group(2).strip() if m else ""
         if m and m.group(1) in gradients:  # kept in the output; the outline uses a colour
             s = gradients[m.group(1)]

@@ -303,10 +303,56 @@ def _collapse(s: str, preserve: bool) -> str:
     return re.sub(r" +", " ", s.replace("\r", "").replace("\n", "").replace("\t", " "))
 
 
+def _display_none(el: ET.Element) -> bool:
+    value = el.get("display")
+    for decl in str(el.get("style") or "").split(";"):
+        k, _, v = decl.partition(":")
+        if k.strip().lower() == "display":
+            value = v
+    return str(value or "").strip().lower() == "none"
+
+
+#: elements of SVG (what a tref may take its characters from; an unknown one is not)
+_SVG_ELEMENTS = frozenset(
+    "a circle clipPath defs desc ellipse feBlend filter g image line linearGradient marker mask "
+    "metadata path pattern polygon polyline radialGradient rect stop style svg switch symbol text "
+    "textPath title tspan use view".split())
+
+
+def _trefs_to_tspans(root: ET.Element) -> None:
+    """``<tref xlink:href="#id">`` (SVG 1.1) as the ``<tspan>`` it stands for: the
+    character data of the referenced element, the tref's own attributes; a tref naming
+    nothing draws nothing."""
+    ids = {e.get("id"): e for e in root.iter() if isinstance(e.tag, str) and e.get("id")}
+    trefs = [el for el in root.iter() if isinstance(el.tag, str) and _local(el.tag) == "tref"]
+
+    def chars(el) -> str:  # character data, a nested tref's excluded (not followed)
+        out = [el.text or ""]
+        for c in el:
+            if not (isinstance(c.tag, str) and _local(c.tag) == "tref"):
+                out.append(chars(c))
+            out.append(c.tail or "")
+        return "".join(out)
+
+    texts = []
+    for el in trefs:
+        href = (el.get("{http://www.w3.org/1999/xlink}href") or el.get("href") or "").strip()
+        target = ids.get(href[1:]) if href.startswith("#") else None
+        same_ns = target is not None and isinstance(target.tag, str) and \
+            target.tag.rpartition("}")[0] == el.tag.rpartition("}")[0] and _local(target.tag) in _SVG_ELEMENTS
+        texts.append(chars(target) if same_ns and target is not el else "")
+    for el, text in zip(trefs, texts):
+        for c in list(el):
+            el.remove(c)
+        el.text = text
+        el.tag = el.tag[:-len("tref")] + "tspan"
+
+
 def text_to_paths(root: ET.Element, notes: set[str]) -> str | None:
     """Replace every ``<text>`` under ``root`` by a ``<g>`` of glyph-outline ``<path>``s
     (see the module docstring); what is not supported is added to ``notes``. Returns a
     warning naming the font families that are not installed, if any."""
+    _trefs_to_tspans(root)
     texts = [el for el in root.iter() if _local(el.tag) == "text"]
     if not texts:
         return None
@@ -394,7 +440,9 @@ def _layout(el, target, props: _Props, ns, fonts: _Fonts, pieces, state, notes, 
     _emit(el.text, target, props, fonts, pieces, state, preserve, notes)
     for child in el:
         name = _local(child.tag)
-        if name in _TEXT_LIKE:
+        if name in _TEXT_LIKE and _display_none(child):  # neither drawn nor advancing the pen
+            pass
+        elif name in _TEXT_LIKE:
             sub = _as_group(child, ns)
             target.append(sub)
             keep = preserve if child.get(_XML_SPACE) is None else child.get(_XML_SPACE) == "preserve"
