@@ -384,3 +384,10 @@ def test_tref_draws_the_referenced_characters_and_display_none_does_not_advance(
     el = _load(tmp_path, f'<text {fam} x="10" y="50">A<tspan display="none">WWW</tspan>B</text>',
                name="none.svg")
     np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=0.01)  # (two runs: no kerning pair)
+
+
+def test_root_background_colour_is_named_not_packed(tmp_path):
+    with pytest.warns(UserWarning, match="background-color of the root"):
+        el = _load(tmp_path, '<rect x="20" y="20" width="50" height="50"/>',
+                   root='viewBox="0 0 200 100" style="background-color: #0000ff80"')
+    np.testing.assert_allclose(_bounds(el), (20, 20, 70, 70))

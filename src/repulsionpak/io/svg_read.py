@@ -1412,6 +1412,11 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
         if root_xml.get(k) is not None
     }
     root_attrs = {k: v for k, v in root_xml.attrib.items()}
+    background = root_xml.get("background-color")
+    for name, v, _ in _inline_declarations(root_xml.get("style")):
+        background = v if name in ("background-color", "background") else background
+    if background and background.strip().lower() not in ("transparent", "none", "initial", "inherit", "unset"):
+        notes.add("background-color of the root <svg> (a page background, not part of the art)")
     meta_el = next((c for c in root_xml if _local(c.tag) == "metadata"), None)
     metadata_text = meta_el.text if meta_el is not None else None
     for k in ("width", "height"):
