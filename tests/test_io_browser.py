@@ -391,3 +391,10 @@ def test_root_background_colour_is_named_not_packed(tmp_path):
         el = _load(tmp_path, '<rect x="20" y="20" width="50" height="50"/>',
                    root='viewBox="0 0 200 100" style="background-color: #0000ff80"')
     np.testing.assert_allclose(_bounds(el), (20, 20, 70, 70))
+
+
+def test_text_position_in_percent_of_the_viewport(tmp_path):
+    fam = 'font-family="DejaVu Sans" font-size="20"'
+    ref = _load(tmp_path, f'<text {fam} x="50" y="50">A</text>', name="ref.svg")
+    el = _load(tmp_path, f'<text {fam} x="20%" y="40%" dx="5%" dy="10%">A</text>', name="pc.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)  # 40 + 10, 40 + 10 of 200 x 100

@@ -197,6 +197,17 @@ def resolve_lengths(root: ET.Element, reference: tuple[float, float]) -> None:
                 px = _px(v, ctx, 0.0)
                 if px is not None:
                     el.set(attr, _fmt(px))
+        if name in ("text", "tspan"):  # position lists: the text layout reads plain numbers
+            for attr, axis in (("x", 0), ("dx", 0), ("y", 1), ("dy", 1)):
+                v = el.get(attr)
+                if v is not None and "%" in v:
+                    items = [p for p in re.split(r"[\s,]+", v.strip()) if p]
+                    out = []
+                    for item in items:
+                        m = _LENGTH.fullmatch(item)
+                        out.append(_fmt(float(m.group(1)) / 100.0 * vp[axis])
+                                   if m and m.group(2) == "%" else item)
+                    el.set(attr, " ".join(out))
         if vp != reference and name in _PERCENT_GEOMETRY:  # svgelements takes the root's
             for attr, axis in _PERCENT_GEOMETRY[name]:
                 v = el.get(attr)
