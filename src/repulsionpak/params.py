@@ -136,6 +136,12 @@ class SimParams:
     outside_block: float = _doc(
         0.25, "× gap", "A skin vertex this far outside the container blocks its element's growth "
         "(beyond the paper: keeps growth pressure from pushing border elements out).")
+    one_sided_growth: float = _doc(
+        0.0, "-", "An element whose vertices inside other meshes all press from about one side keeps "
+        "growing (beyond the paper, which stops it at any contact): the unit directions from its "
+        "centre to those vertices must sum to at least this share of their number (0 = off, the "
+        "paper's rule; 0.5: within about ±60°). The heart with 30 animals, no pocket fill, seeds 1-6: "
+        "mean area 0.495 -> 0.505 at 0.5, ~18 % more iterations; mixed on the suite, so off by default.")
     max_size: float = _doc(
         1.3, "× nominal size", "Elements stop growing at this multiple of the size their skin was "
         "built for (beyond the paper: keeps relative sizes and the gap).")
@@ -434,6 +440,7 @@ class Params:
             (s.soft > 0, "sim.soft must be > 0"),
             (s.cell_size > 0, "sim.cell_size must be > 0"),
             (s.stop_window >= 2, "sim.stop_window must be >= 2"),
+            (0 <= s.one_sided_growth <= 1, "sim.one_sided_growth must be in [0, 1]"),
             (s.requery_every >= 1, "sim.requery_every must be >= 1"),
             (s.threads >= 0, "sim.threads must be >= 0 (0 = automatic)"),
             (s.max_iterations >= 1, "sim.max_iterations must be >= 1"),

@@ -22,7 +22,8 @@ from .forces import (boundary_force, contact_query, contact_update, corner_candi
                      edge_force, inversion_force, mark_corners_near, overlap_force, project_inside,
                      repulsion_force, shape_force)
 from .grid import Grid, bin_points
-from .integrate import count_inside, euler_step, grow, growth_speed_caps, skin_areas, window_change
+from .integrate import (confined_contacts, count_inside, euler_step, grow, growth_speed_caps, skin_areas,
+                        window_change)
 from .kernels import parallel_ready, set_threads
 from .threadgov import WINDOW as GOV_WINDOW
 from .threadgov import ThreadGovernor
@@ -134,6 +135,7 @@ class Simulator:
         self._corner_mark = np.zeros(len(m.corners), np.int64)
         self._corner_stamp = 0
         self.inside = np.zeros(N, np.bool_)
+        self.blocking = np.zeros(N, np.bool_)  # the inside vertices that stop growth (confined_contacts)
         self.outside = np.zeros(N, np.bool_)
         self.nb_count = np.zeros(N, np.int64)
         self.nb_elem = np.zeros((N, MAX_NEIGHBOURS), np.int32)
@@ -240,7 +242,12 @@ class Simulator:
         if m.rot_on is not None:  # designer controls: rotation limits, rigid bodies
             apply_controls(x, st.v, m.x_rest, m.elem_vstart, self.moving, m.rot_on, m.rot_lo,
                            m.rot_hi, m.rigid)
-        grow(self.inside, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
+        blocking = self.inside
+        if p.one_sided_growth > 0.0 and self.allow_growth:  # contacts from one side do not stop growth
+            confined_contacts(x, self.inside, m.elem_vstart, m.elem_nskin, self.moving, p.one_sided_growth,
+                              self.blocking)
+            blocking = self.blocking
+        grow(blocking, self.outside, m.elem_vstart, m.elem_nskin, self.moving, st.n_grow,
              self.growth, p.k_growth * p.dt, self.allow_growth, self.max_growth)
         if p.relax_passes > 0:
             relax_self_intersections(x, m.elem_vstart, m.elem_nskin, self.relaxed, self.edge_rest,
