@@ -9,6 +9,8 @@
     python benchmarks/bench.py firstrun             # `repulsionpak demo` with an empty kernel cache, twice
     python benchmarks/bench.py freshinstall         # the README's `pip install . && repulsionpak demo` in a new venv
     python benchmarks/bench.py controls             # heart scene: free vs --rotation fixed vs --rigid (docs/controls.md)
+    python benchmarks/bench.py pockets-many         # one detailed element (every shipped example on a sheet)
+                                                    #   in a circle: the pocket fill's time and peak memory
     python benchmarks/bench.py all
 
 Fixed seeds; results are printed as Markdown table rows for docs/benchmarks.md.
@@ -194,6 +196,65 @@ def bench_heart(runs: int = 5, secondary: bool = False, pockets: bool = False) -
               f"{rep['area_fraction']:.3f}, {rep['n_vertices']} vertices{extra}", flush=True)
     print(f"heart wall time: min {min(walls):.2f} s, median {float(np.median(walls)):.2f} s, "
           f"max {max(walls):.2f} s over {runs} runs")
+
+
+def _sheet_svg() -> str:
+    """One element made of every shipped example element on a 4 × 3 sheet inside a
+    stroked frame: art of many parts and points (about what a line of text is), whose
+    frame's inside is a hole. As the only primary in a circle it leaves one large pocket
+    around it, which the pocket fill fills with copies of the whole sheet."""
+    from repulsionpak import examples
+
+    cells = []
+    for k, f in enumerate(examples.element_files()):
+        body = f.read_text(encoding="utf-8")
+        body = body[body.index("<svg"):]
+        x, y = 100 * (k % 4) + 10, 100 * (k // 4) + 10
+        cells.append(body.replace("<svg ", f'<svg x="{x}" y="{y}" ', 1).replace('width="100"', 'width="90"', 1)
+                     .replace('height="100"', 'height="90"', 1))
+    return ('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 400 300" width="400" height="300">'
+            '<rect x="3" y="3" width="394" height="294" fill="none" stroke="#264653" stroke-width="4"/>'
+            + "".join(cells) + "</svg>")
+
+
+def bench_pockets_many(seed: int = 1) -> None:
+    """The pocket fill on a scene of many pockets: the sheet of :func:`_sheet_svg` as the
+    only primary (``--count 1``) in the shipped circle, pocket copies of the sheet itself
+    (default: the automatic fill with its size floor; ``--secondary``: the same sheet as
+    the designer's secondary, no floor; with ``--fill-holes`` the frames' insides too).
+    Prints per case the pocket fill's seconds (secondary phase + leftover + holes) against
+    the primary simulation's, the copies placed, the whole run's wall time and the
+    process's peak memory."""
+    import json
+    import tempfile
+
+    from repulsionpak import examples
+
+    tmp = Path(tempfile.mkdtemp(prefix="bench-pockets-many-"))
+    sheet = tmp / "sheet.svg"
+    sheet.write_text(_sheet_svg(), encoding="utf-8")
+    circle = examples.container_file("circle")
+    base = ["repulsionpak", "pack", str(circle), str(sheet), "--count", "1", "--seed", str(seed), "-q",
+            "-o", str(tmp / "out.svg"), "--report", str(tmp / "report.json")]
+    cases = {"automatic (size floor)": [], "--secondary sheet": ["--secondary", str(sheet)],
+             "--secondary sheet --fill-holes": ["--secondary", str(sheet), "--fill-holes"]}
+    probe = ("import resource, subprocess, sys; r = subprocess.run(sys.argv[1:]).returncode; "
+             "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss); sys.exit(r)")
+    subprocess.run(base, check=True)  # warm the kernel cache
+    print("| case | copies | primary s | pocket fill s (phase + leftover + holes) | fill / primary | "
+          "run s (wall) | peak MB |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for name, extra in cases.items():
+        t0 = time.perf_counter()
+        out = subprocess.run([sys.executable, "-c", probe, *base, *extra], check=True, capture_output=True,
+                             text=True)
+        wall = time.perf_counter() - t0
+        peak = int(out.stdout.split()[-1]) / 1024
+        rep = json.loads((tmp / "report.json").read_text())
+        sec = rep["seconds"]
+        fill = sec.get("secondary", 0.0) + sec.get("leftover", 0.0) + sec.get("holes", 0.0)
+        print(f"| {name} | {rep['n_secondary']} | {sec['primary']:.2f} | {fill:.2f} | "
+              f"{fill / max(sec['primary'], 1e-9):.2f} | {wall:.1f} | {peak:.0f} |", flush=True)
 
 
 def bench_mesh() -> None:
@@ -435,7 +496,7 @@ def bench_controls(seeds=(1, 2, 3)) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "threads", "preprocess", "heart", "pockets", "secondary",
-                                     "mesh", "firstrun", "freshinstall", "controls", "all"])
+                                     "mesh", "firstrun", "freshinstall", "controls", "pockets-many", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
@@ -448,6 +509,8 @@ def main() -> None:
         bench_heart(runs=2, pockets=True)
     if a.what in ("secondary", "all"):
         bench_heart(runs=2, secondary=True)
+    if a.what in ("pockets-many", "all"):
+        bench_pockets_many()
     if a.what in ("mesh", "all"):
         bench_mesh()
     if a.what in ("firstrun", "all"):

@@ -340,3 +340,24 @@ def test_dilated_covers_the_same_region_as_a_whole_buffer():
     assert len(out) == 1 + 50 and all(shapely.get_num_geometries(g) == 1 for g in out[1:])
     whole = dots.buffer(4.0, quad_segs=4)
     assert shapely.symmetric_difference(shapely.union_all(out[1:]), whole).area < 1e-9 * whole.area
+
+
+def test_a_budget_bounds_the_leftover_fill(tmp_path):
+    """The fills stop once their work budget (art points handled) is spent, whatever room
+    is left: the long strip that takes ~100 discs gets about as many copies as the budget
+    pays for, and the work charged grows linearly with the copies placed."""
+    from repulsionpak.holes import BUILD_COST, COPY_COST, FILL_WORK, MIN_FILL_WORK, FillBudget, budget_for
+
+    cont, unbounded = _fill_strip(tmp_path, 14000, min_radius=20.0)
+    lib = HoleLibrary.of([load_element(tmp_path / "disc.svg")])
+    per_copy = COPY_COST + (6 + BUILD_COST) * float(lib.points[0])  # a fit of 6 picks, then the build
+    spent = []
+    for n in (10, 20):
+        b = FillBudget(n * per_copy)
+        got = fill_pockets([], lib, cont.region, 10.0, 5.0, np.random.default_rng(0), min_radius=20.0, budget=b)
+        assert b.spent and 0.5 * n <= len(got) <= n < len(unbounded)
+        spent.append((n * per_copy - b.left) / len(got))
+        _assert_gap_and_margin(cont, [e.art for e in got])
+    assert spent[1] == pytest.approx(spent[0], rel=0.3)  # linear: the same work per copy
+    assert budget_for(1000, 20000).left == pytest.approx(2e7 * FILL_WORK)
+    assert budget_for(10, 300).left == pytest.approx(MIN_FILL_WORK * FILL_WORK)

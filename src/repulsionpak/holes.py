@@ -46,10 +46,11 @@ class HoleLibrary:
     radii: np.ndarray  # largest distance of the art from its centre
     weights: np.ndarray  # relative frequency (controls' weight), normalised
     controls: tuple[ElementControls, ...]
+    points: np.ndarray  # (n,) points of each element's art (what a copy of it costs to fit and build)
 
     @staticmethod
     def of(elements: Sequence[Element]) -> "HoleLibrary | None":
-        els, centres, geoms, radii, weights, ctrls = [], [], [], [], [], []
+        els, centres, geoms, radii, weights, ctrls, points = [], [], [], [], [], [], []
         for e in elements:
             c = getattr(e, "controls", None) or ElementControls()
             g = art_area(e.paths)
@@ -64,11 +65,61 @@ class HoleLibrary:
             radii.append(float(np.sqrt((pts ** 2).sum(axis=1).max())))
             weights.append(c.weight)
             ctrls.append(c)
+            points.append(sum(len(q) for a in e.paths for q in a.subpaths))
         if not els:
             return None
         w = np.asarray(weights, dtype=float)
         return HoleLibrary(tuple(els), np.asarray(centres), tuple(geoms), np.asarray(radii),
-                           w / w.sum(), tuple(ctrls))
+                           w / w.sum(), tuple(ctrls), np.asarray(points, dtype=float))
+
+
+@dataclass
+class FillBudget:
+    """Work the leftover and hole fills may still do, in art points handled: every fit
+    of a copy costs :data:`COPY_COST` plus the points of each element it tries, and a
+    copy built (its written curves and their exact art) :data:`BUILD_COST` × its
+    points. A fill stops, whatever room is left, once ``left`` is spent.
+
+    Notes
+    -----
+    A copy of detailed art is expensive however small it is (a line of text: 3,000
+    points, about 0.2 s to fit, write and measure exactly): without a bound the fill of a
+    container around one text element placed 395 copies in 325 s. The bound is set from
+    the primary simulation's own work (:func:`budget_for`), so the fill takes about as
+    long as that at most, on any machine, and its result does not depend on the
+    machine's speed."""
+
+    left: float
+
+    def take(self, cost: float) -> None:
+        self.left -= cost
+
+    @property
+    def spent(self) -> bool:
+        return self.left <= 0
+
+
+#: fixed cost of one fit, in art points (the inscribed circle, a few shapely calls)
+COPY_COST = 200.0
+#: building a copy (written curves, exact art) costs this many times its points, against
+#: one for each random pick tried (a transformed outline and about 13 containment tests)
+BUILD_COST = 4.0
+#: art points the fills may handle per vertex-iteration of the primary simulation: one
+#: vertex-iteration costs about 0.3-0.5 µs, one point of a fill 7-15 µs (measured on the
+#: Arabic test text in a circle, one thread: at 0.037 the fill took twice the primary
+#: simulation's time), so this keeps the fills' time to about half the primary
+#: simulation's (the secondary phase may take the other half: secondary.SECONDARY_WORK)
+FILL_WORK = 0.0075
+
+
+#: the fills' budget is never less than for this many vertex-iterations (about 2 s of
+#: simulation): one small primary alone in a narrow band still gets its copies
+MIN_FILL_WORK = 4e6
+
+
+def budget_for(vertices: int, iterations: int) -> FillBudget:
+    """The fills' budget for a primary simulation of ``vertices`` × ``iterations``."""
+    return FillBudget(FILL_WORK * max(float(vertices) * float(iterations), MIN_FILL_WORK))
 
 
 def _angle(c: ElementControls, rng: np.random.Generator) -> float:
@@ -118,12 +169,15 @@ FIT_SHRINK, FIT_STEPS = 0.998, 6
 
 
 def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, min_radius: float,
-              render: RenderParams, trials: int, min_area: float = 0.0):
+              render: RenderParams, trials: int, min_area: float = 0.0, budget: FillBudget | None = None):
     """One undeformed copy inside the polygon ``part`` (a free region: everything in it is
     at least the gap from all art), centred on its largest inscribed circle and scaled up
     until it touches the edge, the largest of ``trials`` random picks; (copy, its art)
     or None when the circle is below ``min_radius`` or nothing of at least ``min_area``
-    of art (container units², the size floor squared) fits."""
+    of art (container units², the size floor squared) fits. ``budget`` is charged the
+    work done (:class:`FillBudget`)."""
+    if budget is not None:
+        budget.take(COPY_COST)
     line = shapely.maximum_inscribed_circle(part, 0.01 * gap)
     at = np.asarray(line.coords[0])
     r = float(line.length)
@@ -134,6 +188,8 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
     for _ in range(trials):
         k = int(rng.choice(len(library.elements), p=library.weights))
         angle = _angle(library.controls[k], rng)
+        if budget is not None:
+            budget.take(library.points[k])
         lo = r / library.radii[k]  # fits: inside the inscribed circle
         g0 = library.geoms[k]
         if not part.contains(_place(g0, lo, angle, at)):
@@ -152,6 +208,8 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
         return None
     _, s, k, angle = best
     e = library.elements[k]
+    if budget is not None:
+        budget.take(BUILD_COST * library.points[k])
     for _ in range(FIT_STEPS):  # what is written must fit, not only the source's polylines
         m = _matrix(s, angle, library.centres[k], at)
         tol = curve_tolerance(2.0 * s * library.radii[k], gap, render)
@@ -166,11 +224,13 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
 
 def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: np.random.Generator,
                min_radius: float, depth: int = 2, render: RenderParams = RenderParams(),
-               trials: int = 6, limit: int | None = None, min_size: float = 0.0) -> list[PlacedArt]:
+               trials: int = 6, limit: int | None = None, min_size: float = 0.0,
+               budget: FillBudget | None = None) -> list[PlacedArt]:
     """Copies of ``library`` elements in the holes of ``placed`` (see the module
     docstring), at most ``limit``; returns the new copies only. ``min_radius``: the smallest inscribed
     circle of a hole's free part that gets a copy (container units); ``min_size``: the
-    smallest copy (square root of its art's area, container units). Copies keep
+    smallest copy (square root of its art's area, container units); ``budget``: the
+    fill stops once it is spent (:class:`FillBudget`). Copies keep
     1.005 × the gap from their hosts: the writer rounds their curves by at most a fifth
     of their tolerance, itself at most 0.02 gap."""
     geoms = [p.art for p in placed]
@@ -179,7 +239,7 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
     out: list[PlacedArt] = []
     queue = [(g, 0) for g in geoms]
     added: list = []
-    while queue and (limit is None or len(out) < limit):
+    while queue and (limit is None or len(out) < limit) and not (budget is not None and budget.spent):
         host, level = queue.pop(0)
         if level >= depth:
             continue
@@ -201,9 +261,9 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
                     part = max(part.geoms, key=lambda q: q.area)
                 if part.is_empty or not isinstance(part, shapely.Polygon):
                     continue
-                if limit is not None and len(out) >= limit:
+                if (limit is not None and len(out) >= limit) or (budget is not None and budget.spent):
                     break
-                got = _fit_copy(part, library, gap, rng, min_radius, render, trials, min_size ** 2)
+                got = _fit_copy(part, library, gap, rng, min_radius, render, trials, min_size ** 2, budget)
                 if got is None:
                     continue
                 copy, g = got
@@ -260,7 +320,7 @@ def _shells(g):
 def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: float, margin: float,
                  rng: np.random.Generator, min_radius: float, render: RenderParams = RenderParams(),
                  trials: int = 6, limit: int | None = None, min_size: float = 0.0,
-                 into_holes: bool = False) -> list[PlacedArt]:
+                 into_holes: bool = False, budget: FillBudget | None = None) -> list[PlacedArt]:
     """Undeformed copies in what is left of the negative space after the verification:
     the container shrunk by the edge margin, minus every element's art dilated by the
     gap, split into its connected pockets; each pocket whose largest inscribed circle is
@@ -275,7 +335,8 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     the margin from the edge by construction. Returns the new copies only, at most ``limit``.
     ``min_size`` (container units): no copy smaller (:func:`repulsionpak.secondary.art_size`)
     is placed. ``into_holes`` false: the holes of the art (a ring's middle, the inside of
-    a logo) are not pockets; :func:`fill_holes` fills them when asked."""
+    a logo) are not pockets; :func:`fill_holes` fills them when asked. ``budget``: the
+    fill stops once it is spent (:class:`FillBudget`)."""
     keep = 1.005 * gap
     eps = 0.01 * gap
     # a buffer with 4 segments per quarter circle is inscribed in the true one (its chords
@@ -293,9 +354,9 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     out: list[PlacedArt] = []
     for pocket in parts:
         todo = [pocket]  # the pocket, then every piece a copy leaves of it, largest first
-        while todo and (limit is None or len(out) < limit):
+        while todo and (limit is None or len(out) < limit) and not (budget is not None and budget.spent):
             part = todo.pop(0)
-            got = _fit_copy(part, library, gap, rng, min_radius, render, trials, min_size ** 2)
+            got = _fit_copy(part, library, gap, rng, min_radius, render, trials, min_size ** 2, budget)
             if got is None:
                 continue
             copy, g = got

@@ -439,23 +439,28 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         floor = size_floor([art_size(q.art) for q in packing.placed if q.kind == "primary"], sec.min_size)
         packing.placed = [q for q in packing.placed if q.kind == "primary" or art_size(q.art) >= floor]
     if (sec.fill_holes or sec.fill_leftover) and secondary and not packing.partial:
-        from .holes import HoleLibrary, fill_holes, fill_pockets  # noqa: PLC0415
+        from .holes import HoleLibrary, budget_for, fill_holes, fill_pockets  # noqa: PLC0415
 
         library = HoleLibrary.of(secondary)
+        # the fills' work is bounded by the primary simulation's (holes.FillBudget)
+        m = packing.model
+        sizes = np.diff(m.elem_vstart)
+        budget = budget_for(int(sum(int(n) for n, k in zip(sizes, m.kind) if k == "primary")),
+                            max(int(packing.iterations.get("primary", 0)), 1))
         if library is not None and sec.fill_leftover:  # what the verification left (holes.py)
             t5 = time.perf_counter()
             stage("filling pockets")
             packing.placed = packing.placed + fill_pockets(
                 packing.placed, library, container.region, gap, margin_of(params, gap), rng,
                 sec.hole_min_radius * gap, params.render, limit=_room(user_cap, packing.placed),
-                min_size=floor, into_holes=sec.fill_holes)
+                min_size=floor, into_holes=sec.fill_holes, budget=budget)
             packing.seconds["leftover"] = time.perf_counter() - t5
         if library is not None and sec.fill_holes:  # the holes of the art are pockets too (holes.py)
             t5 = time.perf_counter()
             stage("filling holes")
             packing.placed = packing.placed + fill_holes(
                 packing.placed, library, gap, rng, sec.hole_min_radius * gap, sec.hole_depth, params.render,
-                limit=_room(user_cap, packing.placed), min_size=floor)
+                limit=_room(user_cap, packing.placed), min_size=floor, budget=budget)
             packing.seconds["holes"] = time.perf_counter() - t5
     packing.seconds["render"] = t4 - t3
     packing.seconds["total"] = time.perf_counter() - t0

@@ -3,6 +3,7 @@ primaries frozen (they still repel and can be overlapped into, but never move)."
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -304,6 +305,13 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     key_index: dict[tuple[int, int], int] = {}
     tindex = np.zeros(len(seeds), np.int64)
     shrink = np.zeros(len(seeds))
+    m0 = packing.model
+    # the phase simulates at most as many vertices as the primary phase did (the deepest
+    # pockets first): with one detailed primary, 50 copies of it cost many times its run
+    v_prim = sum(int(m0.elem_vstart[e + 1] - m0.elem_vstart[e]) for e in range(m0.n_elements)
+                 if m0.kind[e] == "primary")
+    room = max(v_prim, MIN_WORK_VERTICES)
+    used = 0
     for k, (i, sc) in enumerate(zip(assign, scales)):
         b = int(np.round(np.log(sc) / np.log(SIZE_STEP)))
         if (int(i), b) not in key_index:
@@ -311,6 +319,11 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
             templates.append(build_template(outlines[int(i)], SIZE_STEP ** b, gap, p.preprocess))
         tindex[k] = key_index[(int(i), b)]
         shrink[k] = sp.initial_fraction * sc / SIZE_STEP ** b  # starts at a share of its fit
+        used += len(templates[tindex[k]].verts)
+        if used > room and k > 0:  # this copy would take the phase past the primaries' size
+            seeds, angles, scales, assign = seeds[:k], angles[:k], scales[:k], assign[:k]
+            tindex, shrink = tindex[:k], shrink[:k]
+            break
     base_index = len(packing.templates)
     placement = Placement(tindex + base_index, seeds, angles, shrink)
     all_templates = list(packing.templates) + templates
@@ -318,7 +331,6 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
                                         1 / packing.frame.unit, origin=(0, 0))
     from .pack import bend_limits, neighbour_cell  # noqa: PLC0415  (pack imports this module lazily too)
 
-    m0 = packing.model
     model, state = build_model(all_templates, placement, packing.frame, region_sim,
                                cell_size=neighbour_cell(all_templates, placement.template_index,
                                                         gap, p) / packing.frame.unit,
@@ -332,7 +344,15 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     if controlled:
         setup_model(model, [ctrls[int(i)] for i in assign], angles, base=m0)
     t1 = time.perf_counter()
-    sim = Simulator(model, state, p.sim, phase="secondary")
+    # ... and at most SECONDARY_WORK of the primary phase's vertex-iterations, and not more
+    # iterations than it (each costs a fixed ~0.5 ms besides its vertices; the copies of
+    # one detailed primary ran 2.7 times its iterations)
+    v_sec = max(model.n_vertices - m0.n_vertices, 1)
+    primary_its = max(int(packing.iterations.get("primary", 0)), 1)
+    work = max(v_prim * primary_its, MIN_WORK_VERTICES * MIN_WORK_ITERATIONS)
+    its = min(int(SECONDARY_WORK * work / v_sec), max(primary_its, MIN_WORK_ITERATIONS))
+    cap = min(p.sim.max_iterations, max(its, p.sim.min_iterations))
+    sim = Simulator(model, state, dataclasses.replace(p.sim, max_iterations=cap), phase="secondary")
     sim.templates = all_templates
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
                             should_stop=should_stop, every=snapshot_every)
@@ -340,11 +360,23 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     packing.model, packing.state = model, state
     packing.iterations["secondary"] = res.iterations
     packing.seconds["secondary"] = time.perf_counter() - t1 + packing.seconds["seeding"]
-    packing.stopped_by["secondary"] = res.stopped_by
+    packing.stopped_by["secondary"] = ("work_bound" if res.stopped_by == "max_iterations" and cap < p.sim.max_iterations
+                                       else res.stopped_by)
     packing.area_fraction_meshes = res.area_fraction
     return len(seeds)
 
 
+#: the secondary phase's copies have at most as many mesh vertices as the primaries (the
+#: copies of the deepest pockets first), and it runs at most this share of the primary
+#: phase's vertex-iterations (its growing ones; the settling ones follow): the heart's
+#: copies have 0.3 of its primaries' vertices and run 0.4 of their iterations, far below;
+#: one detailed element alone in a circle (--count 1) got 50 copies of itself, which ran
+#: 2.7 times its iterations
+SECONDARY_WORK = 0.5
+#: ... but never less room than this many vertices and iterations (about 2 s): a narrow
+#: band whose default count is one small primary still gets its row of copies, which
+#: grow from half their fit to it in about 1,000 iterations
+MIN_WORK_VERTICES, MIN_WORK_ITERATIONS = 4000, 1000
 #: size classes of the secondary templates (a copy's skin is built for its size ± 10 %)
 SIZE_STEP = 1.2
 #: random start angles tried per pocket, besides the two along the pocket's long axis
