@@ -188,6 +188,7 @@ def _raster(W: int, H: int, draw) -> np.ndarray:
 def _draw_element(ax, element, apply, scale) -> None:
     from matplotlib.patches import PathPatch
     from matplotlib.path import Path as MPath
+    from repulsionpak.geometry.outline import _stroke_geometry
     from repulsionpak.io.svg_read import rings_to_region
     import shapely
 
@@ -216,9 +217,29 @@ def _draw_element(ax, element, apply, scale) -> None:
                 ax.add_artist(PathPatch(MPath(verts, codes), facecolor=(0, 0, 0, st.opacity * st.fill_opacity),
                                         edgecolor="none", linewidth=0))
 
+        def polygons(region, alpha):
+            for poly in shapely.get_parts(region):
+                if poly.is_empty or not isinstance(poly, shapely.Polygon):
+                    continue
+                ext = [np.asarray(poly.exterior.coords)] + [np.asarray(r.coords) for r in poly.interiors]
+                verts = np.concatenate(ext)
+                codes = np.concatenate([[MPath.MOVETO] + [MPath.LINETO] * (len(r) - 2) + [MPath.CLOSEPOLY]
+                                        for r in ext])
+                ax.add_artist(PathPatch(MPath(verts, codes), facecolor=(0, 0, 0, alpha),
+                                        edgecolor="none", linewidth=0))
+
         def stroke():
             width = st.stroke_width * scale
             if st.stroke is None or st.opacity * st.stroke_opacity <= 0 or width <= 0:
+                return
+            dots = any(len(q) and np.ptp(np.asarray(q), axis=0).max() == 0 for q in art.subpaths)
+            if not st.stroke_dasharray and (width >= 3 or dots):
+                # the package's own stroke area: its miter limit (matplotlib has none) and the dots
+                # of round or square caps on zero-length subpaths (thinner strokes stay with
+                # matplotlib, whose hairlines reach the ink threshold as a browser's do)
+                area = _stroke_geometry(art, st.stroke_width)
+                mapped = shapely.transform(area, lambda xy: apply(xy))
+                polygons(mapped, st.opacity * st.stroke_opacity)
                 return
             verts, codes = [], []
             for pts, closed in zip(subs, art.closed):

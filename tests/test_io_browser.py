@@ -398,3 +398,53 @@ def test_text_position_in_percent_of_the_viewport(tmp_path):
     ref = _load(tmp_path, f'<text {fam} x="50" y="50">A</text>', name="ref.svg")
     el = _load(tmp_path, f'<text {fam} x="20%" y="40%" dx="5%" dy="10%">A</text>', name="pc.svg")
     np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)  # 40 + 10, 40 + 10 of 200 x 100
+
+
+# ----------------------------------------------------------------------------- clip paths, odd attributes
+
+
+_STAR = "M 100 15 l 50 160 l -130 -100 l 160 0 l -130 100 z"
+
+
+def test_clip_rule_is_inherited_where_the_clip_path_stands(tmp_path):
+    body = (f'<g clip-rule="evenodd"><clipPath id="c"><path d="{_STAR}"/></clipPath></g>'
+            '<rect width="200" height="200" clip-path="url(#c)"/>')
+    el = _load(tmp_path, body, root='viewBox="0 0 200 200"')
+    region = shapely.union_all([shapely.Polygon(p) for p in el.paths[0].subpaths])
+    if len(el.paths[0].subpaths) > 1:  # outer ring and the pentagon hole
+        region = shapely.symmetric_difference_all([shapely.Polygon(p) for p in el.paths[0].subpaths])
+    assert region.contains(shapely.Point(100, 30))  # a tip of the star
+    assert not region.contains(shapely.Point(100, 105))  # the centre: a hole with evenodd
+
+
+def test_a_group_inside_a_clip_path_is_ignored_but_text_is_not(tmp_path):
+    el = _load(tmp_path, '<clipPath id="c"><rect width="50" height="50"/><g><rect x="100" width="50" '
+                         'height="50"/></g></clipPath><rect width="200" height="100" clip-path="url(#c)"/>')
+    np.testing.assert_allclose(_bounds(el), (0, 0, 50, 50), atol=1e-6)
+    el = _load(tmp_path, '<clipPath id="c"><text x="10" y="50" font-family="DejaVu Sans" font-size="40">'
+                         'I</text></clipPath><rect width="200" height="100" clip-path="url(#c)"/>', name="t.svg")
+    b = _bounds(el)
+    assert 10 < b[0] < b[2] < 30 and b[1] > 10 and b[3] <= 50 + 1e-6  # the glyph clips
+
+
+def test_text_in_another_namespace_is_not_drawn(tmp_path):
+    fam = 'font-family="DejaVu Sans" font-size="20"'
+    ref = _load(tmp_path, f'<text {fam} x="10" y="50">A</text>', name="ref.svg")
+    el = _load(tmp_path, f'<text {fam} x="10" y="50">A<a xmlns="http://example.org/x">WWW</a></text>',
+               name="ns.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)
+
+
+def test_inherit_on_a_geometry_attribute_is_invalid(tmp_path):
+    el = _load(tmp_path, '<g x="20"><rect x="inherit" width="50" height="50"/></g>')
+    np.testing.assert_allclose(_bounds(el), (0, 0, 50, 50), atol=1e-6)
+
+
+def test_a_skewed_stroke_and_a_root_filter_are_said_to_be_approximated(tmp_path):
+    with pytest.warns(UserWarning, match="skewing or uneven scaling"):
+        _load(tmp_path, '<line x1="60" y1="90" x2="140" y2="10" stroke="black" stroke-width="20" '
+                        'transform="skewX(-45)"/>')
+    with pytest.warns(UserWarning, match="filter"):
+        _load(tmp_path, '<filter id="f"><feGaussianBlur stdDeviation="4"/></filter>'
+                        '<rect width="50" height="50"/>', root='viewBox="0 0 200 100" filter="url(#f)"',
+              name="f.svg")

@@ -46,6 +46,7 @@ import shapely
 
 from ..errors import InputError
 from ..geometry.outline import art_area
+from .svg_xml import TEXT_GROUP
 from .svg_xml import local_name as _local
 from ..types import ArtPath, ShapeSource, Style
 
@@ -137,11 +138,29 @@ def hoist_clip_paths(root: ET.Element) -> int:
     defs = ET.Element(f"{{{_SVG_NS}}}defs" if root.tag.startswith("{") else "defs")
     for el in outer:
         p = parent.get(el)
+        # clip-rule is inherited from where the clipPath stands: kept when it moves
+        if el.get("clip-rule") is None and "clip-rule" not in (el.get("style") or ""):
+            anc = p
+            while anc is not None and anc is not root:
+                rule = _own_property(anc, "clip-rule")
+                if rule is not None:
+                    el.set("clip-rule", rule)
+                    break
+                anc = parent.get(anc)
         if p is not None:
             p.remove(el)
         defs.append(el)
     root.insert(0, defs)
     return len(outer)
+
+
+def _own_property(el: ET.Element, name: str) -> str | None:
+    value = el.get(name)
+    for decl in str(el.get("style") or "").split(";"):
+        k, _, v = decl.partition(":")
+        if k.strip().lower() == name:
+            value = v.strip()
+    return value if value and value.strip().lower() != "inherit" else None
 
 
 def clip_refs(value, matrix: np.ndarray, notes: set[str]) -> tuple[ClipRef, ...]:
@@ -192,8 +211,10 @@ def clip_defs(doc, inv_viewport, notes: set[str]) -> dict[str, ClipDef]:
                         url_id(vals.get("clip-path")),
                     )
                 )
-            elif isinstance(child, (se.Group, se.Use)):
-                gather(child, cd, inv_clip)
+            elif isinstance(child, se.Use) or (isinstance(child, se.Group) and vals.get(TEXT_GROUP)):
+                gather(child, cd, inv_clip)  # (text is drawn as groups of glyph outlines)
+            elif isinstance(child, se.Group):  # not a valid child of a clipPath: ignored, as
+                continue  # browsers do
             elif isinstance(child, se.Text):
                 notes.add("text inside a clipPath (does not clip)")
 

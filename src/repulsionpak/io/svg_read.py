@@ -777,6 +777,9 @@ def _negative_length(value) -> bool:
     return bool(m) and float(m.group(1)) < 0
 
 
+_GEOMETRY_ATTRS = ("x", "y", "width", "height", "cx", "cy", "r", "rx", "ry", "x1", "y1", "x2", "y2")
+
+
 def _shape_sizes(root: ET.Element) -> None:
     """Give circles, ellipses and rects the sizes SVG 2 gives them where an attribute is
     missing: an ellipse's ``rx`` or ``ry`` left out (or ``auto``) takes the other's value,
@@ -788,11 +791,17 @@ def _shape_sizes(root: ET.Element) -> None:
         if not isinstance(el.tag, str):
             continue
         name = _local(el.tag)
+        for k in _GEOMETRY_ATTRS:  # not properties: "inherit" is invalid, and a group has none
+            v = el.get(k)  # (svgelements passed a <g x="20"> on to the shapes inside)
+            if v is not None and (v.strip().lower() == "inherit" or name in ("g", "a", "switch", "defs")):
+                del el.attrib[k]
         if name == "circle" and el.get("r") is None and not _styled(el, "r"):
             el.set("r", "0")
         elif name == "ellipse" and not (_styled(el, "rx") or _styled(el, "ry")):
-            # a negative radius is an error: the property falls back to auto (SVG 2)
-            rx, ry = (None if _negative_length(el.get(k)) else el.get(k) for k in ("rx", "ry"))
+            # a negative radius is an error: the property falls back to auto (SVG 2); both
+            rx, ry = el.get("rx"), el.get("ry")  # negative: not drawn (said by _negative_size)
+            if _negative_length(rx) != _negative_length(ry):
+                rx, ry = (None if _negative_length(v) else v for v in (rx, ry))
             if _auto(rx) and _auto(ry):
                 el.set("rx", "0")
                 el.set("ry", "0")
@@ -1508,6 +1517,11 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
                 style = _style_of(child, op, det_scale, vp_scale, gradients, notes, context)
                 if isinstance(child, se.SimpleLine):  # a line has no inside: never filled
                     style = dataclasses.replace(style, fill=None)
+                if style.stroke is not None and style.stroke_width > 0 and style.opacity > 0:
+                    sv = np.linalg.svd(_matrix_to_np(child.transform * ~viewport)[:2, :2], compute_uv=False)
+                    if sv[0] > 1.05 * sv[1]:  # a skewed or unevenly scaled stroke varies in width
+                        notes.add("stroke under a skewing or uneven scaling transform "
+                                  "(drawn with one even width)")
                 if layers:
                     style = dataclasses.replace(style, layers=layers)
                 segs = _dots(_smooth_controls(list(child.segments(transformed=False))), style)
@@ -1601,6 +1615,8 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
         return out
 
     root_own = own(doc)
+    if "filter" in root_own:
+        notes.add("filter")
     # a clip-path on the root <svg> is in the file's user units (as resvg draws it)
     root_clips = clip_refs(doc.values.get("clip-path"), np.eye(3), notes)
     root_op = _clamp01(_float_attr(root_own.get("opacity"), 1.0))

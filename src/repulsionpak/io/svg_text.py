@@ -29,7 +29,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from .svg_text_metrics import BASELINES, baseline_offset, decoration_bars, metrics_of, shift_item
-from .svg_xml import inline_declarations
+from .svg_xml import TEXT_GROUP, inline_declarations
 from .svg_xml import local_name as _local
 
 __all__ = ["text_to_paths"]
@@ -414,6 +414,7 @@ def _as_group(el: ET.Element, ns: str) -> ET.Element:
                                       if not d.split(":")[0].strip().lower().startswith("marker"))
         attrs.update({k: "none" for k in ("marker-start", "marker-mid", "marker-end")})
     g = ET.Element(ns + "g", attrs)
+    g.set(TEXT_GROUP, _local(el.tag))  # (a clipPath takes text, not groups)
     g.tail = el.tail if _local(el.tag) == "text" else None
     return g
 
@@ -440,7 +441,8 @@ def _layout(el, target, props: _Props, ns, fonts: _Fonts, pieces, state, notes, 
     _emit(el.text, target, props, fonts, pieces, state, preserve, notes)
     for child in el:
         name = _local(child.tag)
-        if name in _TEXT_LIKE and _display_none(child):  # neither drawn nor advancing the pen
+        foreign = isinstance(child.tag, str) and child.tag.rpartition("}")[0] != el.tag.rpartition("}")[0]
+        if name in _TEXT_LIKE and (foreign or _display_none(child)):  # neither drawn nor advancing
             pass
         elif name in _TEXT_LIKE:
             sub = _as_group(child, ns)

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import re
 
+#: attribute marking the groups that hold a text's glyph outlines (its value: text, tspan ...):
+#: a clipPath takes text, but no groups
+TEXT_GROUP = "data-repulsionpak-text"
+
 _IMPORTANT = re.compile(r"\s*!\s*important\s*$", re.IGNORECASE)
 
 
