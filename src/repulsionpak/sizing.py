@@ -165,20 +165,55 @@ _STEPS = np.geomspace(0.5, 4.0, 37)
 #: a one-copy region takes the least used element among those whose fitted art is at least
 #: this share of the best one's (variety over a little area)
 CLOSE_FIT = 0.8
+#: parts of at most this many copies split into cells, each copy fitted to its own
+SMALL_PART = 3
 
 
 def fit_in_room(room: Room, point: np.ndarray, samples: np.ndarray, angles: np.ndarray,
-                offset: float) -> np.ndarray:
+                offset: float, depth: np.ndarray | None = None) -> np.ndarray:
     """(A,) the largest scale (file → container units) at which the outline ``samples``
     (:func:`repulsionpak.secondary.outline_samples`), turned by each of ``angles`` and
-    centred on ``point``, keeps ``offset`` from the container's edge at every sample; the
-    scales tried run from half to four times the inscribed-circle fit."""
-    pockets = Pockets(room.depth, float(room.origin[0]), float(room.origin[1]), room.h,
+    centred on ``point``, keeps ``offset`` from the container's edge (or from wherever
+    ``depth``, a grid like ``room.depth``, falls to 0) at every sample; the scales tried
+    run from half to four times the inscribed-circle fit."""
+    depth = room.depth if depth is None else depth
+    pockets = Pockets(depth, float(room.origin[0]), float(room.origin[1]), room.h,
                       np.zeros(1), np.zeros(1, np.int64), np.zeros(1, np.int64))
     radius = float(np.sqrt((samples ** 2).sum(axis=1).max()))
-    d = float(room.at(point[None], room.depth)[0])
+    d = float(room.at(point[None], depth)[0])
     s_round = max(d - offset, 0.25 * d) / max(radius, 1e-300)
     return fit_scales(pockets, point, samples, angles, offset, s_round, _STEPS)
+
+
+def cells(room: Room, part: int, points: np.ndarray, rounds: int = 8) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Split part ``part`` among ``points`` (n, 2): a few rounds of Lloyd's relaxation
+    (each point moves to the centroid of the pixels nearest it), then each cell's depth
+    grid — the distance to the container's edge or to the bisector with another cell,
+    whichever is nearer, 0 outside the cell — and its deepest point (the centre of the
+    largest disc in the cell). Returns ((n, 2) centres, n depth grids)."""
+    mask = room.part == part
+    c = room.centres(mask)
+    p = np.asarray(points, float).copy()
+    for _ in range(rounds):
+        near = np.argmin(((c[:, None, :] - p[None]) ** 2).sum(axis=2), axis=1)
+        for k in range(len(p)):
+            if np.any(near == k):
+                p[k] = c[near == k].mean(axis=0)
+    jj, ii = np.nonzero(mask)
+    grids, centres = [], []
+    for k in range(len(p)):
+        d = room.depth[jj, ii].copy()
+        for j in range(len(p)):
+            if j != k:
+                u = p[j] - p[k]
+                L = float(np.hypot(*u))
+                if L > 0:
+                    d = np.minimum(d, ((0.5 * (p[k] + p[j]) - c) @ u) / L)
+        g = np.zeros_like(room.depth)
+        g[jj, ii] = np.maximum(d, 0.0)
+        grids.append(g)
+        centres.append(c[int(np.argmax(d))])
+    return np.array(centres), grids
 
 
 def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: float, params: PlacementParams,
@@ -191,69 +226,84 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
     relative sizes are kept within a part). Each copy is then fitted to the container at
     its position (:func:`fit_in_room`, the art ``offset`` + 0.1 gap from the edge, where
     the skin rests): it starts at an angle at which its share fits, or else at the angle
-    that fits it largest, and its scale is capped at that fit. A part of one copy takes the
-    element that fits it best (the least used of those within ``CLOSE_FIT`` of the best);
-    the others cycle through the shuffled library. Scales are rounded down to classes
-    ``SIZE_STEP`` apart, so copies of one element share a few templates.
+    that fits it largest, and its scale is capped at that fit. A part of at most
+    ``SMALL_PART`` copies is split into cells (:func:`cells`): each copy is centred on its
+    cell's deepest point and takes the element that fits the cell best (the least used of
+    those within ``CLOSE_FIT`` of the best), at its fitted angle and scale; the copies of larger parts
+    cycle through the shuffled library, capped at the part's width. Scales are rounded down
+    to classes ``SIZE_STEP`` apart, so copies of one element share a few templates.
     """
     base = params.element_size * gap
     field = size_field(room, base, params.width_share)
     counts = part_counts(room, field, gap, params, count)
     position, part = spread(room, field, counts, rng, params.candidates_per_point,
                             params.min_element_size * gap)
+    samples = [outline_samples(o) for o in outlines]
+    art = np.array([o.geometry.area for o in outlines])
+    edge = offset + 0.1 * gap
     M = len(position)
     L = len(outlines)
     order = rng.permutation(L)
     library = order[np.arange(M) % L]
     size = room.at(position, field)
-    samples = [outline_samples(o) for o in outlines]
-    art = np.array([o.geometry.area for o in outlines])
-    edge = offset + 0.1 * gap
     angles = rng.uniform(0.0, 2 * np.pi, (M, ANGLE_TRIES)) if params.rotate else np.zeros((M, 1))
     fits = {}  # (copy, element) -> (A,) fitted scales
 
     def fit(k, i):
         if (k, i) not in fits:
-            fits[k, i] = fit_in_room(room, position[k], samples[i], angles[k], edge)
+            fits[k, i] = fit_in_room(room, position[k], samples[i], angles[k], edge, depth_of.get(k))
         return fits[k, i]
 
+    # a part of a few copies is split into cells, each copy fitted to its own (a copy
+    # alone in its part: the whole part, centred on its deepest point)
+    small = counts[part] <= SMALL_PART
+    depth_of: dict[int, np.ndarray] = {}
+    for k in np.unique(part[small]):
+        idx = np.nonzero(part == k)[0]
+        centres, grids = cells(room, int(k), position[idx])
+        for i, c, g in zip(idx, centres, grids):
+            position[i], depth_of[int(i)] = c, g
     used = np.zeros(L, np.int64)
     for k in range(M):
-        if counts[part[k]] == 1:
+        if small[k]:
             best = np.array([art[i] * fit(k, i).max() ** 2 for i in range(L)])
             close = np.nonzero(best >= CLOSE_FIT * best.max())[0]
             library[k] = close[np.argmin(used[close])] if len(close) else int(np.argmax(best))
         used[library[k]] += 1
     areas = room.part_area()
+    fitw = fit_widths(outlines)
+    local = room.at(position, room.width)
+    # each copy's largest scale: its fit (a small part's cells) or the local width across
+    # it (turned its best way); the part's common scale is solved with these caps, so the
+    # copies that cannot reach it leave their share to the others
+    cap = np.array([np.inf if small[k] else max(local[k] - 2.0 * edge, 0.5 * gap) / fitw[library[k]]
+                    for k in range(M)])
+    for k in range(M):
+        if small[k]:
+            cap[k] = float(fit(k, int(library[k])).max())
     scale = np.zeros(M)
     for k in np.unique(part):
         idx = np.nonzero(part == k)[0]
-        rel = size[idx] / size[idx].max()
         target = params.target_fraction * areas[k]
 
-        def total(s, idx=idx, rel=rel):
-            return sum(outlines[library[i]].skin_area(s * r, offset) for i, r in zip(idx, rel))
+        def total(s, idx=idx):
+            return sum(outlines[library[i]].skin_area(min(s, cap[i]), offset) for i in idx)
 
         lo, hi = 0.0, 1.0
-        while total(hi) < target:
+        while total(hi) < target and hi < 1e12 and total(hi) < total(2.0 * hi):
             hi *= 2.0
         for _ in range(60):
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if total(mid) < target else (lo, mid)
-        scale[idx] = 0.5 * (lo + hi) * rel
+        scale[idx] = np.minimum(0.5 * (lo + hi), cap[idx])
     angle = angles[:, 0].copy()
-    width = room.part_width()[part]
-    fitw = fit_widths(outlines)
     for k in range(M):
-        if counts[part[k]] == 1:  # alone in its part: it stays where it fits best
+        if small[k]:  # alone or nearly in its part: it stays where it fits best
             f = fit(k, int(library[k]))
-            ok = np.nonzero(f >= scale[k])[0]
+            ok = np.nonzero(f >= scale[k] * (1.0 - 1e-9))[0]
             a = int(ok[0]) if len(ok) else int(np.argmax(f))
             angle[k] = angles[k, a]
             scale[k] = min(scale[k], float(f[a]))
-        else:  # it will move: capped only by its part's width, turned its best way
-            room_for = max(width[k] - 2.0 * edge, 0.5 * gap) / fitw[library[k]]
-            scale[k] = min(scale[k], room_for)
     ref = float(scale.max())
     cls = np.floor(np.log(scale / ref) / np.log(SIZE_STEP) + 1e-9)
     scale = ref * SIZE_STEP ** cls
