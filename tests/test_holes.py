@@ -361,3 +361,19 @@ def test_a_budget_bounds_the_leftover_fill(tmp_path):
     assert spent[1] == pytest.approx(spent[0], rel=0.3)  # linear: the same work per copy
     assert budget_for(1000, 20000).left == pytest.approx(2e7 * FILL_WORK)
     assert budget_for(10, 300).left == pytest.approx(MIN_FILL_WORK * FILL_WORK)
+
+
+def test_free_copies_are_tried_along_a_long_pocket(tmp_path):
+    """A bar longer than its pocket is wide fits only along it: the fit's first picks turn
+    the copy's long axis along the pocket's, so a strip gets a row of bars lying along it
+    (random angles alone found it seldom)."""
+    (tmp_path / "bar.svg").write_text(scenes.element_svg("bar"))
+    (tmp_path / "strip.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" width="600" height="100">'
+                                        '<path d="M0 20H600V80H0Z"/></svg>')
+    cont = load_container(tmp_path / "strip.svg")
+    lib = HoleLibrary.of([load_element(tmp_path / "bar.svg")])
+    got = fill_pockets([], lib, cont.region, 10.0, 5.0, np.random.default_rng(0), min_radius=5.0, min_size=20.0)
+    along = [e for e in got if (e.art.bounds[2] - e.art.bounds[0]) > 2.5 * (e.art.bounds[3] - e.art.bounds[1])]
+    assert len(along) >= 3  # a row of bars lying along the strip (the ends' square pieces may take one aslant)
+    assert max(e.art.bounds[2] - e.art.bounds[0] for e in along) > 80.0  # longer than the strip is wide
+    _assert_gap_and_margin(cont, [e.art for e in got])

@@ -47,10 +47,11 @@ class HoleLibrary:
     weights: np.ndarray  # relative frequency (controls' weight), normalised
     controls: tuple[ElementControls, ...]
     points: np.ndarray  # (n,) points of each element's art (what a copy of it costs to fit and build)
+    axes: np.ndarray  # (n,) direction of each element's long axis, radians (file units)
 
     @staticmethod
     def of(elements: Sequence[Element]) -> "HoleLibrary | None":
-        els, centres, geoms, radii, weights, ctrls, points = [], [], [], [], [], [], []
+        els, centres, geoms, radii, weights, ctrls, points, axes = [], [], [], [], [], [], [], []
         for e in elements:
             c = getattr(e, "controls", None) or ElementControls()
             g = art_area(e.paths)
@@ -63,6 +64,7 @@ class HoleLibrary:
             centres.append(ctr)
             geoms.append(g0)
             radii.append(float(np.sqrt((pts ** 2).sum(axis=1).max())))
+            axes.append(_long_axis(g0))
             weights.append(c.weight)
             ctrls.append(c)
             points.append(sum(len(q) for a in e.paths for q in a.subpaths))
@@ -70,7 +72,17 @@ class HoleLibrary:
             return None
         w = np.asarray(weights, dtype=float)
         return HoleLibrary(tuple(els), np.asarray(centres), tuple(geoms), np.asarray(radii),
-                           w / w.sum(), tuple(ctrls), np.asarray(points, dtype=float))
+                           w / w.sum(), tuple(ctrls), np.asarray(points, dtype=float), np.asarray(axes))
+
+
+def _long_axis(geom) -> float:
+    """Direction (radians) of the long side of ``geom``'s minimum rotated rectangle."""
+    c = np.asarray(shapely.get_coordinates(shapely.minimum_rotated_rectangle(geom)))
+    if len(c) < 4:
+        return 0.0
+    a, b = c[1] - c[0], c[2] - c[1]
+    u = a if np.hypot(*a) >= np.hypot(*b) else b
+    return float(math.atan2(u[1], u[0]))
 
 
 @dataclass
@@ -162,6 +174,8 @@ def _holes(geom) -> list:
     return out
 
 
+#: picks of a fit (of its ``trials``) that turn a free copy's long axis along the pocket's
+ALONG_TRIES = 2
 #: a copy fitted on its source's polylines whose written curves reach out of the free
 #: part is scaled by FIT_SHRINK, at most FIT_STEPS times (a source is flattened at 1e-3
 #: of its size: the curves bulge up to that much beyond its chords)
@@ -185,9 +199,14 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
         return None
     shapely.prepare(part)
     best = None
-    for _ in range(trials):
+    axis = _long_axis(part)
+    for t in range(trials):
         k = int(rng.choice(len(library.elements), p=library.weights))
         angle = _angle(library.controls[k], rng)
+        if t < ALONG_TRIES and library.controls[k].limits is None:
+            # a free copy's first picks lie along the pocket (either way round): a bar
+            # fills a long pocket only along it, and random angles seldom find that
+            angle = axis - library.axes[k] + math.pi * (t % 2)
         if budget is not None:
             budget.take(library.points[k])
         lo = r / library.radii[k]  # fits: inside the inscribed circle
