@@ -341,7 +341,11 @@ def run_one(rel: str) -> dict:
     element, error, said = None, None, []
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            p = Path(tmp) / svg.name
+            # as deep as in the suite, beside its resources/: relative image links still resolve
+            p = Path(tmp) / "tests" / rel
+            p = p.with_name(svg.name)
+            p.parent.mkdir(parents=True)
+            (Path(tmp) / "resources").symlink_to(_SUITE / "resources")
             p.write_bytes(raw)
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")

@@ -448,3 +448,45 @@ def test_a_skewed_stroke_and_a_root_filter_are_said_to_be_approximated(tmp_path)
         _load(tmp_path, '<filter id="f"><feGaussianBlur stdDeviation="4"/></filter>'
                         '<rect width="50" height="50"/>', root='viewBox="0 0 200 100" filter="url(#f)"',
               name="f.svg")
+
+
+# ----------------------------------------------------------------------------- images
+
+
+def _png_uri(tmp_path) -> str:
+    import base64
+    import io
+
+    from PIL import Image
+
+    img = Image.new("RGBA", (10, 10), (0, 0, 0, 0))
+    for x in range(2, 8):  # a red 6 x 4 block in a transparent 10 x 10 picture
+        for y in range(3, 7):
+            img.putpixel((x, y), (255, 0, 0, 255))
+    buf = io.BytesIO()
+    img.save(buf, "PNG")
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
+
+
+def test_raster_image_is_the_rectangle_of_its_visible_pixels(tmp_path):
+    with pytest.warns(UserWarning, match="raster <image>"):
+        el = _load(tmp_path, f'<image x="10" y="10" width="100" height="50" href="{_png_uri(tmp_path)}"/>')
+    # the 10 x 10 picture meets the 100 x 50 viewport at scale 5, centred: x from 35
+    np.testing.assert_allclose(_bounds(el), (35 + 10, 10 + 15, 35 + 40, 10 + 35), atol=1e-6)
+    assert el.paths[0].style.fill == "#ff0000"
+
+
+def test_svg_image_is_drawn_as_its_shapes(tmp_path):
+    (tmp_path / "pic.svg").write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10">'
+                                      '<circle id="c" cx="5" cy="5" r="5" fill="#00ff00"/></svg>')
+    el = _load(tmp_path, '<image x="20" y="0" width="40" height="40" href="pic.svg"/>'
+                         '<circle id="c" cx="150" cy="50" r="10"/>')
+    np.testing.assert_allclose(_bounds(el, 0), (20, 0, 60, 40), atol=1e-6)
+    assert el.paths[0].style.fill == "#00ff00"
+
+
+def test_image_that_cannot_be_read_is_not_drawn(tmp_path):
+    with pytest.warns(UserWarning, match="could not be read"):
+        el = _load(tmp_path, '<image width="40" height="40" href="https://example.org/a.png"/>'
+                             '<rect x="100" width="10" height="10"/>')
+    np.testing.assert_allclose(_bounds(el), (100, 0, 110, 10), atol=1e-6)

@@ -938,7 +938,7 @@ def test_unsupported_content_warns_and_is_skipped(tmp_path):
         '<symbol id="s"><rect width="50" height="50"/></symbol>'
         '<mask id="m"><rect width="70" height="70" fill="white"/></mask>'
     )
-    with pytest.warns(UserWarning, match="warn.svg.*filter.*image"):
+    with pytest.warns(UserWarning, match="warn.svg.*<image> that could not be read.*filter"):
         el = load_element(_write(tmp_path, "warn.svg", _svg(body)))
     assert len(el.paths) == 1  # symbol and mask content are not drawn
     np.testing.assert_allclose(el.paths[0].subpaths[0].max(axis=0), [5, 5])

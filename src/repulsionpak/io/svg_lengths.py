@@ -51,6 +51,7 @@ _PERCENT_GEOMETRY = {
     "ellipse": (("cx", 0), ("cy", 1)),
     "line": (("x1", 0), ("y1", 1), ("x2", 0), ("y2", 1)),
     "use": (("x", 0), ("y", 1)),
+    "image": (("x", 0), ("y", 1), ("width", 0), ("height", 1)),
 }
 _SVG_UNITS = {"", "px", "pt", "pc", "mm", "cm", "in", "%"}
 

@@ -50,6 +50,7 @@ from ..geometry.outline import (
 from ..types import ArtPath, Container, CurveSubpath, Element, Style
 from .svg_clip import (ClipChild, ClipDef, ClipRef, ClipResolver, clip_art, clip_defs, clip_refs,
                        hoist_clip_paths, polygon_rings)
+from .svg_image import images_to_rects
 from .svg_lengths import resolve_lengths, resolve_transform_origin
 from .svg_markers import (MARKABLE, clip_box, drop_marker_attribute, marker_ids, marker_svg, placements,
                           resolve_marker_lengths, resolve_overflow_inherit)
@@ -1408,6 +1409,12 @@ def parse_svg_shapes(path: str | Path, data: bytes, as_drawn: bool = False) -> S
             resolve_marker_lengths(el, reference)
     resolve_lengths(root_xml, reference)
     resolve_transform_origin(root_xml, reference)
+    images = images_to_rects(root_xml, Path(str(path)).parent, _length, reference,
+                             lambda b: parse_xml_hardened(path, b))
+    if images["raster"]:
+        notes.add("raster <image> (packed as the rectangle of its visible pixels, in their mean colour)")
+    if images["unread"]:
+        notes.add("<image> that could not be read (not drawn)")
     _sanitize(path, root_xml, notes)
     _shape_sizes(root_xml)
     fonts_missing = text_to_paths(root_xml, notes)
