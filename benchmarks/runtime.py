@@ -1,0 +1,187 @@
+"""Whole-run timings: against the authors' C++, beside a busy neighbour, and a 1,000-element poster.
+
+    python benchmarks/runtime.py cpp --cpp-dir OUTDIR [--runs 3]
+        the paper's heart and nine animals, gap 5.2, default settings, the whole process from
+        command to written SVG: `repulsionpak pack` and the authors' C++ (built headless by
+        ../shared/anchors/cpp_headless/build.sh OUTDIR SOURCE) alternately, `--runs` each
+    python benchmarks/runtime.py neighbour [--runs 2]
+        the heart without pockets, a CPU-bound process started one second into the run:
+        ms per primary iteration with automatic threads, with one thread and with two
+    python benchmarks/runtime.py poster
+        the shipped example elements, `--count 1000`, in a 2:3 rectangle: wall seconds, peak memory
+
+Each prints Markdown table rows for docs/benchmarks.md, with the machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+SHARED = HERE.parent.parent / "shared" / "data"
+HEART = SHARED / "containers" / "heart.svg"
+ANIMALS = SHARED / "animals"
+PACK = [str(Path(sys.executable).parent / "repulsionpak"), "pack"]
+
+
+def machine() -> str:
+    cpu = platform.machine()
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def timed(cmd, cwd=None, env=None, during=None) -> tuple[float, float, float, str]:
+    """Run ``cmd``; returns (wall s, CPU s of the child, peak RSS MB, stdout).
+    ``during(proc)`` is called once the child has started."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if during is not None:
+        during(proc)
+    out, _ = proc.communicate()
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(map(str, cmd))} failed ({proc.returncode}):\n{out[-2000:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu, after.ru_maxrss / 1024.0, out
+
+
+def _median(v):
+    v = sorted(v)
+    return v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+
+
+def bench_cpp(cpp_dir: Path, runs: int = 3) -> None:
+    """Ours against the C++ on the heart, alternately, whole processes."""
+    exe = cpp_dir / "build" / "repulsionpak_headless"
+    if not exe.exists():
+        raise SystemExit(f"{exe} not found: build it with ../shared/anchors/cpp_headless/build.sh {cpp_dir} SOURCE")
+    ours, theirs = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for r in range(runs):
+            out = Path(tmp) / f"heart-{r}.svg"
+            w, c, m, _ = timed(PACK + [str(HEART), str(ANIMALS), "--gap", "5.2", "--seed", "1",
+                                       "-o", str(out), "--report", str(out.with_suffix(".json"))])
+            rep = json.loads(out.with_suffix(".json").read_text())
+            ours.append((w, c, m, rep))
+            w2, c2, m2, text = timed([str(exe), "params_linux_det250_a.lua", "--threads", "2",
+                                      "--fill-every", "250"], cwd=cpp_dir)
+            it = re.search(r"iterations:\s*(\d+)", text)
+            theirs.append((w2, c2, m2, int(it.group(1)) if it else None))
+            print(f"run {r + 1}: ours {w:.2f} s wall ({c:.1f} CPU s), C++ {w2:.2f} s wall ({c2:.1f} CPU s)",
+                  file=sys.stderr)
+    ow, tw = _median([o[0] for o in ours]), _median([t[0] for t in theirs])
+    rep = ours[0][3]
+    print(f"machine: {machine()}")
+    print("| scene | ours wall (CPU) | C++ wall (CPU) | ratio (wall) | ours iterations | C++ iterations |")
+    print("|---|---:|---:|---:|---:|---:|")
+    print(f"| heart + 9 animals, gap 5.2, default settings, median of {runs} | "
+          f"{ow:.2f} s ({_median([o[1] for o in ours]):.1f}) | {tw:.2f} s ({_median([t[1] for t in theirs]):.1f}) | "
+          f"{tw / ow:.1f}× | {rep['iterations']['primary']} + {rep['iterations']['secondary']} | {theirs[0][3]} |")
+    print("stages (ours, first run): " + ", ".join(f"{k} {v:.2f} s" for k, v in rep["seconds"].items()))
+
+
+def _busy_after(delay: float):
+    """A ``during`` callback: start a CPU-bound process ``delay`` seconds into the run."""
+    procs = []
+
+    def during(proc):
+        time.sleep(delay)
+        procs.append(subprocess.Popen([sys.executable, "-c", "while True: pass"]))
+    return during, procs
+
+
+def bench_neighbour(runs: int = 2) -> None:
+    """ms per primary iteration with a busy neighbour from the first second on."""
+    modes = {"automatic": {}, "one thread": {"REPULSIONPAK_THREADS": "1"}, "two threads (fixed)": {}}
+    rows = {k: [] for k in modes}
+    with tempfile.TemporaryDirectory() as tmp:
+        cfg = Path(tmp) / "two.toml"
+        cfg.write_text("[sim]\nthreads = 2\n")
+        for r in range(runs):
+            for name, extra in modes.items():
+                out = Path(tmp) / f"n-{r}.svg"
+                cmd = PACK + [str(HEART), str(ANIMALS), "--gap", "5.2", "--seed", "1", "--no-pocket-fill",
+                              "-o", str(out), "--report", str(out.with_suffix(".json")), "--quiet"]
+                if name.startswith("two"):
+                    cmd += ["--config", str(cfg)]
+                env = dict(os.environ, **extra)
+                during, procs = _busy_after(1.0)
+                try:
+                    w, c, m, _ = timed(cmd, env=env, during=during)
+                finally:
+                    for p in procs:
+                        p.kill()
+                        p.wait()
+                rep = json.loads(out.with_suffix(".json").read_text())
+                ms = 1e3 * rep["seconds"]["primary"] / rep["iterations"]["primary"]
+                rows[name].append((ms, w))
+                print(f"run {r + 1} {name}: {ms:.2f} ms/iteration, {w:.1f} s wall", file=sys.stderr)
+    one = _median([x[0] for x in rows["one thread"]])
+    print(f"machine: {machine()}")
+    print("| threads, busy neighbour from 1 s on | ms / primary iteration | × one thread | wall s |")
+    print("|---|---:|---:|---:|")
+    for name, v in rows.items():
+        ms = _median([x[0] for x in v])
+        print(f"| {name} | {ms:.2f} | {ms / one:.2f} | {_median([x[1] for x in v]):.1f} |")
+
+
+def bench_poster(count: int = 1000) -> None:
+    """The shipped examples, ``count`` copies, in a 2:3 rectangle."""
+    from repulsionpak import examples
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rect = Path(tmp) / "poster.svg"
+        rect.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1500">'
+                        '<rect width="1000" height="1500"/></svg>')
+        out = Path(tmp) / "poster-out.svg"
+        cmd = PACK + [str(rect), *map(str, examples.element_files()), "--count", str(count), "--seed", "1",
+                      "-o", str(out), "--report", str(out.with_suffix(".json")), "--png",
+                      str(out.with_suffix(".png")), "--quiet"]
+        w, c, m, _ = timed(cmd)
+        rep = json.loads(out.with_suffix(".json").read_text())
+    print(f"machine: {machine()}")
+    print("| scene | elements | vertices | iterations | wall s | CPU s | peak RSS MB | area |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    print(f"| {count} shipped examples in a 2:3 rectangle | {rep['n_primary']} + {rep['n_secondary']} | "
+          f"{rep['n_vertices']} | {rep['iterations']['primary']} + {rep['iterations']['secondary']} | "
+          f"{w:.1f} | {c:.1f} | {m:.0f} | {rep['area_fraction']:.3f} |")
+    print("stages: " + ", ".join(f"{k} {v:.1f} s" for k, v in rep["seconds"].items()))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("what", choices=["cpp", "neighbour", "poster"])
+    ap.add_argument("--cpp-dir", type=Path, help="the C++ build folder (build.sh OUTDIR)")
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--count", type=int, default=1000)
+    a = ap.parse_args()
+    if a.what == "cpp":
+        if a.cpp_dir is None:
+            ap.error("cpp needs --cpp-dir")
+        bench_cpp(a.cpp_dir.resolve(), a.runs)
+    elif a.what == "neighbour":
+        bench_neighbour(a.runs)
+    else:
+        bench_poster(a.count)
+
+
+if __name__ == "__main__":
+    main()
