@@ -490,3 +490,10 @@ def test_image_that_cannot_be_read_is_not_drawn(tmp_path):
         el = _load(tmp_path, '<image width="40" height="40" href="https://example.org/a.png"/>'
                              '<rect x="100" width="10" height="10"/>')
     np.testing.assert_allclose(_bounds(el), (100, 0, 110, 10), atol=1e-6)
+
+
+def test_trailing_space_after_a_tspan_does_not_move_a_centred_text(tmp_path):
+    fam = 'font-family="DejaVu Sans" font-size="20" text-anchor="middle"'
+    ref = _load(tmp_path, f'<text {fam} x="100" y="50">ab</text>', name="ref.svg")
+    el = _load(tmp_path, f'<text {fam} x="100" y="50">\n  <tspan>ab</tspan>\n  </text>', name="sp.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)

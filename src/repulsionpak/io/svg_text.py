@@ -386,7 +386,10 @@ def _convert(root: ET.Element, texts: list[ET.Element], notes: set[str]) -> str 
         _layout(text, group, _Props(props, text), ns, fonts, pieces, state, notes,
                 text.get(_XML_SPACE) == "preserve")
         for chunk in pieces:
-            width = 0.0 if chunk["start"] is None else chunk["end"] - chunk["start"]
+            # the text's trailing space is not laid out (a space inside it, before the next
+            # chunk, is): the anchor of the last chunk sees it without
+            end = chunk.get("trimmed", chunk["end"]) if chunk is pieces[-1] else chunk["end"]
+            width = 0.0 if chunk["start"] is None else end - chunk["start"]
             shift = {"start": 0.0, "middle": -0.5 * width, "end": -width}[chunk["anchor"]]
             for target, verts, codes in chunk["items"]:
                 v = verts.copy()
@@ -483,11 +486,14 @@ def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve, note
         verts[:, 1] += y
         chunk["items"].append((target, verts, codes))
     end = state["x"] + advance
-    if state["space"] and not preserve and chunk["anchor"] != "start" and s.strip(" "):
-        # a line's trailing space is not laid out: the anchor sees the chunk without it
-        try:
-            end = state["x"] + fonts.run(s.rstrip(" "), props)[2]
-        except Exception:  # noqa: BLE001
-            pass
+    if preserve:
+        chunk["trimmed"] = end
+    elif s.strip(" "):  # the end without trailing spaces, for the text's last chunk
+        chunk["trimmed"] = end
+        if state["space"] and chunk["anchor"] != "start":
+            try:
+                chunk["trimmed"] = state["x"] + fonts.run(s.rstrip(" "), props)[2]
+            except Exception:  # noqa: BLE001
+                pass
     state["x"] += advance
     chunk["end"] = end
