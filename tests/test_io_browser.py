@@ -497,3 +497,11 @@ def test_trailing_space_after_a_tspan_does_not_move_a_centred_text(tmp_path):
     ref = _load(tmp_path, f'<text {fam} x="100" y="50">ab</text>', name="ref.svg")
     el = _load(tmp_path, f'<text {fam} x="100" y="50">\n  <tspan>ab</tspan>\n  </text>', name="sp.svg")
     np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)
+
+
+def test_a_chunk_takes_the_text_anchor_of_its_first_glyphs(tmp_path):
+    fam = 'font-family="DejaVu Sans" font-size="20"'
+    ref = _load(tmp_path, f'<text {fam} x="100" y="50" text-anchor="end">ab</text>', name="ref.svg")
+    el = _load(tmp_path, f'<text {fam} x="100" y="50">\n  <tspan text-anchor="end">ab</tspan></text>',
+               name="tspan.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)  # ends at x = 100

@@ -471,8 +471,9 @@ def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve, note
         notes.add("text the font machinery could not draw (left out)")
         return
     chunk = pieces[-1]
-    if chunk["start"] is None:
+    if chunk["start"] is None:  # the chunk's first glyphs: their element's text-anchor is the chunk's
         chunk["start"] = state["x"]
+        chunk["anchor"] = props.anchor
     y = state["y"]
     if props.shifts or props.dominant not in ("auto", "alphabetic") or props.alignment != "auto" \
             or props.decorations:
