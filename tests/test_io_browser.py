@@ -505,3 +505,21 @@ def test_a_chunk_takes_the_text_anchor_of_its_first_glyphs(tmp_path):
     el = _load(tmp_path, f'<text {fam} x="100" y="50">\n  <tspan text-anchor="end">ab</tspan></text>',
                name="tspan.svg")
     np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)  # ends at x = 100
+
+
+def test_tspan_transform_has_no_effect_and_inherit_takes_the_parent_alignment(tmp_path):
+    fam = 'font-family="DejaVu Sans" font-size="20"'
+    ref = _load(tmp_path, f'<text {fam} x="10" y="50">ab</text>', name="ref.svg")
+    el = _load(tmp_path, f'<text {fam} x="10" y="50"><tspan transform="skewX(30)">ab</tspan></text>',
+               name="tf.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(ref), atol=1e-6)
+    hang = _load(tmp_path, f'<text {fam} x="10" y="50" alignment-baseline="hanging">ab</text>', name="h.svg")
+    el = _load(tmp_path, f'<g alignment-baseline="hanging"><text {fam} x="10" y="50" '
+                         'alignment-baseline="inherit">ab</text></g>', name="inh.svg")
+    np.testing.assert_allclose(_bounds(el), _bounds(hang), atol=1e-6)
+    assert _bounds(hang)[1] > _bounds(ref)[1] + 5  # (hanging moves the text down)
+
+
+def test_writing_mode_on_a_group_is_said_to_be_ignored(tmp_path):
+    with pytest.warns(UserWarning, match="writing-mode"):
+        _load(tmp_path, '<g writing-mode="tb"><text x="10" y="50" font-family="DejaVu Sans">ab</text></g>')

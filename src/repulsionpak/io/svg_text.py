@@ -103,9 +103,12 @@ class _Props:
         tspan = el is not None and _local(el.tag) in _TEXT_LIKE
         self.shifts = base.shifts if base and tspan else ()
         self.decorations = base.decorations if base else ()  # drawn across every descendant's text
-        self.unsupported: set[str] = set()
+        # what is not supported is said wherever it is set (on a group around the text too)
+        self.unsupported: set[str] = set(base.unsupported) if base else set()
         for name, v in own.items():
             if v.lower() == "inherit":
+                if name == "alignment-baseline":  # not inherited unless asked
+                    self.alignment = base.alignment if base else "auto"
                 continue
             if name == "dominant-baseline" and v.lower() in BASELINES:
                 self.dominant = self.dominant if v.lower() == "no-change" else v.lower()
@@ -411,6 +414,8 @@ def _convert(root: ET.Element, texts: list[ET.Element], notes: set[str]) -> str 
 
 def _as_group(el: ET.Element, ns: str) -> ET.Element:
     attrs = {k: v for k, v in el.attrib.items() if k not in _POSITION_ATTRS}
+    if _local(el.tag) != "text":  # a tspan is not transformable: its transform has no effect
+        attrs.pop("transform", None)
     if _local(el.tag) == "text":  # markers are not drawn on text: not on the glyph outlines either
         if "style" in attrs:
             attrs["style"] = ";".join(d for d in attrs["style"].split(";")
