@@ -521,5 +521,5 @@ def test_tspan_transform_has_no_effect_and_inherit_takes_the_parent_alignment(tm
 
 
 def test_writing_mode_on_a_group_is_said_to_be_ignored(tmp_path):
-    with pytest.warns(UserWarning, match="writing-mode"):
+    with pytest.warns(UserWarning, match="vertical writing"):
         _load(tmp_path, '<g writing-mode="tb"><text x="10" y="50" font-family="DejaVu Sans">ab</text></g>')
