@@ -108,7 +108,8 @@ def _setup_fonts(suite: Path) -> None:
 
 
 def _page_map(text: str, png_w: int):
-    """(apply, k): ``apply(points)`` maps element coordinates to reference pixels."""
+    """(apply, k): ``apply(points)`` maps element coordinates to reference pixels,
+    ``apply.user(points)`` the file's user units (they differ where the root stretches)."""
     import svgelements as se
 
     m = re.search(r"<svg\b[^>]*>", text)
@@ -164,6 +165,13 @@ def _page_map(text: str, png_w: int):
         p = np.asarray(p, dtype=float)
         return p @ M[:2, :2].T + M[:2, 2]
 
+    U = np.diag([k, k, 1.0]) @ Vn  # the file's user units (not the element's) -> pixels
+
+    def apply_user(p):
+        p = np.asarray(p, dtype=float)
+        return p @ U[:2, :2].T + U[:2, 2]
+
+    apply.user = apply_user
     return apply, scale
 
 
@@ -283,7 +291,7 @@ def _frame_mask(frame_tag: str | None, apply, scale, W, H) -> np.ndarray:
 
     x, y, w, h = num("x", 0), num("y", 0), num("width", 0), num("height", 0)
     sw = num("stroke-width", 1.0)
-    pts = apply(np.array([[x, y], [x + w, y], [x + w, y + h], [x, y + h]]))
+    pts = apply.user(np.array([[x, y], [x + w, y], [x + w, y + h], [x, y + h]]))  # (in user units)
     lw = (sw * scale + 4.0) * 0.72
     return _raster(W, H, lambda ax: ax.add_artist(
         Polygon(pts, closed=True, facecolor="none", edgecolor="k", linewidth=lw))) > 0
