@@ -170,17 +170,18 @@ SMALL_PART = 3
 
 
 def fit_in_room(room: Room, point: np.ndarray, samples: np.ndarray, angles: np.ndarray,
-                offset: float, depth: np.ndarray | None = None) -> np.ndarray:
+                offset: float, depth: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """(A,) the largest scale (file → container units) at which the outline ``samples``
     (:func:`repulsionpak.secondary.outline_samples`), turned by each of ``angles`` and
-    centred on ``point``, keeps ``offset`` from the container's edge (or from wherever
-    ``depth``, a grid like ``room.depth``, falls to 0) at every sample; the scales tried
-    run from half to four times the inscribed-circle fit."""
-    depth = room.depth if depth is None else depth
-    pockets = Pockets(depth, float(room.origin[0]), float(room.origin[1]), room.h,
+    centred on ``point``, keeps ``offset`` from the container's edge — or, given ``depth``
+    = (grid, origin) (a grid of ``room``'s pixels whose pixel (0, 0) has its corner at
+    ``origin``, 0 off it), from wherever that falls to 0 — at every sample; the scales
+    tried run from half to four times the inscribed-circle fit."""
+    grid, origin = (room.depth, room.origin) if depth is None else depth
+    pockets = Pockets(grid, float(origin[0]), float(origin[1]), room.h,
                       np.zeros(1), np.zeros(1, np.int64), np.zeros(1, np.int64))
     radius = float(np.sqrt((samples ** 2).sum(axis=1).max()))
-    d = float(room.at(point[None], depth)[0])
+    d = float(pockets.lookup(np.asarray(point, float)))
     s_round = max(d - offset, 0.25 * d) / max(radius, 1e-300)
     return fit_scales(pockets, point, samples, angles, offset, s_round, _STEPS)
 
@@ -190,7 +191,8 @@ def cells(room: Room, part: int, points: np.ndarray, rounds: int = 8) -> tuple[n
     (each point moves to the centroid of the pixels nearest it), then each cell's depth
     grid — the distance to the container's edge or to the bisector with another cell,
     whichever is nearer, 0 outside the cell — and its deepest point (the centre of the
-    largest disc in the cell). Returns ((n, 2) centres, n depth grids)."""
+    largest disc in the cell). Returns ((n, 2) centres, n (grid, origin) pairs: each grid
+    covers the part's bounding box only, ``origin`` its corner)."""
     mask = room.part == part
     c = room.centres(mask)
     p = np.asarray(points, float).copy()
@@ -200,6 +202,9 @@ def cells(room: Room, part: int, points: np.ndarray, rounds: int = 8) -> tuple[n
             if np.any(near == k):
                 p[k] = c[near == k].mean(axis=0)
     jj, ii = np.nonzero(mask)
+    j0, i0 = int(jj.min()), int(ii.min())
+    shape = (int(jj.max()) - j0 + 1, int(ii.max()) - i0 + 1)
+    origin = room.origin + room.h * np.array([i0, j0])
     grids, centres = [], []
     for k in range(len(p)):
         d = room.depth[jj, ii].copy()
@@ -209,9 +214,9 @@ def cells(room: Room, part: int, points: np.ndarray, rounds: int = 8) -> tuple[n
                 L = float(np.hypot(*u))
                 if L > 0:
                     d = np.minimum(d, ((0.5 * (p[k] + p[j]) - c) @ u) / L)
-        g = np.zeros_like(room.depth)
-        g[jj, ii] = np.maximum(d, 0.0)
-        grids.append(g)
+        g = np.zeros(shape)
+        g[jj - j0, ii - i0] = np.maximum(d, 0.0)
+        grids.append((g, origin))
         centres.append(c[int(np.argmax(d))])
     return np.array(centres), grids
 
@@ -257,7 +262,7 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
     # a part of a few copies is split into cells, each copy fitted to its own (a copy
     # alone in its part: the whole part, centred on its deepest point)
     small = counts[part] <= SMALL_PART
-    depth_of: dict[int, np.ndarray] = {}
+    depth_of: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     for k in np.unique(part[small]):
         idx = np.nonzero(part == k)[0]
         centres, grids = cells(room, int(k), position[idx])
