@@ -208,7 +208,7 @@ def test_underline_and_line_through_are_bars_across_the_run(tmp_path):
     under = _load(tmp_path, _TEXT.format('text-decoration="underline line-through"'), name="u.svg")
     pb, ub = _bounds(plain), _bounds(under)
     assert ub[3] > 60 + 1.0 and pb[3] <= 60 + 1e-6  # the underline reaches below the baseline
-    geom = shapely.union_all([shapely.Polygon(p) for p in under.paths[0].subpaths if len(p) >= 3])
+    geom = shapely.union_all([shapely.Polygon(p) for a in under.paths for p in a.subpaths if len(p) >= 3])
     probe = shapely.LineString([(ub[0] + 0.5, 0), (ub[0] + 0.5, 100)])  # left of the H's stem
     assert geom.intersection(probe).length > 0.5  # the bars start where the run starts
 
@@ -523,3 +523,15 @@ def test_tspan_transform_has_no_effect_and_inherit_takes_the_parent_alignment(tm
 def test_writing_mode_on_a_group_is_said_to_be_ignored(tmp_path):
     with pytest.warns(UserWarning, match="vertical writing"):
         _load(tmp_path, '<g writing-mode="tb"><text x="10" y="50" font-family="DejaVu Sans">ab</text></g>')
+
+
+def test_decorations_take_the_declaring_element_paint_and_skip_the_trailing_space(tmp_path):
+    fam = 'font-family="DejaVu Sans" font-size="20"'
+    el = _load(tmp_path, f'<text {fam} x="10" y="50" fill="#ffff00" text-decoration="line-through">'
+                         '<tspan fill="#0000ff">ab</tspan> </text>')
+    glyphs = [a for a in el.paths if a.style.fill == "#0000ff"]
+    bars = [a for a in el.paths if a.style.fill == "#ffff00"]
+    assert glyphs and len(bars) == 1  # one bar, in the text's yellow, across "ab" only
+    np.testing.assert_allclose(_bounds(el, el.paths.index(bars[0]))[[0, 2]],
+                               _bounds(_load(tmp_path, f'<text {fam} x="10" y="50">ab</text>', name="r.svg"))[[0, 2]],
+                               atol=2.5)

@@ -102,7 +102,10 @@ class _Props:
         # is not applied, as in Chrome and resvg)
         tspan = el is not None and _local(el.tag) in _TEXT_LIKE
         self.shifts = base.shifts if base and tspan else ()
-        self.decorations = base.decorations if base else ()  # drawn across every descendant's text
+        # (kind, the declaring element's props): drawn across every descendant's text in the
+        # declaring element's paint
+        self.decorations = base.decorations if base else ()
+        self.target = None  # the group of this element's glyphs (set by _layout)
         # what is not supported is said wherever it is set (on a group around the text too)
         self.unsupported: set[str] = set(base.unsupported) if base else set()
         for name, v in own.items():
@@ -116,7 +119,7 @@ class _Props:
                 self.alignment = v.lower()
             elif name == "text-decoration":
                 kinds = tuple(k for k in v.lower().split() if k in ("underline", "overline", "line-through"))
-                self.decorations = tuple(dict.fromkeys(self.decorations + kinds))
+                self.decorations = self.decorations + tuple((k, self) for k in dict.fromkeys(kinds))
             if name == "font-size":
                 self.size = _font_size(v, self.size)
             elif name == "font-family":
@@ -428,6 +431,7 @@ def _as_group(el: ET.Element, ns: str) -> ET.Element:
 
 
 def _layout(el, target, props: _Props, ns, fonts: _Fonts, pieces, state, notes, preserve) -> None:
+    props.target = target
     for name in props.unsupported:
         notes.add(f"text {name} (ignored)")
     for name in ("rotate", "textLength"):
@@ -484,13 +488,23 @@ def _emit(s, target, props: _Props, fonts: _Fonts, pieces, state, preserve, note
             or props.decorations:
         m = fonts.metrics(props)
         y += baseline_offset(m, props.size, props.dominant, props.alignment, props.shifts)
-        if props.decorations and advance > 0:
-            bars, bar_codes = decoration_bars(m, props.size, props.decorations, 0.0, advance, 0.0)
-            verts, codes = np.concatenate([verts, bars]), np.concatenate([codes, bar_codes])
     if len(verts):
         verts[:, 0] += state["x"]
         verts[:, 1] += y
         chunk["items"].append((target, verts, codes))
+    if props.decorations and advance > 0:  # drawn in the paint of the element declaring them
+        m = fonts.metrics(props)
+        new = []
+        for kind, owner in props.decorations:
+            bars, bar_codes = decoration_bars(m, props.size, (kind,), 0.0, advance, 0.0)
+            if len(bars):
+                bars[:, 0] += state["x"]
+                bars[:, 1] += y
+                new.append((owner.target if owner.target is not None else target, bars, bar_codes))
+        if s.strip(" ") or preserve:  # spaces are decorated only where text follows them
+            chunk["items"].extend(chunk.pop("pending", []) + new)
+        else:
+            chunk.setdefault("pending", []).extend(new)
     end = state["x"] + advance
     if preserve:
         chunk["trimmed"] = end
