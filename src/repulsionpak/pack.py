@@ -249,7 +249,8 @@ def prepare(container: Container, elements: Sequence[Element], params: Params,
 def room_placement(container: Container, outlines: Sequence[Outline], gap: float, params: Params,
                    rng: np.random.Generator) -> tuple[list[Template], Placement] | None:
     """The primaries sized and counted by the room the container has (:mod:`repulsionpak.sizing`),
-    or None where the paper's placement applies: ``placement.follow_room`` off, an even
+    or None where the paper's placement applies (unless ``placement.room_everywhere``):
+    ``placement.follow_room`` off, an even
     container (one region, nearly all of it at least ``element_size`` gaps wide), or a
     given count in a single region or in regions that are all wide (a tenth or less of the
     container narrower than the size the count gives: the paper's blue noise shares it out
@@ -261,12 +262,13 @@ def room_placement(container: Container, outlines: Sequence[Outline], gap: float
     pl = params.placement
     if not pl.follow_room:
         return None
-    if pl.count is not None and len(shapely.get_parts(container.region)) <= 1:
+    force = pl.room_everywhere  # even containers and given counts too
+    if pl.count is not None and len(shapely.get_parts(container.region)) <= 1 and not force:
         return None
     base = pl.element_size * gap if pl.count is None else math.sqrt(container.area / pl.count)
     room = room_of(container.region, gap)
-    if is_even(room, base) or (pl.count is not None and (
-            len(room.parts) <= 1 or narrow_share(room, base) < UNEVEN_SHARE)):
+    if not force and (is_even(room, base) or (pl.count is not None and (
+            len(room.parts) <= 1 or narrow_share(room, base) < UNEVEN_SHARE))):
         return None
     pl_base = pl if pl.count is None else dataclasses.replace(pl, element_size=base / gap)
     plan = plan_sizes(room, outlines, gap, params.preprocess.skin_offset * gap, pl_base, rng, count=pl.count)

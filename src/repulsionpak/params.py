@@ -70,6 +70,15 @@ class PlacementParams:
     width_share: float = _doc(
         1.0, "-", "When the primaries follow the room, the size an element aims for where the container "
         "is w wide is min(element_size gaps, width_share × w): 1 packs one row across a band.")
+    variety: float = _doc(
+        3.0, "-", "When the primaries follow the room, no element takes more than this many times "
+        "its share of the copies (count / library size) while others are left: 1 uses every element "
+        "equally, as the paper's cycle does; more lets the elements that fit best (round ones) "
+        "take more cells.")
+    room_everywhere: bool = _doc(
+        False, "-", "Place the primaries by the room policy (repulsionpak.sizing: cells, each copy "
+        "the element, angle and size that fit its cell) in every container, round ones and given "
+        "counts included (beyond the paper; see docs/quality.md).")
     min_element_size: float = _doc(
         3.0, "× gap", "A region narrower than this (its largest inscribed circle) gets no primary of "
         "its own when the primaries follow the room; the pocket fill may still put small copies there.")
@@ -427,6 +436,7 @@ class Params:
             (pl.element_size > 0, "placement.element_size must be > 0"),
             (pl.min_element_size > 0, "placement.min_element_size must be > 0"),
             (pl.width_share > 0, "placement.width_share must be > 0"),
+            (pl.variety >= 1, "placement.variety must be >= 1"),
             (0 < pl.initial_fraction < pl.target_fraction <= 1,
              "need 0 < placement.initial_fraction < placement.target_fraction <= 1"),
             (s.dt > 0 and s.dt <= 0.5, "sim.dt must be in (0, 0.5]"),

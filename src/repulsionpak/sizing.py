@@ -24,7 +24,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 
 from .params import PlacementParams
 from .preprocess import Outline
@@ -145,28 +144,13 @@ def spread(room: Room, field: np.ndarray, counts: np.ndarray, rng: np.random.Gen
     return np.vstack(pos), np.asarray(which, np.int64)
 
 
-def fit_widths(outlines: Sequence[Outline]) -> np.ndarray:
-    """(L,) geometric mean of the sides of each element's minimum rotated rectangle (file
-    units): about the width an element needs across a band, turned its best way."""
-    out = []
-    for o in outlines:
-        env = shapely.oriented_envelope(o.geometry)
-        xy = np.asarray(env.exterior.coords) if env.geom_type == "Polygon" else np.zeros((3, 2))
-        a = np.hypot(*(xy[1] - xy[0]))
-        b = np.hypot(*(xy[2] - xy[1]))
-        out.append(float(np.sqrt(max(a * b, 1e-300))))
-    return np.array(out)
-
-
 #: angles tried per copy when fitting it to the room at its position
 ANGLE_TRIES = 12
 #: scales tried per angle, from half the inscribed-circle fit to four times it
 _STEPS = np.geomspace(0.5, 4.0, 37)
-#: a one-copy region takes the least used element among those whose fitted art is at least
-#: this share of the best one's (variety over a little area)
+#: a copy takes the least used element among those whose fitted art is at least this share
+#: of the best one's (variety over a little area)
 CLOSE_FIT = 0.8
-#: parts of at most this many copies split into cells, each copy fitted to its own
-SMALL_PART = 3
 
 
 def fit_in_room(room: Room, point: np.ndarray, samples: np.ndarray, angles: np.ndarray,
@@ -186,57 +170,87 @@ def fit_in_room(room: Room, point: np.ndarray, samples: np.ndarray, angles: np.n
     return fit_scales(pockets, point, samples, angles, offset, s_round, _STEPS)
 
 
-def cells(room: Room, part: int, points: np.ndarray, rounds: int = 8) -> tuple[np.ndarray, list[np.ndarray]]:
+def _nearest(c: np.ndarray, p: np.ndarray, chunk: int = 16384) -> np.ndarray:
+    """(K,) index of the nearest of points ``p`` (n, 2) to each of ``c`` (K, 2), in chunks."""
+    out = np.empty(len(c), np.int64)
+    pp = (p ** 2).sum(axis=1)
+    for a in range(0, len(c), chunk):
+        q = c[a:a + chunk]
+        out[a:a + chunk] = np.argmin(pp[None, :] - 2.0 * q @ p.T, axis=1)
+    return out
+
+
+#: a cell's bisectors are taken with this many nearest other copies
+CELL_NEIGHBOURS = 12
+
+
+def cells(room: Room, part: int, points: np.ndarray, rounds: int = 8) -> tuple[np.ndarray, list]:
     """Split part ``part`` among ``points`` (n, 2): a few rounds of Lloyd's relaxation
     (each point moves to the centroid of the pixels nearest it), then each cell's depth
-    grid — the distance to the container's edge or to the bisector with another cell,
-    whichever is nearer, 0 outside the cell — and its deepest point (the centre of the
-    largest disc in the cell). Returns ((n, 2) centres, n (grid, origin) pairs: each grid
-    covers the part's bounding box only, ``origin`` its corner)."""
+    grid — the distance to the container's edge or to the bisector with another cell
+    (its ``CELL_NEIGHBOURS`` nearest), whichever is nearer, 0 outside the cell — and its
+    deepest point (the centre of the largest disc in the cell). Returns ((n, 2) centres,
+    n (grid, origin) pairs: each grid covers its cell's bounding box only, ``origin`` its
+    corner)."""
     mask = room.part == part
     c = room.centres(mask)
-    p = np.asarray(points, float).copy()
-    for _ in range(rounds):
-        near = np.argmin(((c[:, None, :] - p[None]) ** 2).sum(axis=2), axis=1)
-        for k in range(len(p)):
-            if np.any(near == k):
-                p[k] = c[near == k].mean(axis=0)
     jj, ii = np.nonzero(mask)
-    j0, i0 = int(jj.min()), int(ii.min())
-    shape = (int(jj.max()) - j0 + 1, int(ii.max()) - i0 + 1)
-    origin = room.origin + room.h * np.array([i0, j0])
+    p = np.asarray(points, float).copy()
+    n = len(p)
+    near = np.zeros(len(c), np.int64)
+    for _ in range(rounds if n > 1 else 0):
+        near = _nearest(c, p)
+        sums = np.zeros((n, 2))
+        np.add.at(sums, near, c)
+        cnt = np.bincount(near, minlength=n)
+        p[cnt > 0] = sums[cnt > 0] / cnt[cnt > 0, None]
+    if n > 1:
+        near = _nearest(c, p)
     grids, centres = [], []
-    for k in range(len(p)):
-        d = room.depth[jj, ii].copy()
-        for j in range(len(p)):
-            if j != k:
-                u = p[j] - p[k]
-                L = float(np.hypot(*u))
-                if L > 0:
-                    d = np.minimum(d, ((0.5 * (p[k] + p[j]) - c) @ u) / L)
-        g = np.zeros(shape)
-        g[jj - j0, ii - i0] = np.maximum(d, 0.0)
-        grids.append((g, origin))
-        centres.append(c[int(np.argmax(d))])
+    for k in range(n):
+        sel = np.nonzero(near == k)[0]
+        if len(sel) == 0:  # an empty cell: its point, no room
+            grids.append((np.zeros((1, 1)), room.origin))
+            centres.append(p[k])
+            continue
+        ck = c[sel]
+        d = room.depth[jj[sel], ii[sel]].copy()
+        others = np.argsort(((p - p[k]) ** 2).sum(axis=1))[1:CELL_NEIGHBOURS + 1]
+        for j in others:
+            u = p[j] - p[k]
+            L = float(np.hypot(*u))
+            if L > 0:
+                d = np.minimum(d, ((0.5 * (p[k] + p[j]) - ck) @ u) / L)
+        j0, i0 = int(jj[sel].min()), int(ii[sel].min())
+        g = np.zeros((int(jj[sel].max()) - j0 + 1, int(ii[sel].max()) - i0 + 1))
+        g[jj[sel] - j0, ii[sel] - i0] = np.maximum(d, 0.0)
+        grids.append((g, room.origin + room.h * np.array([i0, j0])))
+        centres.append(ck[int(np.argmax(d))])
     return np.array(centres), grids
 
 
 def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: float, params: PlacementParams,
                rng: np.random.Generator, count: int | None = None) -> SizePlan:
-    """The primaries of an uneven container: count per part (:func:`part_counts`),
-    positions (:func:`spread`), elements, scales and start angles.
+    """The primaries of a container, placed by the room it has: count per part
+    (:func:`part_counts`), positions (:func:`spread`, then :func:`cells`), elements, scales
+    and start angles.
 
-    Each part's copies share one scale at which their skins (art offset by ``offset``)
-    cover ``target_fraction`` of the part (weighted by the local size at each copy, so
-    relative sizes are kept within a part). Each copy is then fitted to the container at
-    its position (:func:`fit_in_room`, the art ``offset`` + 0.1 gap from the edge, where
-    the skin rests): it starts at an angle at which its share fits, or else at the angle
-    that fits it largest, and its scale is capped at that fit. A part of at most
-    ``SMALL_PART`` copies is split into cells (:func:`cells`): each copy is centred on its
-    cell's deepest point and takes the element that fits the cell best (the least used of
-    those within ``CLOSE_FIT`` of the best), at its fitted angle and scale; the copies of larger parts
-    cycle through the shuffled library, capped at the part's width. Scales are rounded down
-    to classes ``SIZE_STEP`` apart, so copies of one element share a few templates.
+    Each part is split into one cell per copy; each copy is centred on its cell's deepest
+    point and fitted to the cell (:func:`fit_in_room`, its art ``offset`` + 0.1 gap from
+    the cell's edge, where the skin rests): it takes the element whose fitted copy holds
+    the most art (the least used of those within ``CLOSE_FIT`` of the best, and no element
+    more than ``variety`` × its share of the copies while others are left), and the angle
+    of that fit. Each part's copies share one scale at which their skins cover
+    ``target_fraction`` of the part, each capped at its fit (the common scale is solved with
+    the caps, so copies that cannot reach it leave their share to the others); a copy
+    starts at the first of its angles that fits that scale. Scales are rounded down to
+    classes ``SIZE_STEP`` apart, so copies of one element share a few templates.
+
+    Notes
+    -----
+    The paper assigns the elements cyclically at random angles and lets the simulation
+    sort them; in a jam it cannot: an animal whose limbs point at its neighbours stays
+    stunted. Chosen for its cell, each copy starts where it fits.
     """
     base = params.element_size * gap
     field = size_field(room, base, params.width_share)
@@ -252,40 +266,31 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
     library = order[np.arange(M) % L]
     size = room.at(position, field)
     angles = rng.uniform(0.0, 2 * np.pi, (M, ANGLE_TRIES)) if params.rotate else np.zeros((M, 1))
-    fits = {}  # (copy, element) -> (A,) fitted scales
-
-    def fit(k, i):
-        if (k, i) not in fits:
-            fits[k, i] = fit_in_room(room, position[k], samples[i], angles[k], edge, depth_of.get(k))
-        return fits[k, i]
-
-    # a part of a few copies is split into cells, each copy fitted to its own (a copy
-    # alone in its part: the whole part, centred on its deepest point)
-    small = counts[part] <= SMALL_PART
     depth_of: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    for k in np.unique(part[small]):
+    for k in np.unique(part):
         idx = np.nonzero(part == k)[0]
         centres, grids = cells(room, int(k), position[idx])
         for i, c, g in zip(idx, centres, grids):
             position[i], depth_of[int(i)] = c, g
+    fits = {}  # (copy, element) -> (A,) fitted scales
+
+    def fit(k, i):
+        if (k, i) not in fits:
+            fits[k, i] = fit_in_room(room, position[k], samples[i], angles[k], edge, depth_of[k])
+        return fits[k, i]
+
+    most = max(1, int(np.ceil(params.variety * M / L)))
     used = np.zeros(L, np.int64)
-    for k in range(M):
-        if small[k]:
-            best = np.array([art[i] * fit(k, i).max() ** 2 for i in range(L)])
-            close = np.nonzero(best >= CLOSE_FIT * best.max())[0]
-            library[k] = close[np.argmin(used[close])] if len(close) else int(np.argmax(best))
+    roomy = np.array([float(depth_of[k][0].max()) for k in range(M)])
+    for k in np.argsort(roomy, kind="stable"):  # the tightest cells choose first
+        best = np.array([art[i] * fit(k, i).max() ** 2 for i in range(L)])
+        free = used < most
+        pool = best if not free.any() else np.where(free, best, -1.0)
+        close = np.nonzero(pool >= CLOSE_FIT * pool.max())[0]
+        library[k] = close[np.argmin(used[close])]
         used[library[k]] += 1
+    cap = np.array([float(fit(k, int(library[k])).max()) for k in range(M)])
     areas = room.part_area()
-    fitw = fit_widths(outlines)
-    local = room.at(position, room.width)
-    # each copy's largest scale: its fit (a small part's cells) or the local width across
-    # it (turned its best way); the part's common scale is solved with these caps, so the
-    # copies that cannot reach it leave their share to the others
-    cap = np.array([np.inf if small[k] else max(local[k] - 2.0 * edge, 0.5 * gap) / fitw[library[k]]
-                    for k in range(M)])
-    for k in range(M):
-        if small[k]:
-            cap[k] = float(fit(k, int(library[k])).max())
     scale = np.zeros(M)
     for k in np.unique(part):
         idx = np.nonzero(part == k)[0]
@@ -295,20 +300,17 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
             return sum(outlines[library[i]].skin_area(min(s, cap[i]), offset) for i in idx)
 
         lo, hi = 0.0, 1.0
-        while total(hi) < target and hi < 1e12 and total(hi) < total(2.0 * hi):
+        while total(hi) < target and total(hi) < total(2.0 * hi):
             hi *= 2.0
         for _ in range(60):
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if total(mid) < target else (lo, mid)
         scale[idx] = np.minimum(0.5 * (lo + hi), cap[idx])
-    angle = angles[:, 0].copy()
+    angle = np.zeros(M)
     for k in range(M):
-        if small[k]:  # alone or nearly in its part: it stays where it fits best
-            f = fit(k, int(library[k]))
-            ok = np.nonzero(f >= scale[k] * (1.0 - 1e-9))[0]
-            a = int(ok[0]) if len(ok) else int(np.argmax(f))
-            angle[k] = angles[k, a]
-            scale[k] = min(scale[k], float(f[a]))
+        f = fit(k, int(library[k]))
+        ok = np.nonzero(f >= scale[k] * (1.0 - 1e-9))[0]
+        angle[k] = angles[k, int(ok[0]) if len(ok) else int(np.argmax(f))]
     ref = float(scale.max())
     cls = np.floor(np.log(scale / ref) / np.log(SIZE_STEP) + 1e-9)
     scale = ref * SIZE_STEP ** cls
