@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 
 from .params import PlacementParams
 from .preprocess import Outline
@@ -144,6 +145,22 @@ def spread(room: Room, field: np.ndarray, counts: np.ndarray, rng: np.random.Gen
     return np.vstack(pos), np.asarray(which, np.int64)
 
 
+def fit_widths(outlines: Sequence[Outline]) -> np.ndarray:
+    """(L,) geometric mean of the sides of each element's minimum rotated rectangle (file
+    units): about the width an element needs across a band, turned its best way."""
+    out = []
+    for o in outlines:
+        env = shapely.oriented_envelope(o.geometry)
+        xy = np.asarray(env.exterior.coords) if env.geom_type == "Polygon" else np.zeros((3, 2))
+        out.append(float(np.sqrt(max(np.hypot(*(xy[1] - xy[0])) * np.hypot(*(xy[2] - xy[1])), 1e-300))))
+    return np.array(out)
+
+
+#: parts of at most this many copies are split into cells, each copy fitted to its own
+#: (every part with ``room_everywhere``)
+SMALL_PART = 3
+
+
 #: angles tried per copy when fitting it to the room at its position
 ANGLE_TRIES = 12
 #: scales tried per angle, from half the inscribed-circle fit to four times it
@@ -235,13 +252,16 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
     (:func:`part_counts`), positions (:func:`spread`, then :func:`cells`), elements, scales
     and start angles.
 
-    Each part is split into one cell per copy; each copy is centred on its cell's deepest
-    point and fitted to the cell (:func:`fit_in_room`, its art ``offset`` + 0.1 gap from
+    A part of at most ``SMALL_PART`` copies (every part with ``room_everywhere``) is split
+    into one cell per copy; each copy is centred on its cell's deepest point and fitted to
+    the cell (:func:`fit_in_room`, its art ``offset`` + 0.1 gap from
     the cell's edge, where the skin rests): it takes the element whose fitted copy holds
     the most art (the least used of those within ``CLOSE_FIT`` of the best, and no element
     more than ``variety`` × its share of the copies while others are left), and the angle
-    of that fit. Each part's copies share one scale at which their skins cover
-    ``target_fraction`` of the part, each capped at its fit (the common scale is solved with
+    of that fit; the copies of larger parts cycle through the shuffled library at random
+    angles, capped at the local width across them (on the suite's uneven default-count
+    scenes, cells there lost up to 0.05 of area). Each part's copies share one scale at
+    which their skins cover ``target_fraction`` of the part, each capped (the common scale is solved with
     the caps, so copies that cannot reach it leave their share to the others); a copy
     starts at the first of its angles that fits that scale. Scales are rounded down to
     classes ``SIZE_STEP`` apart, so copies of one element share a few templates.
@@ -266,8 +286,9 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
     library = order[np.arange(M) % L]
     size = room.at(position, field)
     angles = rng.uniform(0.0, 2 * np.pi, (M, ANGLE_TRIES)) if params.rotate else np.zeros((M, 1))
+    celled = (counts[part] <= SMALL_PART) | params.room_everywhere
     depth_of: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    for k in np.unique(part):
+    for k in np.unique(part[celled]):
         idx = np.nonzero(part == k)[0]
         centres, grids = cells(room, int(k), position[idx])
         for i, c, g in zip(idx, centres, grids):
@@ -281,15 +302,23 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
 
     most = max(1, int(np.ceil(params.variety * M / L)))
     used = np.zeros(L, np.int64)
-    roomy = np.array([float(depth_of[k][0].max()) for k in range(M)])
+    roomy = np.array([float(depth_of[k][0].max()) if celled[k] else np.inf for k in range(M)])
     for k in np.argsort(roomy, kind="stable"):  # the tightest cells choose first
+        if not celled[k]:  # a copy of a large part: the shuffled cycle, as the paper's
+            used[library[k]] += 1
+            continue
         best = np.array([art[i] * fit(k, i).max() ** 2 for i in range(L)])
         free = used < most
         pool = best if not free.any() else np.where(free, best, -1.0)
         close = np.nonzero(pool >= CLOSE_FIT * pool.max())[0]
         library[k] = close[np.argmin(used[close])]
         used[library[k]] += 1
-    cap = np.array([float(fit(k, int(library[k])).max()) for k in range(M)])
+    # each copy's largest scale: its fit to its cell, or (a copy of a large part, which will
+    # move) the local width across it, turned its best way
+    fitw = fit_widths(outlines)
+    local = room.at(position, room.width)
+    cap = np.array([float(fit(k, int(library[k])).max()) if celled[k] else
+                    max(local[k] - 2.0 * edge, 0.5 * gap) / fitw[library[k]] for k in range(M)])
     areas = room.part_area()
     scale = np.zeros(M)
     for k in np.unique(part):
@@ -306,8 +335,8 @@ def plan_sizes(room: Room, outlines: Sequence[Outline], gap: float, offset: floa
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if total(mid) < target else (lo, mid)
         scale[idx] = np.minimum(0.5 * (lo + hi), cap[idx])
-    angle = np.zeros(M)
-    for k in range(M):
+    angle = angles[:, 0].copy()
+    for k in np.nonzero(celled)[0]:
         f = fit(k, int(library[k]))
         ok = np.nonzero(f >= scale[k] * (1.0 - 1e-9))[0]
         angle[k] = angles[k, int(ok[0]) if len(ok) else int(np.argmax(f))]
