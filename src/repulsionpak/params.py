@@ -162,9 +162,10 @@ class SimParams:
     min_triangle_area: float = _doc(
         0.2, "× rest area", "Triangles squeezed below this share of their rest area push back "
         "(beyond the paper: keeps meshes from folding); 0 disables.")
-    threads: int = _doc(0, "-", "numba threads; 0 = automatic: every core (at most "
-                        "$REPULSIONPAK_THREADS) that other processes leave free, once the parallel kernels "
-                        "are compiled, see parallel_threshold.")
+    threads: int = _doc(0, "-", "numba threads; 0 = automatic: one, or every core (at most "
+                        "$REPULSIONPAK_THREADS) while measured iterations show that more threads are faster "
+                        "(they are not beside a busy process), once the parallel kernels are compiled; "
+                        "see parallel_threshold.")
     parallel_threshold: int = _doc(
         1000, "vertices", "With threads = 0, scenes with fewer vertices run on one thread "
         "(two threads: 0.86x as fast at 340 vertices, 1.1x at 700, 1.4x at 1,400 on 2 cores).")
