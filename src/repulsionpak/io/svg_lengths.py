@@ -34,7 +34,8 @@ _NUMBER = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 _LENGTH = re.compile(rf"\s*({_NUMBER})\s*([a-zA-Z%]*)\s*")
 _ABSOLUTE = {"": 1.0, "px": 1.0, "pt": 4.0 / 3.0, "pc": 16.0, "mm": 96.0 / 25.4, "cm": 96.0 / 2.54,
              "in": 96.0, "q": 96.0 / 101.6}
-_SIZE_KEYWORDS = {"xx-small": 9.0, "x-small": 10.0, "small": 13.0, "medium": 16.0, "large": 18.0,
+#: CSS font-size keywords in px (the text module shares them)
+FONT_SIZE_KEYWORDS = _SIZE_KEYWORDS = {"xx-small": 9.0, "x-small": 10.0, "small": 13.0, "medium": 16.0, "large": 18.0,
                   "x-large": 24.0, "xx-large": 32.0, "xxx-large": 48.0}
 _DEFAULT_FONT_SIZE = 16.0
 #: geometry attributes whose lengths are rewritten when they use a unit svgelements lacks
@@ -99,8 +100,24 @@ def _font_size(el: ET.Element, parent: float) -> float:
                 if _LENGTH.fullmatch(tok) or tok.lower() in _SIZE_KEYWORDS:
                     value = tok
                     break
-    if value is None:
-        return parent
+    return parent if value is None else font_size_value(value, parent)
+
+
+def font_size_value(value: str, parent: float) -> float:
+    """A CSS ``font-size`` value in user units.
+
+    Parameters
+    ----------
+    value : str
+        A keyword (``medium``, ``larger`` ...), a length or a percentage.
+    parent : float
+        The inherited font size (user units): what ``%``, ``em``, ``ex`` and ``ch`` refer to.
+
+    Returns
+    -------
+    float
+        The size; ``parent`` for a value that does not parse or is negative.
+    """
     v = value.strip().lower()
     if v in _SIZE_KEYWORDS:
         return _SIZE_KEYWORDS[v]

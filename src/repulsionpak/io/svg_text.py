@@ -28,6 +28,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from .svg_lengths import FONT_SIZE_KEYWORDS as _SIZE_KEYWORDS
+from .svg_lengths import font_size_value
 from .svg_text_metrics import BASELINES, baseline_offset, decoration_bars, metrics_of, shift_item
 from .svg_xml import TEXT_GROUP, inline_declarations
 from .svg_xml import local_name as _local
@@ -38,8 +40,6 @@ _TEXT_LIKE = {"tspan", "a", "textPath"}
 _POSITION_ATTRS = ("x", "y", "dx", "dy", "rotate", "textLength", "lengthAdjust")
 _XML_SPACE = "{http://www.w3.org/XML/1998/namespace}space"
 _GENERIC = {"serif", "sans-serif", "monospace", "cursive", "fantasy"}
-_SIZE_KEYWORDS = {"xx-small": 9.0, "x-small": 10.0, "small": 13.0, "medium": 16.0, "large": 18.0,
-                  "x-large": 24.0, "xx-large": 32.0, "xxx-large": 48.0}
 _UNITS = {"": 1.0, "px": 1.0, "pt": 4.0 / 3.0, "pc": 16.0, "mm": 96.0 / 25.4, "cm": 96.0 / 2.54,
           "in": 96.0, "q": 96.0 / 101.6}
 _DEFAULT_SIZE = 16.0  # a browser's "medium"
@@ -145,24 +145,8 @@ class _Props:
 
 
 def _font_size(v: str, parent: float) -> float:
-    v = v.strip().lower()
-    if v in _SIZE_KEYWORDS:
-        return _SIZE_KEYWORDS[v]
-    if v == "larger":
-        return parent * 1.2
-    if v == "smaller":
-        return parent / 1.2
-    m = re.fullmatch(rf"({_NUMBER})\s*([a-z%]*)", v)
-    if not m:
-        return parent
-    num, unit = float(m.group(1)), m.group(2)
-    if unit == "%":
-        return parent * num / 100.0
-    if unit in ("em", "rem"):
-        return parent * num
-    if unit == "ex":
-        return parent * num / 2.0
-    return num * _UNITS.get(unit, 1.0) if num > 0 else parent
+    size = font_size_value(v, parent)
+    return size if size > 0 else parent  # a zero size draws no glyph: keep the text visible
 
 
 def _weight(v: str, parent: int) -> int:
