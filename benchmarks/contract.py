@@ -43,7 +43,7 @@ sys.path.insert(0, str(ROOT / "src"))  # measure this checkout's code, whatever 
 PICTURES = ("convex-circle", "stars-circle", "thin-circle", "holed-band", "letters-holed", "mixed-circle-120")
 
 #: sections of docs/quality.md written by other benchmarks, kept when the page is regenerated
-KEPT_SECTIONS = ("Output curves", "Area at the gap actually produced")
+KEPT_SECTIONS = ("The size floor and the Q_s promise", "Output curves", "Area at the gap actually produced")
 
 PROMISES = ("gap_median", "gap_p10", "overlap", "outside", "edge_margin", "distortion", "scp_ratio")
 
