@@ -1217,3 +1217,22 @@ def test_zero_length_subpaths_are_dots_with_round_and_square_caps(tmp_path, cap,
     # the line keeps its own caps: 20 x 2, plus a disc (a square) of diameter 2 at its ends
     line = [p for p in el.paths if np.ptp(np.concatenate(p.subpaths)[:, 0]) > 10]
     assert art_area(line).area == pytest.approx(40 + area, rel=0.03)
+
+
+def test_container_outline_whose_ends_miss_by_a_rounding_counts_as_closed(tmp_path):
+    """Icon sets draw outlines without ``z`` whose last point misses the first by a rounding
+    (Tabler's heart: 0.006 in 24 units); at a fine gap's tolerance that refused the file.
+    Ends within 1e-3 of the outline's size close it; farther apart it stays open."""
+    from repulsionpak.errors import InputError
+    from repulsionpak.io import load_container
+
+    near = tmp_path / "near.svg"
+    near.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 24 24"><path fill="none" '
+                    'stroke="black" d="M12 4 L20 12 L12 20 L4 12 L11.994 4.002"/></svg>')
+    c = load_container(near, tolerance=2e-4)
+    assert c.region.area == pytest.approx(128.0, rel=1e-3)
+    far = tmp_path / "far.svg"
+    far.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 24 24"><path fill="none" '
+                   'stroke="black" d="M12 4 L20 12 L12 20 L4 12 L11.5 4.5"/></svg>')
+    with pytest.raises(InputError, match="closed"):
+        load_container(far, tolerance=2e-4)

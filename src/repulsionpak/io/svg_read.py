@@ -1988,6 +1988,12 @@ def thin_dense_lines(arts: list[ArtPath]) -> list[ArtPath]:
     return out
 
 
+#: an open subpath of a container whose last point misses its first by at most this share
+#: of its size counts as closed: icon sets draw outlines without ``z`` whose ends differ by
+#: a rounding (Tabler's heart: 0.006 in 24 units), which a fine gap's tolerance refused
+CLOSE_SHARE = 1e-3
+
+
 def container_from_shapes(
     path,
     shapes: list[SvgShape],
@@ -2009,11 +2015,12 @@ def container_from_shapes(
         rings = []
         for pts, closed in flatten_shape(path, sh, tol, budget):
             if not closed:
-                if len(pts) >= 3 and float(np.hypot(*(pts[-1] - pts[0]))) <= tol:
-                    pts = pts[:-1]
-                else:
+                ends = float(np.hypot(*(pts[-1] - pts[0])))
+                if len(pts) < 3 or ends > max(tol, CLOSE_SHARE * float(np.hypot(*np.ptp(pts, axis=0)))):
                     n_open += 1
                     continue
+                if ends <= tol:
+                    pts = pts[:-1]
             if len(pts) >= 3:
                 rings.append(pts)
         if not rings:
