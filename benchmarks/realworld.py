@@ -132,12 +132,10 @@ NOTES = [
     "  the frame holds them, so the mainland is a thin strip at the right of a wide picture.",
     "* **Outlined icons.** Phosphor's regular house is drawn as a band (the icon's ink): the packing",
     "  fills the band with small copies, not the house's inside (its `fill` weight would).",
-    "* **Tabler** icons carry an invisible 24 x 24 helper square (`fill` and `stroke` none), which the",
-    "  reader counts as container geometry (with a warning): the container became a square. Their",
-    "  heart's outline also ends 0.006 from its start without a `z`: at the gap's fine tolerance",
-    "  the reader finds no closed path and refuses the container, though browsers fill it. The",
-    "  script leaves the square out of the container file and closes the path (the SVG reader's",
-    "  issue); as elements the icons are read as drawn.",
+    "* **Tabler** icons carry an invisible 24 x 24 helper square (`fill` and `stroke` none) beside",
+    "  the drawn outline, which the reader leaves out of the container (with a warning), and their",
+    "  heart's outline ends 0.006 from its start without a `z`, which counts as closed (ends within",
+    "  1/1000 of the outline's size): the container files are used as the package ships them.",
 ]
 
 
@@ -176,17 +174,6 @@ def _source(cache: Path, spec: str, work: Path, scene_container: str = "") -> Pa
     if key == "world":
         return _country(cache, rel, work)
     src = package_dir(cache, key) / rel
-    if key == "tabler" and spec == scene_container:
-        # Tabler's icons carry an invisible 24 x 24 helper square (fill and stroke none), which
-        # the reader counts as container geometry (with a warning): a square, not the icon.
-        # The container file leaves it out; as elements the icons are read as drawn.
-        text = re.sub(r'<path stroke="none" d="M0 0h24v24H0z" fill="none"\s*/>', "", src.read_text())
-        # and the heart's outline ends 0.006 from its start without a "z": a browser fills it
-        # closed, the reader (at the gap's fine tolerance) finds no closed path; it is closed here
-        text = re.sub(r'(<path d="[^"]*?)\s*"', lambda m: m.group(1) + (' z"' if not m.group(1).rstrip().endswith(("z", "Z")) else '"'), text)
-        f = work / f"{src.stem}.svg"
-        f.write_text(text)
-        return f
     if key == "simple":
         slug = src.stem
         text = src.read_text()

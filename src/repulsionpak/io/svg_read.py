@@ -2055,8 +2055,8 @@ def container_from_shapes(
         raise InputError(
             path, "has no closed path; a container needs at least one closed outline"
         )
+    outer = drop_unpainted(path, unpainted, outer)
     region = shapely.union_all(outer) if outer else shapely.Polygon()
-    warn_unpainted(path, unpainted, outer, region)
     if holes:
         hole_region = shapely.union_all(holes)
         if region.is_empty:
@@ -2083,21 +2083,42 @@ def container_from_shapes(
     )
 
 
-def warn_unpainted(path, unpainted: list, outer: list, region) -> None:
-    """Warn when shapes with neither fill nor stroke widen a container that also has
-    painted shapes (e.g. an icon's invisible bounding square): they count, since a
-    container is geometry, but that may not be what was meant."""
+def drop_unpainted(path, unpainted: list, outer: list) -> list:
+    """The container's outer shapes without those painted with neither fill nor stroke,
+    when some shape is painted.
+
+    Parameters
+    ----------
+    path : Path
+        The container file (for the warning).
+    unpainted : list
+        The outer shapes' regions that have neither fill nor stroke (identity matters).
+    outer : list
+        Every outer shape's region.
+
+    Returns
+    -------
+    list
+        ``outer`` less the unpainted regions; all of ``outer`` when nothing is painted (a file
+        of bare geometry) or everything is.
+
+    Notes
+    -----
+    A container is geometry, whatever its paint, but an icon's invisible bounding square
+    next to its drawn outline (every Tabler icon has one) is a layout helper browsers do not
+    draw: counted, it turned the container into a square. Such helpers are left out, with a
+    warning that says how to keep them.
+    """
     if not unpainted or len(unpainted) == len(outer):
-        return
-    painted = shapely.union_all([g for g in outer if not any(g is u for u in unpainted)])
-    extra = region.area - painted.area
-    if extra > 1e-9 * max(region.area, 1e-300):
-        warn(
-            path,
-            f"{len(unpainted)} shape(s) with neither fill nor stroke count as container "
-            f"geometry and add {extra / region.area:.0%} of its area; give helper shapes "
-            'display="none" to leave them out',
-        )
+        return outer
+    kept = [g for g in outer if not any(g is u for u in unpainted)]
+    warn(
+        path,
+        f"left out {len(unpainted)} shape(s) with neither fill nor stroke beside the drawn outline "
+        "(layout helpers such as an icon's bounding square); give them a fill or stroke to make "
+        "them part of the container",
+    )
+    return kept
 
 
 def _svg_container(path: Path, data: bytes, tolerance: float | None) -> Container:
