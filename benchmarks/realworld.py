@@ -163,7 +163,7 @@ def _brand_colours(cache: Path) -> dict[str, str]:
     return {d["slug"]: "#" + d["hex"] for d in data}
 
 
-def _source(cache: Path, spec: str, work: Path, scene_container: str = "") -> Path:
+def _source(cache: Path, spec: str, work: Path) -> Path:
     """The SVG file of a ``pkg:path`` spec, as the scene uses it (brand marks get their
     brand colour, the map's countries a tight viewBox)."""
     if spec == "letter":
@@ -238,7 +238,7 @@ def run_scene(scene: Scene, cache: Path, out: Path, seed: int, reuse: bool = Fal
 
 
 def _run(scene: Scene, cache: Path, work: Path, seed: int) -> dict:
-    container = _source(cache, scene.container, work, scene.container)
+    container = _source(cache, scene.container, work)
     elements = [_source(cache, e, work) for e in scene.elements]
     svg, png, rep = work / "packing.svg", work / "packing.png", work / "report.json"
     exe = [sys.executable, "-m", "repulsionpak.cli"]
