@@ -126,7 +126,7 @@ NOTES = [
     "  is not cut.",
     "* **Islands.** Islands too small for the smallest copy stay empty (dozens around Indonesia,",
     "  Japan's and Greece's small islands, Chile's southern fjords); the big islands get few large",
-    "  copies (Borneo one fish) while thin arms (Sulawesi, the Peloponnese's fingers) get many",
+    "  copies (Borneo two fish) while thin arms (Sulawesi, the Peloponnese's fingers) get many",
     "  small ones: how archipelagos are sized is the element-size work's, not the output's.",
     "* **Chile** on this map includes Easter Island and the Juan Fernández Islands far to the west:",
     "  the frame holds them, so the mainland is a thin strip at the right of a wide picture.",
