@@ -215,15 +215,7 @@ def _draw_element(ax, element, apply, scale) -> None:
                 region = rings_to_region(rings, st.fill_rule)
             except Exception:  # noqa: BLE001
                 return
-            for poly in shapely.get_parts(region):
-                if poly.is_empty or not isinstance(poly, shapely.Polygon):
-                    continue
-                ext = [np.asarray(poly.exterior.coords)] + [np.asarray(r.coords) for r in poly.interiors]
-                verts = np.concatenate(ext)
-                codes = np.concatenate([[MPath.MOVETO] + [MPath.LINETO] * (len(r) - 2) + [MPath.CLOSEPOLY]
-                                        for r in ext])
-                ax.add_artist(PathPatch(MPath(verts, codes), facecolor=(0, 0, 0, st.opacity * st.fill_opacity),
-                                        edgecolor="none", linewidth=0))
+            polygons(region, st.opacity * st.fill_opacity)
 
         def polygons(region, alpha):
             for poly in shapely.get_parts(region):
