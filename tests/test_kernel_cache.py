@@ -138,6 +138,47 @@ def test_build_requirements_match_the_runtime_ones():
     assert {"numpy", "numba", "shapely", "svgelements", "pythoncdt"} <= names
 
 
+def test_the_builds_workload_needs_no_cli_or_picture_packages(tmp_path):
+    """The build environment has only the build requirements (no Pillow, matplotlib, typer,
+    rich): the library's pack → measure → SVG → read-back path, which the build runs, must
+    not import them, or the wheel silently ships no kernels."""
+    code = textwrap.dedent("""\
+        import importlib.abc, sys
+        from pathlib import Path
+
+        class Block(importlib.abc.MetaPathFinder):
+            def find_spec(self, name, path=None, target=None):
+                if name.split(".")[0] in ("PIL", "matplotlib", "typer", "rich"):
+                    raise ImportError(f"{name} is not in the build environment")
+                return None
+
+        sys.meta_path.insert(0, Block())
+        from repulsionpak import examples
+        from repulsionpak.evaluate import evaluate, evaluate_file
+        from repulsionpak.io import load_container, load_elements
+        from repulsionpak.pack import margin_of, pack
+        from repulsionpak.packing_output import invariants, packing_svg_text
+        from repulsionpak.params import params_from_dict
+
+        gap = examples.DEFAULT_GAP
+        container = load_container(examples.container_file(examples.DEFAULT_CONTAINER))
+        elements = load_elements(examples.element_files()[:3])
+        params = params_from_dict({"gap": gap, "seed": 1, "placement": {"count": 4},
+                                   "sim": {"max_iterations": 200, "settle_iterations": 10, "threads": 1}})
+        packing = pack(container, elements, params)
+        metrics = evaluate(container, packing.placed, gap, with_scp=False, margin=margin_of(params, gap),
+                           sources=elements)
+        svg = Path(sys.argv[1]) / "w.svg"
+        svg.write_text(packing_svg_text(packing, metrics, invariants(packing, metrics), path=svg))
+        print(round(evaluate_file(svg, sources=elements)["area_fraction"], 6))
+    """)
+    env = {**os.environ, "REPULSIONPAK_NO_WARMUP": "1"}
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True,
+                       timeout=600, env=env)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert 0.0 < float(r.stdout.split()[-1]) < 1.0
+
+
 @pytest.mark.slow
 def test_built_kernels_cover_the_demo_and_its_measurement(tmp_path):
     """What setup.py ships (kernel_cache.build) is every kernel the demo, the distortion

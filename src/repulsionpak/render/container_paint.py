@@ -54,12 +54,17 @@ def _rgb(colour: str | None) -> np.ndarray | None:
         return None
     if str(colour).strip().lower() == "currentcolor":
         return np.zeros(3)
-    from PIL import ImageColor  # noqa: PLC0415  (matplotlib's parser costs 0.3 s of imports)
+    # svgelements' parser: the reader's own dependency (matplotlib's costs 0.3 s of imports,
+    # and neither it nor Pillow is in the build environment that packs the demo)
+    from svgelements import Color  # noqa: PLC0415
 
-    try:
-        return np.asarray(ImageColor.getrgb(str(colour).strip())[:3], float) / 255.0
-    except ValueError:  # a paint server reference or an unusual colour
+    text = str(colour).strip()
+    if text.lower().startswith("url(") or text.lower() in ("none", "transparent"):
+        return None  # a paint server reference: no colour of its own
+    c = Color(text)
+    if c.value is None:
         return None
+    return np.array([c.red, c.green, c.blue], float) / 255.0
 
 
 def _linear(rgb: np.ndarray) -> np.ndarray:
