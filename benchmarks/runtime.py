@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import re
 import resource
 import subprocess
@@ -33,17 +32,8 @@ HEART = SHARED / "containers" / "heart.svg"
 ANIMALS = SHARED / "animals"
 PACK = [str(Path(sys.executable).parent / "repulsionpak"), "pack"]
 
-
-def machine() -> str:
-    cpu = platform.machine()
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+sys.path.insert(0, str(HERE))
+from bench import machine  # noqa: E402  (the same machine line as the other scripts)
 
 
 def timed(cmd, cwd=None, env=None, during=None) -> tuple[float, float, float, str]:
