@@ -15,7 +15,7 @@ from .blas import with_one_blas_thread
 from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
 from .params import Params, PlacementParams
-from .placement import Placement, assign_elements, estimate_count, final_scale, place
+from .placement import Placement, assign_elements, estimate_count, final_scale, gap_for_count, place
 from .preprocess import Outline, Template, build_template, outline_of
 from .render import is_convex, placed_art, rest_art, skin_polygons
 from .room import room_of
@@ -94,7 +94,7 @@ def default_gap(container: Container, placement: PlacementParams | None = None) 
     circle = shapely.maximum_inscribed_circle(container.region, 1e-3 * gap)
     gap = min(gap, 0.04 * 2 * circle.length)
     if placement is not None and placement.count:
-        gap = min(gap, math.sqrt(container.region.area / placement.count) / placement.element_size)
+        gap = min(gap, gap_for_count(container.region.area, placement.count, placement))
     return float(f"{gap:.4g}")
 
 

@@ -21,6 +21,12 @@ def estimate_count(container_area: float, gap: float, params: PlacementParams) -
     return max(1, int(round(container_area / (size * size))))
 
 
+def gap_for_count(container_area: float, count: int, params: PlacementParams) -> float:
+    """The gap at which ``count`` elements are ``element_size`` gaps across: the inverse of
+    :func:`estimate_count` (what the default gap caps itself at when a count is asked)."""
+    return float(np.sqrt(container_area / count) / params.element_size)
+
+
 def assign_elements(n_library: int, count: int, rng: np.random.Generator) -> np.ndarray:
     """Cycle through a shuffled library until ``count`` elements are assigned (sec. 4 step 2).
 

@@ -106,7 +106,6 @@ class Simulator:
     """Advance a packing. ``phase`` is a label ("primary"/"secondary") for snapshots."""
 
     templates: list | None = None  # the model's templates, set by pack() for snapshot renderers
-    governor: ThreadGovernor | None = None  # the thread choice of the last run()
 
     def __init__(self, model: Model, state: State, params: SimParams, phase: str = "primary"):
         self.model, self.state, self.params, self.phase = model, state, params, phase
@@ -371,8 +370,8 @@ class Simulator:
         start, most = self.thread_range()
         threads = set_threads(start)
         # a chosen thread count is kept; an automatic one follows the machine's load
-        gov = self.governor = ThreadGovernor(most if p.threads == 0 else 1, start,
-                                             window=p.requery_every * -(-GOV_WINDOW // p.requery_every))
+        gov = ThreadGovernor(most if p.threads == 0 else 1, start,
+                             window=p.requery_every * -(-GOV_WINDOW // p.requery_every))
         hist = st.area_history
         w = p.stop_window
         a = hist[-1] if hist else 0.0

@@ -82,7 +82,6 @@ class ThreadGovernor:
         self._probe_gap = PROBE_FIRST
         self._probing = False
         self._warming = True
-        self.switches = 0
 
     @property
     def active(self) -> bool:
@@ -146,7 +145,6 @@ class ThreadGovernor:
         self.current = to
         self._times.clear()
         self._since_switch = 0
-        self.switches += 1
         return to
 
 
