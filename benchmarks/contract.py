@@ -132,7 +132,8 @@ def measure_scene(scene, workdir: str, picture_dir: str | None = None) -> dict:
     """Pack and measure ``scene`` (a :class:`repulsionpak.scenes.Scene`); never raises: a
     failure is recorded in the summary's ``error``."""
     from repulsionpak import scenes
-    from repulsionpak.io import read_packing_svg, render_png
+    from repulsionpak.io import read_packing_svg
+    from repulsionpak.render.png import render_png
 
     t0 = time.perf_counter()
     try:
@@ -336,7 +337,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from repulsionpak import scenes
-    from repulsionpak.io.svg_write import atomic_write_bytes
+    from repulsionpak.io.files import atomic_write_bytes
 
     every = {s.name: s for s in scenes.suite() + scenes.fast_suite() + scenes.holdout_suite()}
     if args.only:

@@ -31,7 +31,7 @@ import numpy as np
 import shapely
 
 from repulsionpak.io import load_container
-from repulsionpak.io.svg_write import read_packing_svg
+from repulsionpak.io import read_packing_svg
 
 
 def free_space(svg: str, container: str | None = None, grid: int = 400) -> dict:

@@ -197,7 +197,7 @@ def _draw_element(ax, element, apply, scale) -> None:
     from matplotlib.patches import PathPatch
     from matplotlib.path import Path as MPath
     from repulsionpak.geometry.outline import _stroke_geometry
-    from repulsionpak.io.svg_read import rings_to_region
+    from repulsionpak.io.regions import rings_to_region
     import shapely
 
     pt = 72.0 / 100.0  # points per pixel

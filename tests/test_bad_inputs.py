@@ -690,7 +690,7 @@ def test_an_invalid_root_viewbox_is_ignored_as_browsers_do(tmp_path, vb):
         c = load_container(p)
     assert c.bounds == pytest.approx((10, 10, 110, 60))  # user units = px: no viewBox scaling
     out = tmp_path / "o.svg"
-    from repulsionpak.io import write_packing_svg
+    from repulsionpak.render.svg import write_packing_svg
     write_packing_svg(out, c, [], 2.0)
     import xml.etree.ElementTree as ET
     root = ET.parse(out).getroot()

@@ -12,7 +12,9 @@ import numpy as np
 import pytest
 import shapely
 
-from repulsionpak.io import load_container, read_packing_svg, render_png, write_packing_svg
+from repulsionpak.io import load_container, read_packing_svg
+from repulsionpak.render.png import render_png
+from repulsionpak.render.svg import write_packing_svg
 from repulsionpak.render.container_paint import hidden_art, hiding_warning, outline_colour, outline_width
 from repulsionpak.types import ArtPath, PlacedArt, Style
 
@@ -205,7 +207,7 @@ def test_live_scene_follows_the_choice(tmp_path):
 
 def test_batch_thumbnail_follows_the_choice(tmp_path):
     """The contact sheet's tiles are png_bytes of each packing with its container paint."""
-    from repulsionpak.io.png import png_bytes
+    from repulsionpak.render.png import png_bytes
 
     c = _container(tmp_path)
     a = _png_rgb(png_bytes(c, _copies(fill="#1b998b"), size_px=100, container_paint="as-drawn", gap=4.0))

@@ -9,7 +9,9 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from repulsionpak.io import load_container, read_packing_svg, render_png, write_packing_svg
+from repulsionpak.io import load_container, read_packing_svg
+from repulsionpak.render.png import render_png
+from repulsionpak.render.svg import write_packing_svg
 from repulsionpak.render.container_paint import outline_width
 from repulsionpak.render.frame import packing_frame
 from repulsionpak.types import ArtPath, PlacedArt, Style

@@ -21,8 +21,9 @@ from repulsionpak.io import (
     load_elements,
     parse_pathfile,
     rings_to_region,
-    svg_read,
 )
+from repulsionpak.io import files as io_files
+from repulsionpak.io import svg_element
 
 FIX = Path(__file__).parent / "fixtures"
 DATA = Path("/work/shared/data")
@@ -921,7 +922,7 @@ def test_point_budget(tmp_path, monkeypatch):
         ),
     )
     assert load_element(p).paths[0].n_points == 3000
-    monkeypatch.setattr(svg_read, "MAX_POINTS", 1000)
+    monkeypatch.setattr(io_files, "MAX_POINTS", 1000)
     with pytest.raises(InputError, match="many.svg.*more than 1000 points"):
         load_element(p)
     big = _write(
@@ -1178,12 +1179,12 @@ def test_a_dense_drawing_is_thinned_within_a_quarter_of_the_curve_tolerance(tmp_
     exact = shapely.Polygon(np.array([p.split(",") for p in _dense_polygon(6000).split()], float))
     thin = shapely.Polygon(poly.subpaths[0])
     size = np.hypot(*np.ptp(np.asarray(exact.exterior.coords), axis=0))
-    assert exact.hausdorff_distance(thin) <= svg_read.DENSE_TOLERANCE * size * (1 + 1e-6)
+    assert exact.hausdorff_distance(thin) <= svg_element.DENSE_TOLERANCE * size * (1 + 1e-6)
     np.testing.assert_allclose(poly.source.curves[0].ctrl[:, 0], poly.subpaths[0])  # curves = outline
 
 
 def test_a_drawing_under_the_limit_is_kept_as_drawn(tmp_path):
-    n = svg_read.MAX_LINE_SEGMENTS // 2
+    n = svg_element.MAX_LINE_SEGMENTS // 2
     el = load_element(_write(tmp_path, "d.svg", _svg(f'<polygon points="{_dense_polygon(n)}"/>')))
     assert len(el.paths[0].subpaths[0]) == n
 

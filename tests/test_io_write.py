@@ -11,14 +11,10 @@ import pytest
 import shapely
 
 from repulsionpak.errors import InputError, OutputError, ParameterError
-from repulsionpak.io import (
-    load_container,
-    load_element,
-    read_packing_svg,
-    render_png,
-    write_packing_svg,
-)
-from repulsionpak.io.svg_write import format_number
+from repulsionpak.io import load_container, load_element, read_packing_svg
+from repulsionpak.render.png import render_png
+from repulsionpak.render.svg import write_packing_svg
+from repulsionpak.render.numbers import format_number
 from repulsionpak.types import ArtPath, Container, PlacedArt, Style
 
 FIX = Path(__file__).parent / "fixtures"
@@ -510,7 +506,7 @@ def test_png_does_not_touch_pyplot(tmp_path):
 
     code = (
         "import sys, shapely\n"
-        "from repulsionpak.io import render_png\n"
+        "from repulsionpak.render.png import render_png\n"
         "from repulsionpak.types import Container\n"
         f"render_png({str(tmp_path / 'p.png')!r}, Container('b.svg', shapely.box(0, 0, 1, 1)), [], size_px=32)\n"
         "assert 'matplotlib.pyplot' not in sys.modules\n"

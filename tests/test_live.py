@@ -329,7 +329,7 @@ def test_browser_pause_step_drag_pin_remove_add_download(live, tmp_path):
     # the time the result was served (from "Converged" to Ctrl-C) is not in the run's times
     assert rep["seconds"]["total"] < (t_int - live.t0) - (t_int - _drive.t_done) + 0.5
     # the pinned element's art lies where it was pinned (inside its pinned skin)
-    from repulsionpak.io.svg_write import read_packing_svg
+    from repulsionpak.io import read_packing_svg
 
     _, placed, _ = read_packing_svg(live.out / "out.svg")
     x, y, w, h = _drive.pinned_box

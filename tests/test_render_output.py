@@ -77,7 +77,7 @@ def test_container_group_holds_the_container_as_drawn(packing):
     assert c.get("id") == "frame" and c.get("stroke") == "#222222" and c.get("stroke-width") == "3"
     assert c.get("transform") == "matrix(1 0 0 1 400 400)"  # the composed group transform
     # the outline the output draws is the input's: distance zero
-    from repulsionpak.io.svg_read import parse_svg_shapes
+    from repulsionpak.io.svg_shapes import parse_svg_shapes
     from repulsionpak.io.svg_source import segments_to_curves
 
     def drawn(path, in_container_group):

@@ -193,7 +193,7 @@ def test_a_straightened_copy_is_flattened_as_its_written_curves(tmp_path):
     placed copy's own tolerance, not on the source's flattening (relative to the source's
     size: on a copy ~50 gaps across its chords lay up to ~0.03 gap inside the written
     circle, and a straightened disc was written within 0.947 of the edge margin)."""
-    from repulsionpak.io.svg_read import load_element
+    from repulsionpak.io import load_element
     from repulsionpak.render.placed import FLATTEN_SHARE
     from repulsionpak.verify import straighten
 

@@ -35,7 +35,9 @@ _quiet_interrupt_while_importing()
 
 from .errors import (ConfigError, DivergedError, InputError, OutputError, ParameterError,  # noqa: E402
                      RepulsionPakError, SimulationError)
-from .io import load_container, load_element, load_elements, read_packing_svg, render_png, write_packing_svg  # noqa: E402
+from .io import load_container, load_element, load_elements, read_packing_svg  # noqa: E402
+from .render.png import render_png  # noqa: E402
+from .render.svg import write_packing_svg  # noqa: E402
 from .pack import Packing, pack  # noqa: E402
 from .params import Params, load_config  # noqa: E402
 from .types import ArtPath, Container, Element, PlacedArt, Style  # noqa: E402

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
-from .io.svg_write import atomic_write_bytes
+from .io.files import atomic_write_bytes
 
 FORMAT = "repulsionpak-checkpoint-1"
 _ARRAYS = ("x", "v", "n_grow", "area_history")

@@ -336,7 +336,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     if fill_holes and pocket_fill:  # --fill-holes: copies go into the holes of the art too
         params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, fill_holes=True))
-    from .io.svg_read import TooManyPoints
+    from .io.files import TooManyPoints
     from .pack import CONTAINER_TOLERANCE, check_fineness, default_gap
 
     # the container's curves are flattened finely (gap/1000; without a gap, read twice:
@@ -434,8 +434,8 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
     After a signal (``late.stop``) only the SVG and the report are still written; the
     report then lists the outputs left out (``not_written``)."""
     from .evaluate import evaluate
-    from .io import render_png
-    from .io.svg_write import atomic_write_bytes
+    from .render.png import render_png
+    from .io.files import atomic_write_bytes
     from .pack import margin_of
     from .packing_output import container_paint_of, invariants, packing_svg_text, paint_warning
 
@@ -546,7 +546,7 @@ def _expand(paths: list[Path]) -> list[Path]:
 
 
 def _write_json_atomic(path: Path, data: dict) -> None:
-    from .io.svg_write import atomic_write_bytes
+    from .io.files import atomic_write_bytes
 
     atomic_write_bytes(path, (json.dumps(data, indent=2) + "\n").encode("utf-8"))
 

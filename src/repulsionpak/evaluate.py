@@ -800,7 +800,7 @@ def _new_figure():
 def _save_atomic(fig, out_png) -> Path:
     import io
 
-    from .io.svg_write import atomic_write_bytes
+    from .io.files import atomic_write_bytes
 
     out = Path(out_png)
     buf = io.BytesIO()

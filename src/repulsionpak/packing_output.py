@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .io.svg_write import packing_svg_string
+from .render.svg import packing_svg_string
 
 
 def invariants(packing, metrics: dict) -> dict:

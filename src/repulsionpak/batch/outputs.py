@@ -10,8 +10,8 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..errors import OutputError
-from ..io.png import contact_sheet_png
-from ..io.svg_write import atomic_write_bytes
+from ..io.files import atomic_write_bytes
+from ..render.png import contact_sheet_png
 from .jobs import Job, _fmt_value
 from .tasks import JobResult
 

@@ -146,7 +146,7 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
         if job.svg:
             res.svg = packing_svg_text(packing, metrics, checks, path=f"{job.name}.svg")
         if job.thumbnail_px:
-            from ..io.png import png_bytes
+            from ..render.png import png_bytes
 
             res.thumbnail = png_bytes(inputs.container, packing.placed, size_px=job.thumbnail_px,
                                       container_paint=container_paint_of(packing), gap=packing.gap)

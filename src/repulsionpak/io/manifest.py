@@ -27,6 +27,7 @@ from pathlib import Path
 from ..controls import ElementControls, Pin
 from ..errors import InputError, ParameterError
 from ..types import Element
+from .load import load_elements
 
 KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight")
 PIN_KEYS = ("x", "y", "angle", "scale")
@@ -90,8 +91,6 @@ def load_manifest(path, base: ElementControls | None = None, tolerance: float | 
     """The elements a manifest names, each with its :class:`ElementControls`; ``base``
     (the CLI shortcuts) is overridden by ``[defaults]``, which each ``[[element]]``
     overrides."""
-    from .svg_read import load_elements  # noqa: PLC0415
-
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -163,8 +162,6 @@ def load_element_args(paths, controls: ElementControls | None = None, tolerance:
     """Element arguments as the CLI gets them: files, folders and manifests (``.toml``),
     in order. ``controls`` (the CLI shortcuts) applies to every element; None leaves the
     plain files without controls (the default behaviour)."""
-    from .svg_read import load_elements  # noqa: PLC0415
-
     if isinstance(paths, (str, Path)):
         paths = [paths]
     out: list[Element] = []

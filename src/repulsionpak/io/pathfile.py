@@ -27,15 +27,8 @@ import shapely
 
 from ..errors import InputError
 from ..types import ArtPath, Container, Element, Style
-from . import svg_read
-from .svg_read import (
-    clean_points,
-    count_self_crossing,
-    finalize_region,
-    rings_to_region,
-    warn,
-    warn_self_crossing,
-)
+from .files import MAX_POINTS, check_coordinates, warn
+from .regions import clean_points, count_self_crossing, finalize_region, rings_to_region, warn_self_crossing
 
 __all__ = [
     "PALETTE",
@@ -219,11 +212,11 @@ def parse_pathfile(path: str | Path, data: bytes | str) -> PathFile:
             raise InputError(path, f"line {i}: {bad[:40]!r} is not a number") from None
         if not np.all(np.isfinite(pts)):
             raise InputError(path, f"line {i}: non-finite coordinate (NaN or infinity)")
-        svg_read.check_coordinates(path, pts, f" on line {i}")
+        check_coordinates(path, pts, f" on line {i}")
         total += len(pts)
-        if total > svg_read.MAX_POINTS:
+        if total > MAX_POINTS:
             raise InputError(
-                path, f"has more than {svg_read.MAX_POINTS} points; simplify the file"
+                path, f"has more than {MAX_POINTS} points; simplify the file"
             )
         if len(pts) < 2:
             continue

@@ -8,6 +8,9 @@ import re
 #: a clipPath takes text, but no groups
 TEXT_GROUP = "data-repulsionpak-text"
 
+SVG_NS = "http://www.w3.org/2000/svg"
+XLINK_NS = "http://www.w3.org/1999/xlink"
+
 _IMPORTANT = re.compile(r"\s*!\s*important\s*$", re.IGNORECASE)
 
 
@@ -16,6 +19,11 @@ def local_name(tag) -> str:
     if not isinstance(tag, str):
         return ""
     return tag.rsplit("}", 1)[-1] if tag.startswith("{") else tag
+
+
+def href(el) -> str | None:
+    """An element's ``href`` (``xlink:href`` first, as SVG 1.1 files write it), or None."""
+    return el.get(f"{{{XLINK_NS}}}href") or el.get("href")
 
 
 def inline_declarations(style: str | None) -> list[tuple[str, str, bool]]:

@@ -128,7 +128,7 @@ def outline_colour(container: Container) -> str:
 
 
 def _region(art: ArtPath) -> shapely.Geometry | None:
-    from ..io.svg_read import RegionTooComplex, rings_to_region  # noqa: PLC0415
+    from ..io.regions import RegionTooComplex, rings_to_region  # noqa: PLC0415
 
     rings = _rings(art)
     if not rings:

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from ..io.svg_read import ROOT_VIEW_ATTRS
-from ..io.svg_write import format_number
+from ..io.svg_viewports import ROOT_VIEW_ATTRS
 from ..types import Container, PlacedArt
+from .numbers import format_number
 
 __all__ = ["Frame", "drawing_bounds", "packing_frame"]
 

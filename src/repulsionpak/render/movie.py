@@ -411,7 +411,7 @@ class MovieRecorder:
 
         hold_cs = max(delay, round(100 * self.hold)) if final else delay
         if self.format == "gif":
-            from ..io.svg_write import atomic_write_bytes  # noqa: PLC0415
+            from ..io.files import atomic_write_bytes  # noqa: PLC0415
 
             data, count = _gif_bytes(frames(), delay, hold_cs, palette_from=last)
             atomic_write_bytes(self.path, data)

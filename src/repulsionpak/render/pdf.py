@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import OutputError
-from ..io.svg_write import atomic_write_bytes
+from ..io.files import atomic_write_bytes
 from ..types import Container, PlacedArt
 from .svg import packing_svg_string
 

@@ -12,8 +12,8 @@ import shapely
 
 from ..errors import OutputError, ParameterError
 from ..types import ArtPath, Container, PlacedArt
-from ..io.svg_read import RegionTooComplex, rings_to_region
-from ..io.svg_write import atomic_write_bytes
+from ..io.files import atomic_write_bytes
+from ..io.regions import RegionTooComplex, rings_to_region
 from .container_paint import check_paint, outline_colour, outline_width
 from .frame import packing_frame
 

@@ -24,7 +24,7 @@ Structure (the output contract; docs/evaluation.md describes how it is read)::
     </svg>
 
 The invisible ``container-region`` path stores the exact region (holes included) so
-:func:`~repulsionpak.io.svg_write.read_packing_svg` gets the container back however it is
+:func:`~repulsionpak.io.svg_packing.read_packing_svg` gets the container back however it is
 drawn. The root's page attributes are the container file's, its viewBox grown where the
 drawing reaches past it (:func:`~repulsionpak.render.frame.packing_frame`). Placed art with curves (``ArtPath.source``) is
 written as those curves (compact relative path data); art without them as polylines.
@@ -44,11 +44,12 @@ import numpy as np
 import shapely
 
 from ..errors import OutputError
-from ..io.svg_write import atomic_write_bytes, format_number
+from ..io.files import atomic_write_bytes
 from ..types import ArtPath, Container, PlacedArt, Style
 from .container_paint import check_paint, outline_colour, outline_width
 from .curves import decimals_for, path_data
 from .frame import packing_frame
+from .numbers import format_number
 from .paint import CopyPaint, matrix_attr
 
 __all__ = ["container_lines", "packing_svg_string", "write_packing_svg"]
