@@ -290,7 +290,7 @@ meshes. Lengths are divided by the requested gap.
 | min edge/gap (n < margin) | the smallest distance from any element's art to the container's boundary, and how many elements are closer than 0.98 × margin (margin = gap/2) | min ≥ 0.98 × 0.5 |
 | distortion p95 | per element, area(best similar copy of its source △ its art) / its art's area: the source is centred on the copy's centroid, scaled to the same area, the rotation searched on a 7.5° grid and refined to 0.01°, then angle, scale and translation refined together; 95th percentile per element category (a scene mixing categories shows the one furthest over its limit) | ≤ 0.08 convex, ≤ 0.15 spiky, thin, holed, letter |
 | primaries alone: p95 / max | the same distortion over the primary elements only (the promise counts every element; pocket copies are small and often undeformed, so the primaries' own percentile is the higher one) | (reported) |
-| Q_s(gap/2)/Q_s(0) | the spherical contact probability of the negative space (paper sec. 11) at r = gap/2 over its value at 0, by raster with ≥ 10 pixels per gap (`repulsionpak.evaluate.scp`); 0 for ideal stripes of width gap | ≤ 0.45 |
+| Q_s(gap/2)/Q_s(0) | the spherical contact probability of the negative space (paper sec. 11) at r = gap/2 over its value at 0, by raster with ≥ 10 pixels per gap (`repulsionpak.measure.scp`); 0 for ideal stripes of width gap | ≤ 0.45 |
 | area fraction | art inside the container / container area | (reported) |
 | seconds | wall time of the packing (read inputs, pack, write SVG) | (reported) |
 
@@ -406,7 +406,7 @@ def main(argv=None) -> int:
     print()
     print(table(ordered))
     if out_dir is not None:
-        from repulsionpak.metrics import limits_dict
+        from repulsionpak.measure import limits_dict
 
         pics = [r for r in ordered if r.get("picture")]
         page = markdown(ordered, meta, pics)

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from repulsionpak import scenes
 from repulsionpak.cli import run_pack
-from repulsionpak.evaluate import evaluate_file
+from repulsionpak.measure import evaluate_file
 from repulsionpak.io import load_elements
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"

@@ -663,8 +663,8 @@ def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None)
     (gap/2000, finer than the gap/1000 the packing used), so distances and 'outside' are
     measured against the true curved outline, not the polygon the simulation used; the
     sources are the scene's element files.
-    Returns the :func:`repulsionpak.evaluate.evaluate` result plus ``promises``
-    (:func:`repulsionpak.metrics.check_promises`) and ``sources`` (each element's
+    Returns the :func:`repulsionpak.measure.evaluate` result plus ``promises``
+    (:func:`repulsionpak.measure.check_promises`) and ``sources`` (each element's
     ``data-source``).
     """
     from .evaluate import evaluate

@@ -29,7 +29,7 @@ from repulsionpak.batch import (CSV_COLUMNS, BatchInputs, dask_client, make_jobs
                                 run_batch, run_jobs)
 from repulsionpak.cli import app
 from repulsionpak.errors import ConfigError, OutputError, ParameterError
-from repulsionpak.evaluate import evaluate, evaluate_file
+from repulsionpak.measure import evaluate, evaluate_file
 from repulsionpak.io import load_container, load_elements
 from repulsionpak.pack import pack
 from repulsionpak.params import params_from_dict

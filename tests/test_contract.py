@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from repulsionpak import scenes
-from repulsionpak.metrics import ContractLimits
+from repulsionpak.measure import ContractLimits
 
 LIMITS = ContractLimits()
 FAST = scenes.fast_suite()

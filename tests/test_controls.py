@@ -17,7 +17,7 @@ from repulsionpak.errors import InputError, ParameterError
 from repulsionpak.geometry.outline import art_area
 from repulsionpak.io import load_container, load_elements, read_packing_svg
 from repulsionpak.io.manifest import load_element_args, load_manifest
-from repulsionpak.metrics import distortion, source_geometries
+from repulsionpak.measure import distortion, source_geometries
 from repulsionpak.pack import pack
 from repulsionpak.params import Params
 from repulsionpak.scenes import container_svg, element_svg, glyph_svg

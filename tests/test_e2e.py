@@ -17,7 +17,7 @@ from repulsionpak.io import load_container, load_elements, read_packing_svg
 from repulsionpak.pack import pack
 from repulsionpak.params import params_from_dict
 
-ev = importlib.import_module("repulsionpak.evaluate")
+ev = importlib.import_module("repulsionpak.measure")
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 needs_shared = pytest.mark.skipif(not SHARED.is_dir(), reason="../shared/data is not available")

@@ -1,10 +1,13 @@
-"""Tests of repulsionpak.evaluate: metrics, SCP against analytic references, plots."""
+"""Tests of repulsionpak.measure: coverage, gaps, raster, SCP against analytic references,
+evaluate, the table and the plots."""
 
 from __future__ import annotations
 
 import importlib
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -13,11 +16,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon, box
 
-from repulsionpak.errors import OutputError, ParameterError
+import repulsionpak
+import repulsionpak.measure as ev
+from repulsionpak.errors import ParameterError
+from repulsionpak.geometry.outline import _polygonal
+from repulsionpak.measure import coverage
 from repulsionpak.types import ArtPath, Container, PlacedArt, Style
-
-# the module (``repulsionpak.evaluate`` may be shadowed by the re-exported function)
-ev = importlib.import_module("repulsionpak.evaluate")
 
 
 def sq(x0, y0, x1, y1, ccw=True):
@@ -224,7 +228,7 @@ def test_random_circles_raster_vs_exact():
 )
 def test_rasterize_area_matches(points):
     poly = shapely.make_valid(Polygon(points))
-    poly = ev._polygonal(poly)
+    poly = _polygonal(poly)
     if poly.area < 50:
         return
     mask, info = ev.rasterize(poly, (0, 0, 100, 100), grid=400)
@@ -452,18 +456,15 @@ def test_format_table(evaluated):
 # --------------------------------------------------------------------------- plots
 
 
-def test_plot_scp(tmp_path, squares_scp, stripes_scp):
-    out = tmp_path / "sub" / "scp.png"
-    with pytest.raises(OutputError):  # like every output: no directory is created silently
-        ev.plot_scp([("squares", squares_scp[2])], out, gap=GAP)
-    out.parent.mkdir()
-    ev.plot_scp([("squares", squares_scp[2]), ("stripes", stripes_scp[2])], out, gap=GAP)
-    assert out.stat().st_size > 5000
-    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert [p.name for p in out.parent.iterdir()] == ["scp.png"]  # no temp files left
+def test_scp_plot_png(squares_scp, stripes_scp):
+    png = ev.scp_plot_png([("squares", squares_scp[2]), ("stripes", stripes_scp[2])], gap=GAP)
+    assert len(png) > 5000
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(ParameterError):
+        ev.scp_plot_png([], gap=GAP)
 
 
-def test_plot_scp_bands(tmp_path, squares_scp):
+def test_scp_bands_png(squares_scp):
     groups = {}
     for k, label in enumerate(["rotated", "translated"]):
         res = []
@@ -472,19 +473,16 @@ def test_plot_scp_bands(tmp_path, squares_scp):
             res.append(ev.scp(c, a, grid=300, gap=GAP))
         groups[label] = res
     groups["grid"] = [squares_scp[2]]
-    out = tmp_path / "bands.png"
-    ev.plot_scp_bands(groups, out, GAP)
-    assert out.stat().st_size > 5000
+    png = ev.scp_bands_png(groups, GAP)
+    assert len(png) > 5000 and png[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ParameterError):
-        ev.plot_scp_bands({}, tmp_path / "x.png", GAP)
+        ev.scp_bands_png({}, GAP)
 
 
 def test_area_fraction_unites_only_elements_that_meet(monkeypatch):
     """area_fraction: overlaps are counted once, art outside the container not at all,
     and only clusters of intersecting elements are united (one union of a whole packing
     of dotted art noded 27,000 polygons together: 4 s for what is a sum of areas)."""
-    evaluate_mod = importlib.import_module("repulsionpak.evaluate")
-
     rng = np.random.default_rng(3)
     region = box(0, 0, 100, 100)
     dotted = [shapely.union_all([Point(x + 1.5 * i, y + 1.5 * j).buffer(0.5) for i in range(4) for j in range(4)])
@@ -494,17 +492,17 @@ def test_area_fraction_unites_only_elements_that_meet(monkeypatch):
     geoms = dotted + pair
     want = shapely.intersection(shapely.union_all(geoms), region).area / region.area
     united: list[int] = []
-    union_all = evaluate_mod.robust_union_all
+    union_all = coverage.robust_union_all
 
     def spy(gs, **kw):
         united.append(len(list(gs)))
         return union_all(gs, **kw)
 
-    monkeypatch.setattr(evaluate_mod, "robust_union_all", spy)
-    got = evaluate_mod.area_fraction(region, geoms)
+    monkeypatch.setattr(coverage, "robust_union_all", spy)
+    got = coverage.area_fraction(region, geoms)
     assert got == pytest.approx(want, rel=1e-12)
     assert united == [2]  # the overlapping pair only
-    assert evaluate_mod.area_fraction(region, []) == 0.0
+    assert coverage.area_fraction(region, []) == 0.0
 
 
 def test_primaries_alone_and_the_smallest_copy():
@@ -531,3 +529,33 @@ def test_primaries_alone_and_the_smallest_copy():
                        primary_scp=True)["scp_ratio_primary"] == pytest.approx(r["scp_ratio_primary"])
     table = ev.format_table(r)
     assert "primaries alone: area fraction" in table and "0.2000" in table
+
+
+def test_evaluate_is_a_function_and_measure_its_package():
+    """``repulsionpak.evaluate`` is the function (``repulsionpak.measure.evaluate``), not
+    also a module of that name."""
+    assert repulsionpak.evaluate is ev.evaluate and callable(ev.evaluate)
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("repulsionpak.evaluate")
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("repulsionpak.metrics")
+
+
+def test_the_library_imports_and_measures_without_matplotlib():
+    """matplotlib is imported by the plots only: with it missing, the library imports and
+    measures, and a plot says what is missing."""
+    code = """
+import sys
+sys.modules["matplotlib"] = None  # as if it were not installed
+import repulsionpak, repulsionpak.measure as m
+c, a = m.stripes_reference(10.0, 5.0, 90.0)
+r = m.scp(c, a, grid=90, gap=5.0)
+assert abs(r["q0"] - 5.0 / 15.0) < 1e-9, r["q0"]
+try:
+    m.scp_plot_png([("s", r)], gap=5.0)
+except ImportError:
+    print("no matplotlib")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "no matplotlib"

@@ -12,7 +12,7 @@ import shapely
 from repulsionpak import scenes
 from repulsionpak.controls import ElementControls
 from repulsionpak.errors import ConfigError, ParameterError
-from repulsionpak.evaluate import art_geometry, scp
+from repulsionpak.measure import art_geometry, scp
 from repulsionpak.geometry.outline import art_area
 from repulsionpak.holes import HoleLibrary, fill_holes, fill_pockets
 from repulsionpak.io import load_container, load_element, read_packing_svg

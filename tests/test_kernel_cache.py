@@ -154,7 +154,7 @@ def test_the_builds_workload_needs_no_cli_or_picture_packages(tmp_path):
 
         sys.meta_path.insert(0, Block())
         from repulsionpak import examples
-        from repulsionpak.evaluate import evaluate, evaluate_file
+        from repulsionpak.measure import evaluate, evaluate_file
         from repulsionpak.io import load_container, load_elements
         from repulsionpak.pack import margin_of, pack
         from repulsionpak.packing_output import invariants, packing_svg_text

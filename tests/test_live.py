@@ -179,7 +179,7 @@ def test_controller_moves_pins_removes_and_adds_between_iterations():
     assert np.hypot(*(c.mean(axis=0) - 250)) < 60 and np.hypot(c[:, 0] - 250, c[:, 1] - 250).max() < 230
     # the page's estimates from the last frame against the exact measures of the art the
     # renderer makes of the same state (before the final verification adjusts it)
-    from repulsionpak.evaluate import evaluate
+    from repulsionpak.measure import evaluate
     from repulsionpak.render import placed_art
     from repulsionpak.sim.model import SimFrame
 

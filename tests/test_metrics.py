@@ -1,5 +1,5 @@
-"""Tests of repulsionpak.metrics (issue 10's yardstick) on constructed geometry with
-known answers: gaps, overlaps, edge distances, outside area, distortion, promises."""
+"""Tests of repulsionpak.measure's art-only yardstick on constructed geometry with known
+answers: gaps, overlaps, edge distances, outside area, distortion, promises."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ import shapely
 from shapely import affinity
 from shapely.geometry import Point, Polygon, box
 
-from repulsionpak import metrics
+from repulsionpak import measure
 from repulsionpak.errors import ParameterError
-from repulsionpak.evaluate import evaluate
+from repulsionpak.measure import evaluate
 from repulsionpak.types import ArtPath, Container, PlacedArt, Style
 
 
@@ -56,15 +56,15 @@ def test_edge_distances_curved_container_and_outside():
     inner = box(-10, -10, 10, 10)  # corners at 10·√2 from the centre
     poking = box(90, -5, 110, 5)  # crosses the boundary
     away = box(200, 0, 210, 10)  # entirely outside
-    d = metrics.edge_distances(disc, [inner, poking, away, Polygon()])
+    d = measure.edge_distances(disc, [inner, poking, away, Polygon()])
     assert d[0] == pytest.approx(100 - 10 * math.sqrt(2), rel=1e-4)
     assert d[1:] == [0.0, 0.0, None]
-    out = metrics.outside_area(disc, [inner, poking, away])
+    out = measure.outside_area(disc, [inner, poking, away])
     # the part of ``poking`` inside the disc: ∫_{-5}^{5} (sqrt(100² − y²) − 90) dy
     prim = lambda y: 0.5 * (y * math.sqrt(100**2 - y**2) + 100**2 * math.asin(y / 100))  # noqa: E731
     inside = prim(5) - prim(-5) - 90 * 10
     assert out == pytest.approx(100.0 + (200.0 - inside), rel=1e-4)
-    assert metrics.outside_area(disc, [inner]) == 0.0
+    assert measure.outside_area(disc, [inner]) == 0.0
 
 
 def test_holed_element_counts_its_hole():
@@ -102,7 +102,7 @@ STAR = Polygon([(math.cos(t) * (1.0 if k % 2 == 0 else 0.4), math.sin(t) * (1.0 
 def test_similar_copy_has_no_distortion(shape, angle, scale, shift):
     copy = affinity.translate(affinity.scale(affinity.rotate(shape, angle, origin="centroid"),
                                              scale, scale, origin="centroid"), *shift)
-    d, (ang, s, dx, dy) = metrics.distortion(shape, copy, return_fit=True)
+    d, (ang, s, dx, dy) = measure.distortion(shape, copy, return_fit=True)
     assert d < 2e-4
     assert s == pytest.approx(scale, rel=1e-3)
     if shape is not STAR and shape.geom_type == "Polygon" and not shape.interiors and shape.area != 5:
@@ -114,11 +114,11 @@ def test_distortion_of_a_rectangle_from_a_square_is_analytic():
     """Best similar square in a √2 × 1/√2 rectangle: side 1/√2 inside it, △ = 1 − ½ = ½
     of the unit area; for a 3 × ⅓ rectangle: side ⅓, △ = 1 − 1/9."""
     sq = box(0, 0, 1, 1)
-    assert metrics.distortion(sq, box(0, 0, math.sqrt(2), 1 / math.sqrt(2))) == pytest.approx(0.5, abs=2e-3)
-    assert metrics.distortion(sq, box(0, 0, 3, 1 / 3)) == pytest.approx(8 / 9, abs=2e-3)
+    assert measure.distortion(sq, box(0, 0, math.sqrt(2), 1 / math.sqrt(2))) == pytest.approx(0.5, abs=2e-3)
+    assert measure.distortion(sq, box(0, 0, 3, 1 / 3)) == pytest.approx(8 / 9, abs=2e-3)
     # without the translation / scale fit: the area-matched, centroid-aligned square
     # covers 1/√2 of the rectangle's height: △ = 2·(1 − 1/√2)
-    assert metrics.distortion(sq, box(0, 0, math.sqrt(2), 1 / math.sqrt(2)), fit_translation=False) \
+    assert measure.distortion(sq, box(0, 0, math.sqrt(2), 1 / math.sqrt(2)), fit_translation=False) \
         == pytest.approx(min(0.5, 2 * (1 - 1 / math.sqrt(2))), abs=2e-3)
 
 
@@ -130,7 +130,7 @@ def test_bent_copy_is_distorted_and_more_bending_is_more():
             return np.stack([xy[:, 0], xy[:, 1] + k * xy[:, 0] ** 2], axis=1)
         return shapely.transform(bar, f)
 
-    values = [metrics.distortion(bar, bent(k)) for k in (0.0, 0.002, 0.005, 0.01)]
+    values = [measure.distortion(bar, bent(k)) for k in (0.0, 0.002, 0.005, 0.01)]
     assert values[0] < 1e-4
     assert 0.02 < values[1] < values[2] < values[3]
     # a parabola of sagitta 25 on a bar 10 thick: far from any straight bar
@@ -145,10 +145,10 @@ def test_distortion_from_a_known_angle_finds_the_same_fit():
     L = Polygon([(0, 0), (4, 0), (4, 1), (1, 1), (1, 3), (0, 3)])
     for src, copy in [(bar, affinity.rotate(bent, 63.0, origin="centroid")),
                       (L, affinity.scale(affinity.rotate(L, -120.0), 3.0, 2.6))]:
-        full, (ang, *_rest) = metrics.distortion(src, copy, return_fit=True)
+        full, (ang, *_rest) = measure.distortion(src, copy, return_fit=True)
         assert full > 0.02
         for off in (-3.0, 0.0, 2.5):
-            warm = metrics.distortion(src, copy, angle=math.radians(ang + off))
+            warm = measure.distortion(src, copy, angle=math.radians(ang + off))
             assert warm == pytest.approx(full, abs=1e-3)
 
 
@@ -158,52 +158,52 @@ def test_distortions_in_threads_equal_one_thread():
             [affinity.scale(affinity.rotate(STAR, 7 * k), 1.0 + 0.05 * k, 1.0) for k in range(5)]
     names = ["a.svg"] * 5 + ["b.svg"] * 5
     angles = [math.radians(10 * k) for k in range(5)] + [None] * 5
-    one = metrics.distortions(geoms, names, src, angles=angles)
-    assert metrics.distortions(geoms, names, src, angles=angles, workers=3) == one
+    one = measure.distortions(geoms, names, src, angles=angles)
+    assert measure.distortions(geoms, names, src, angles=angles, workers=3) == one
     assert max(one[:5]) < 1e-4 and one[9] > one[6] > 0.01
     with pytest.raises(ParameterError):
-        metrics.distortions(geoms, names, src, workers=0)
+        measure.distortions(geoms, names, src, workers=0)
     with pytest.raises(ParameterError):
-        metrics.distortions(geoms, names, src, angles=[0.0])
+        measure.distortions(geoms, names, src, angles=[0.0])
 
 
 def test_frame_angle():
     t = math.radians(30.0)
     m = np.array([[2 * math.cos(t), -2 * math.sin(t), 5.0], [2 * math.sin(t), 2 * math.cos(t), 1.0], [0, 0, 1]])
-    assert metrics.frame_angle(m) == pytest.approx(t) and metrics.frame_angle(None) is None
+    assert measure.frame_angle(m) == pytest.approx(t) and measure.frame_angle(None) is None
 
 
 def test_distortion_none_for_empty_and_bad_arguments():
-    assert metrics.distortion(Polygon(), box(0, 0, 1, 1)) is None
-    assert metrics.distortion(box(0, 0, 1, 1), Polygon()) is None
+    assert measure.distortion(Polygon(), box(0, 0, 1, 1)) is None
+    assert measure.distortion(box(0, 0, 1, 1), Polygon()) is None
     with pytest.raises(ParameterError):
-        metrics.distortion(box(0, 0, 1, 1), box(0, 0, 1, 1), coarse=3)
+        measure.distortion(box(0, 0, 1, 1), box(0, 0, 1, 1), coarse=3)
     with pytest.raises(ParameterError):
-        metrics.distortions([box(0, 0, 1, 1)], [], {})
+        measure.distortions([box(0, 0, 1, 1)], [], {})
 
 
 def test_distortions_by_source_name_and_summary():
     src = {"a.svg": box(0, 0, 1, 1), "b.svg": STAR}
     geoms = [affinity.rotate(box(0, 0, 1, 1), 10), box(0, 0, math.sqrt(2), 1 / math.sqrt(2)), STAR]
-    vals = metrics.distortions(geoms, ["a.svg", "a.svg", "missing.svg"], src)
+    vals = measure.distortions(geoms, ["a.svg", "a.svg", "missing.svg"], src)
     assert vals[0] < 1e-4 and vals[1] == pytest.approx(0.5, abs=2e-3) and vals[2] is None
-    s = metrics.distortion_summary(vals)
+    s = measure.distortion_summary(vals)
     assert s["median"] == pytest.approx(np.median(vals[:2])) and s["max"] == pytest.approx(vals[1])
     assert s["p95"] == pytest.approx(np.percentile(vals[:2], 95)) and s["values"][2] is None
-    assert metrics.distortion_summary([None])["p95"] is None
+    assert measure.distortion_summary([None])["p95"] is None
     assert "by_kind" not in s
 
 
 def test_distortion_summary_by_kind():
     vals = [0.10, 0.12, None, 0.0, 0.01, 0.02]
     kinds = ["primary", "primary", "primary", "secondary", "secondary", "secondary"]
-    s = metrics.distortion_summary(vals, kinds)
+    s = measure.distortion_summary(vals, kinds)
     prim, sec = s["by_kind"]["primary"], s["by_kind"]["secondary"]
     assert prim["n"] == 3 and prim["max"] == pytest.approx(0.12) and prim["median"] == pytest.approx(0.11)
     assert sec["n"] == 3 and sec["max"] == pytest.approx(0.02)
     # the pocket copies pull the overall statistics below the primaries' own
     assert s["median"] == pytest.approx(0.02) and s["median"] < prim["median"]
-    only = metrics.distortion_summary([0.1], ["primary"])["by_kind"]
+    only = measure.distortion_summary([0.1], ["primary"])["by_kind"]
     assert list(only) == ["primary"]
 
 
@@ -236,7 +236,7 @@ def grid_packing(side=40.0, gap=5.0, n=5, jitter=None):
 def test_a_perfect_grid_keeps_every_promise():
     cont, arts = grid_packing()
     res = evaluate(cont, arts, gap=5.0, grid=900, sources={"square.svg": box(0, 0, 1, 1)})
-    pr = metrics.check_promises(res, {"square.svg": "convex"}, sources=[a.source for a in arts])
+    pr = measure.check_promises(res, {"square.svg": "convex"}, sources=[a.source for a in arts])
     assert pr["gap_median"]["value"] == pytest.approx(1.0) and pr["gap_p10"]["value"] == pytest.approx(1.0)
     assert pr["edge_margin"]["value"] == pytest.approx(1.0)
     assert pr["distortion_convex"]["value"] < 1e-4
@@ -252,7 +252,7 @@ def test_broken_promises_are_reported():
 
     cont, arts = grid_packing(jitter=jitter)
     res = evaluate(cont, arts, gap=5.0, grid=900, sources={"square.svg": box(0, 0, 2, 1)})
-    pr = metrics.check_promises(res, {"square.svg": "convex"}, sources=[a.source for a in arts])
+    pr = measure.check_promises(res, {"square.svg": "convex"}, sources=[a.source for a in arts])
     assert pr["gap_p10"]["ok"] is False and pr["gap_p10"]["value"] == pytest.approx(0.4)
     assert pr["gap_median"]["ok"] is True
     assert pr["distortion_convex"]["ok"] is False  # squares from a 2:1 source
@@ -262,7 +262,7 @@ def test_broken_promises_are_reported():
     # 1 out of the container's right edge (1 × 40 outside)
     cont, arts = grid_packing(jitter=lambda k: (-6.0, 0.0) if k == 1 else ((3.5, 0.0) if k == 4 else (0, 0)))
     res = evaluate(cont, arts, gap=5.0, grid=300)
-    pr = metrics.check_promises(res)
+    pr = measure.check_promises(res)
     assert pr["overlap"]["ok"] is False and pr["outside"]["ok"] is False and pr["edge_margin"]["ok"] is False
     assert res["overlap_area"] == pytest.approx(40.0) and res["outside_area"] == pytest.approx(40.0)
     assert pr["outside"]["value"] == pytest.approx(40.0 / res["container_area"])
@@ -273,7 +273,7 @@ def test_broken_promises_are_reported():
 def test_promises_unknown_without_measurements():
     cont, arts = grid_packing(n=1)
     res = evaluate(cont, arts, gap=5.0, with_scp=False)
-    pr = metrics.check_promises(res)
+    pr = measure.check_promises(res)
     assert pr["gap_median"]["ok"] is None and pr["scp_ratio"]["ok"] is None
     assert pr["overlap"]["ok"] is True and pr["all"] is True
-    assert metrics.limits_dict()["scp_ratio"] == 0.45
+    assert measure.limits_dict()["scp_ratio"] == 0.45

@@ -10,7 +10,7 @@ import pytest
 import shapely
 import shapely.affinity as aff
 
-from repulsionpak import metrics
+from repulsionpak.measure import similarity as metrics
 from repulsionpak.geometry.overlap import OverlapGrid, intersection_areas, nelder_mead_sym, rings_of
 
 

@@ -165,9 +165,9 @@ def test_disc_copies_are_smooth(packing):
 
 
 def test_evaluate_reads_the_curves(packing):
-    from repulsionpak.evaluate import evaluate_file
+    from repulsionpak.measure import evaluate_file
 
-    from repulsionpak.evaluate import evaluate
+    from repulsionpak.measure import evaluate
 
     p = packing["packing"]
     r = evaluate_file(packing["svg"])

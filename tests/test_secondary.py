@@ -197,7 +197,7 @@ def test_a_narrow_band_with_one_primary_gets_its_pockets_filled(tmp_path):
     """The default count of a band 2.5 gaps wide is one primary; the automatic fill's cap
     of 10 copies per primary left 10 copies at random points of the band (median gap
     1.68 here). At least AUTO_FILL_MIN copies are allowed now: the gap is kept (1.02)."""
-    from repulsionpak.evaluate import gap_statistics
+    from repulsionpak.measure import gap_statistics
     from repulsionpak.io import load_container, load_elements
     from repulsionpak.pack import AUTO_FILL_MIN, pack
     from repulsionpak.params import Params

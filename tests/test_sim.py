@@ -29,7 +29,7 @@ from repulsionpak.params import (
 )
 from repulsionpak.types import ArtPath, Container, Element, Style
 
-ev = importlib.import_module("repulsionpak.evaluate")
+ev = importlib.import_module("repulsionpak.measure")
 
 SIDE = 200.0
 GAP = 4.0

@@ -1,4 +1,4 @@
-"""The final verification and repair of a packing's promises (verify.py), on geometry
+"""The final verification and repair of a packing's promises (repulsionpak.verify), on geometry
 built by hand: overlaps, art outside, edge margin and the gap floor."""
 
 from __future__ import annotations
@@ -9,7 +9,8 @@ import shapely
 
 from repulsionpak.geometry.outline import art_area
 from repulsionpak.types import ArtPath, PlacedArt, Style
-from repulsionpak.verify import _pair_distances, verify_and_repair
+from repulsionpak.verify import verify_and_repair
+from repulsionpak.verify.checks import _pair_distances
 
 CONTAINER = shapely.box(0, 0, 100, 100)
 
@@ -142,7 +143,7 @@ def test_a_bent_element_shrinks_away_from_a_neighbour_in_its_hollow():
 
 
 def test_shrink_centre_of_a_pressed_square():
-    from repulsionpak.verify import _shrink_centre
+    from repulsionpak.verify.checks import _shrink_centre
 
     g = shapely.box(10, 10, 30, 30)
     c = np.array([20.0, 20.0])
@@ -437,7 +438,7 @@ def test_a_reflex_corner_poking_into_a_long_element_pushes_it_off_the_corner():
     (along the bar) shrank the bar about its centroid for nothing first (the heart's snake
     under its cleft: 0.67 of its size); shrinking about its bottom below the corner it
     keeps 0.78 of its size (0.75 before)."""
-    from repulsionpak.verify import _edge_poke
+    from repulsionpak.verify.checks import _edge_poke
 
     region = shapely.Polygon([(0, 0), (100, 0), (110, 30), (120, 0), (300, 0), (300, 200), (0, 200)])
     bar = PlacedArt("bar.svg", "primary", (ArtPath((np.array([[40, 29], [260, 29], [260, 44], [40, 44.0]]),),

@@ -41,7 +41,7 @@ from .render.svg import write_packing_svg  # noqa: E402
 from .pack import Packing, pack  # noqa: E402
 from .params import Params, load_config  # noqa: E402
 from .types import ArtPath, Container, Element, PlacedArt, Style  # noqa: E402
-from .evaluate import evaluate  # noqa: E402  (function; the module stays importable by name)
+from .measure import evaluate  # noqa: E402
 
 __version__ = "0.1.0"
 

@@ -433,7 +433,7 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
     """Evaluate ``packing`` and write its outputs (the second half of :func:`run_pack`).
     After a signal (``late.stop``) only the SVG and the report are still written; the
     report then lists the outputs left out (``not_written``)."""
-    from .evaluate import evaluate
+    from .measure import evaluate
     from .render.png import render_png
     from .io.files import atomic_write_bytes
     from .pack import margin_of
@@ -702,7 +702,8 @@ def evaluate(
     distortion (with --elements), SCP Q_s(r) (sec. 11)."""
     global _DEBUG
     _DEBUG = debug
-    from .evaluate import evaluate_file, format_table, plot_scp
+    from .io.files import atomic_write_bytes
+    from .measure import evaluate_file, format_table, scp_plot_png
 
     with _errors():
         if gap is not None and not gap > 0:
@@ -714,7 +715,7 @@ def evaluate(
         sources = None
         if elements:
             from .io import load_elements
-            from .metrics import source_geometries
+            from .measure import source_geometries
 
             sources = source_geometries(load_elements(elements))
             from .geometry.overlap import is_cold as fit_is_cold
@@ -743,7 +744,8 @@ def evaluate(
                 typer.echo(f"== {p}")
                 typer.echo(format_table(r))
         if plot is not None:
-            plot_scp([(p.stem, r) for p, r in results], plot, gap=results[0][1]["gap"]["requested"])
+            atomic_write_bytes(plot, scp_plot_png([(p.stem, r) for p, r in results],
+                                                  gap=results[0][1]["gap"]["requested"]))
 
 
 class _BatchProgress:
@@ -930,7 +932,8 @@ def study(
     global _DEBUG
     _DEBUG = debug
     from . import examples
-    from .evaluate import plot_scp_bands
+    from .io.files import atomic_write_bytes
+    from .measure import scp_bands_png
     from .io import load_container, load_elements
     from .pack import default_gap
     from .study import deformation_study
@@ -958,7 +961,7 @@ def study(
 
         res = deformation_study(cont, elems, g, ks, runs=runs, seed=seed, on_run=on_run,
                                 workers=workers, scheduler=scheduler)
-        plot_scp_bands(res["groups"], output, g)
+        atomic_write_bytes(output, scp_bands_png(res["groups"], g))
         if json_out is not None:
             slim = {"gap": g, "summary": res["summary"],
                     "groups": {k: [{"area_fraction": r["area_fraction"], "scp": r["scp"],

@@ -185,7 +185,7 @@ def _workload(folder: Path) -> None:
     and the file read back and measured with the SCP. ``tests/test_kernel_cache.py`` checks
     that the CLI's demo and evaluate compile nothing after installing what this compiled."""
     from . import examples, warmup
-    from .evaluate import evaluate, evaluate_file
+    from .measure import evaluate, evaluate_file
     from .io import load_container, load_elements
     from .pack import CONTAINER_TOLERANCE, margin_of, pack
     from .packing_output import invariants, packing_svg_text

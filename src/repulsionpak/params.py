@@ -266,7 +266,7 @@ class RenderParams:
 
 @dataclass(frozen=True)
 class VerifyParams:
-    """The final check of the promises on the art, and its repair (``verify.py``)."""
+    """The final check of the promises on the art, and its repair (``verify/``)."""
 
     min_gap: float = _doc(
         0.9, "× gap", "Every element's art keeps at least this distance to every other element's "

@@ -13,7 +13,7 @@ import shapely
 from numba import njit
 
 from .controls import any_controls, controls_of, initial_angles, setup_model, weighted_assignment
-from .evaluate import rasterize
+from .measure.raster import rasterize
 from .geometry.edt import distance_transform
 from .params import SecondaryParams
 from .placement import Placement

@@ -3,7 +3,7 @@
 One task per job (a seed × a combination of ``--set`` values). The client reads the
 inputs once and sends them to the workers once (:func:`run_jobs` scatters them); every
 task runs :func:`repulsionpak.pack.pack` with its job's :class:`~repulsionpak.params.Params`,
-measures the packing with :func:`repulsionpak.evaluate.evaluate` and returns a
+measures the packing with :func:`repulsionpak.measure.evaluate` and returns a
 :class:`JobResult` holding the SVG text, the metrics and a thumbnail PNG — never a file.
 The client writes every output (:func:`write_svg`, :func:`write_summary`).
 

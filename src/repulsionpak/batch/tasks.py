@@ -44,7 +44,7 @@ class BatchInputs:
 class JobResult:
     """What a worker returns for a :class:`Job` (picklable, no files).
 
-    ``metrics`` is the :func:`~repulsionpak.evaluate.evaluate` dict (None when the job
+    ``metrics`` is the :func:`~repulsionpak.measure.evaluate` dict (None when the job
     failed, or measured but breaking a promise: then ``error`` says so and ``exit_code``
     is 6); ``error`` is one line naming the problem, ``exit_code`` the CLI code of that
     error (0 on success); ``warnings`` the messages ``pack`` warned with. ``worker`` is
@@ -118,7 +118,7 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
     simulation runs on one thread: a batch already keeps every core busy with one task
     per worker thread.
     """
-    from ..evaluate import evaluate
+    from ..measure import evaluate
     from ..pack import margin_of, pack
     from ..packing_output import container_paint_of, invariants, packing_svg_text, paint_warning
 

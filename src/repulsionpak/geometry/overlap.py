@@ -1,6 +1,6 @@
 """Area of the intersection of two polygons under many similarity transforms (numba).
 
-The distortion fit (:func:`repulsionpak.metrics.distortion`) searches the rotation,
+The distortion fit (:func:`repulsionpak.measure.distortion`) searches the rotation,
 scale and shift that make a source outline cover a placed copy best: some sixty
 evaluations of area(T(A) ∩ B) per copy, with B fixed. A GEOS overlay costs ~0.3 ms
 each, most of it the call's set-up; this kernel computes the same area in a few
@@ -403,7 +403,7 @@ def _many_areas(axy0, anxt, astarts, params, bxy, bnxt, bstarts, x0, y0, inv, gx
 @njit(cache=True, nogil=True, error_model="numpy")
 def _nelder_mead(p, v, area_a, area_b, nudge, size, tol, max_evals,
                  axy0, anxt, astarts, bxy, bnxt, bstarts, x0, y0, inv, gx, gy, cstart, cedges):
-    """:func:`repulsionpak.metrics._nelder_mead` on area(T(A) △ B), step for step,
+    """:func:`repulsionpak.measure.similarity._nelder_mead` on area(T(A) △ B), step for step,
     without leaving compiled code (scalar loops: numba compiles every array expression
     into a kernel of its own, which took seconds). Returns (parameters, value, ok); ok
     is False when the kernel could not decide an area."""
@@ -534,7 +534,7 @@ def _nelder_mead(p, v, area_a, area_b, nudge, size, tol, max_evals,
 def nelder_mead_sym(a: Rings, b: "OverlapGrid", p: np.ndarray, v: float, size: float, tol: float,
                     max_evals: int):
     """Nelder–Mead on area(T(a) △ b) from ``p`` (value ``v``), all in compiled code: see
-    :func:`repulsionpak.metrics._nelder_mead`. Returns (parameters, value), or None when
+    :func:`repulsionpak.measure.similarity._nelder_mead`. Returns (parameters, value), or None when
     the kernel could not decide an area on the way (the caller then searches with GEOS)."""
     br = b.rings
     q, val, ok = _nelder_mead(np.asarray(p, np.float64), float(v), a.area, br.area, b.nudge, float(size),

@@ -183,7 +183,7 @@ class LiveController:
             shapes.append(shapely.union_all([area, *parts]) if parts else area)
         if not shapes:
             return {}
-        from ..evaluate import gap_statistics
+        from ..measure import gap_statistics
 
         covered = shapely.intersection(shapely.union_all(filled), self.container.region)
         # distances on outlines simplified by 2% of the gap (5x faster on the heart scene)

@@ -1,23 +1,17 @@
-"""Contract metrics of a finished packing (issue 10), measured on the final art only.
+"""Distortion: how far a placed copy's art is from a similar copy of its source.
 
-These functions look at nothing but geometry: the container region, each placed
-element's art (as read back from the output SVG or as rendered) and the source
-element's art. They never look at the simulation's meshes or skins, so they are a
-yardstick independent of the simulation code.
+distortion = min over similarity transforms T (rotation, uniform scale, translation; no
+reflection) of area(T(source) △ copy) / area(copy): 0 for an exact rotated, scaled and
+moved copy, about 2 for shapes that share nothing. The fit searches angles on a grid,
+refines them, then runs a Nelder–Mead search on (angle, log scale, dx, dy), evaluating
+candidates with the compiled overlap kernel (:mod:`repulsionpak.geometry.overlap`); the
+value returned is GEOS's on the exact outlines.
 
-* :func:`edge_distances` – each element's art distance to the container's boundary.
-* :func:`outside_area` – area of art outside the container (exact polygon difference).
-* :func:`distortion` / :func:`distortions` – the area of the symmetric difference
-  between a placed copy and the best similarity transform (rotation, uniform scale,
-  translation; no reflection) of its source, divided by the copy's area.
-* :class:`ContractLimits` and :func:`check_promises` – issue 10's promises (gap median
-  and 10th percentile, zero overlap, nothing outside, edge margin, distortion p95 per
-  element category, Q_s(gap/2)/Q_s(0)) checked on an :func:`repulsionpak.evaluate.evaluate`
-  result.
-
-Nearest-neighbour gaps, overlap area, area fraction and the SCP live in
-:mod:`repulsionpak.evaluate`, which calls the functions here for its ``distortion``,
-``edge`` and ``outside_area`` entries.
+* :func:`distortion` – one copy against its source.
+* :func:`distortions` – every copy of a packing against the source its ``data-source`` names.
+* :func:`source_geometries` – the ``sources`` mapping from library elements.
+* :func:`distortion_summary` – median, p95, max, overall and per kind of element.
+* :func:`frame_angle` – a copy's rotation from its similarity frame (the fit's start).
 """
 
 from __future__ import annotations
@@ -25,72 +19,16 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import asdict, dataclass
 
 import numpy as np
 import shapely
 
-from .errors import ParameterError
-from .geometry.outline import _polygonal
-from .geometry.robust import overlay
-from .geometry.overlap import OverlapGrid, intersection_areas, nelder_mead_sym, rings_of
+from ..errors import ParameterError
+from ..geometry.outline import _polygonal, art_area
+from ..geometry.overlap import OverlapGrid, intersection_areas, nelder_mead_sym, rings_of
+from ..geometry.robust import overlay
 
-__all__ = [
-    "edge_distances",
-    "outside_area",
-    "distortion",
-    "distortions",
-    "source_geometries",
-    "distortion_summary",
-    "ContractLimits",
-    "check_promises",
-]
-
-
-# --------------------------------------------------------------------------- container
-
-
-def edge_distances(container_region, art_geoms: Sequence) -> list[float | None]:
-    """Distance from each element's art to the container's boundary (container units).
-
-    0 for art that touches, crosses or lies outside the boundary (any art outside the
-    container, however little, counts as touching); ``None`` for an element without art.
-    Exact (shapely polygon distance).
-    """
-    region = _polygonal(container_region)
-    if region.is_empty:
-        raise ParameterError("the container has no area")
-    boundary = region.boundary
-    shapely.prepare(region)
-    out: list[float | None] = []
-    geoms = [_polygonal(g) for g in art_geoms]
-    arr = np.array(geoms, dtype=object) if geoms else np.empty(0, dtype=object)
-    if len(arr) == 0:
-        return out
-    d = shapely.distance(arr, boundary)
-    inside = shapely.contains_properly(region, arr)
-    for g, di, ok in zip(geoms, d, inside):
-        if g.is_empty:
-            out.append(None)
-        else:
-            out.append(float(di) if ok else 0.0)
-    return out
-
-
-def outside_area(container_region, art_geoms: Sequence) -> float:
-    """Total area of art lying outside the container (exact polygon difference)."""
-    region = _polygonal(container_region)
-    shapely.prepare(region)
-    total = 0.0
-    for g in art_geoms:
-        g = _polygonal(g)
-        if g.is_empty or shapely.contains(region, g):
-            continue
-        total += float(overlay(shapely.difference, g, region).area)
-    return total
-
-
-# --------------------------------------------------------------------------- distortion
+__all__ = ["distortion", "distortions", "source_geometries", "distortion_summary", "frame_angle"]
 
 
 def _normalised(geom) -> tuple[shapely.Geometry, float]:
@@ -290,9 +228,7 @@ def _nelder_mead(objective, p, v, size: float = _NM_SIZE, tol: float = _NM_TOL, 
 
 def source_geometries(elements) -> dict[str, shapely.Geometry]:
     """``{element.source: art area}`` of library elements (the first of equal names wins),
-    the ``sources`` :func:`distortions` and :func:`repulsionpak.evaluate.evaluate` take."""
-    from .geometry.outline import art_area
-
+    the ``sources`` :func:`distortions` and :func:`repulsionpak.measure.evaluate` take."""
     out: dict[str, shapely.Geometry] = {}
     for e in elements:
         out.setdefault(e.source, art_area(e.paths))
@@ -355,86 +291,3 @@ def distortion_summary(values: Sequence[float | None], kinds: Sequence[str] | No
                               "n": sum(1 for kk in kinds if kk == k)}
                           for k in ("primary", "secondary") if k in kinds}
     return out
-
-
-# --------------------------------------------------------------------------- promises
-
-
-@dataclass(frozen=True)
-class ContractLimits:
-    """Issue 10's promises (all dimensionless, relative to the gap or the container)."""
-
-    gap_median_low: float = 0.9  # × gap: lowest allowed median nearest-neighbour art distance
-    gap_median_high: float = 1.1  # × gap: highest allowed median
-    gap_p10: float = 0.8  # × gap: lowest allowed 10th percentile
-    overlap: float = 1e-6  # × container area: largest allowed total art–art overlap
-    outside: float = 1e-6  # × container area: largest allowed art area outside the container
-    margin: float = 0.5  # × gap: the art's promised distance from the container's edge
-    margin_tolerance: float = 0.98  # an element fails the margin when closer than this × margin
-    distortion_convex: float = 0.08  # largest p95 distortion of convex elements
-    distortion_other: float = 0.15  # largest p95 distortion of spiky, thin, holed and letter elements
-    scp_ratio: float = 0.45  # largest Q_s(gap/2) / Q_s(0)
-
-    def distortion_limit(self, category: str) -> float:
-        return self.distortion_convex if category == "convex" else self.distortion_other
-
-
-def check_promises(result: Mapping, categories: Mapping[str, str] | None = None,
-                   limits: ContractLimits = ContractLimits(),
-                   sources: Sequence[str] | None = None) -> dict:
-    """Issue 10's promises on an :func:`repulsionpak.evaluate.evaluate` result.
-
-    ``categories`` maps a ``data-source`` name to its category (``convex`` /
-    ``spiky`` / ``thin`` / ``holed`` / ``letter``); ``sources[i]`` is element i's
-    ``data-source`` (needed for per-category distortion; without them every element
-    counts as non-convex). Returns ``{promise: {"ok": bool | None, "value": ..., "limit":
-    ...}}`` for ``gap_median``, ``gap_p10``, ``overlap``, ``outside``, ``edge_margin``,
-    ``distortion`` (one entry per category present) and ``scp_ratio``, plus ``"all"``:
-    True when every promise that could be measured holds. ``ok`` is ``None`` when the
-    metric is missing (e.g. no SCP computed, fewer than two elements).
-    """
-    gap = float(result["gap"]["requested"])
-    area = float(result["container_area"])
-    out: dict = {}
-
-    def put(name, value, ok, limit):
-        out[name] = {"ok": None if ok is None else bool(ok), "value": value, "limit": limit}
-
-    med, p10 = result["gap"].get("median"), result["gap"].get("p10")
-    put("gap_median", None if med is None else med / gap,
-        None if med is None else limits.gap_median_low <= med / gap <= limits.gap_median_high,
-        [limits.gap_median_low, limits.gap_median_high])
-    put("gap_p10", None if p10 is None else p10 / gap,
-        None if p10 is None else p10 / gap >= limits.gap_p10, limits.gap_p10)
-    ov = float(result["overlap_area"]) / area
-    put("overlap", ov, ov <= limits.overlap, limits.overlap)
-    oa = result.get("outside_area")
-    put("outside", None if oa is None else oa / area, None if oa is None else oa / area <= limits.outside,
-        limits.outside)
-    edge = result.get("edge") or {}
-    emin = edge.get("min")
-    put("edge_margin", None if emin is None else emin / (limits.margin * gap),
-        None if emin is None else emin >= limits.margin_tolerance * limits.margin * gap,
-        limits.margin_tolerance)
-    dist = (result.get("distortion") or {}).get("values") or []
-    groups: dict[str, list[float]] = {}
-    for i, d in enumerate(dist):
-        if d is None:
-            continue
-        name = sources[i] if sources is not None else None
-        cat = (categories or {}).get(name, "other") if name is not None else "other"
-        groups.setdefault(cat, []).append(float(d))
-    for cat, vals in sorted(groups.items()):
-        p95 = float(np.percentile(vals, 95))
-        lim = limits.distortion_limit(cat)
-        put(f"distortion_{cat}", p95, p95 <= lim, lim)
-    ratio = result.get("scp_ratio")
-    put("scp_ratio", ratio, None if ratio is None else ratio <= limits.scp_ratio, limits.scp_ratio)
-    known = [v["ok"] for v in out.values() if v["ok"] is not None]
-    out["all"] = bool(known) and all(known)
-    return out
-
-
-def limits_dict(limits: ContractLimits = ContractLimits()) -> dict:
-    """The limits as a plain dict (for reports)."""
-    return asdict(limits)

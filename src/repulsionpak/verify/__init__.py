@@ -1,0 +1,16 @@
+"""The final verification of a packing's promises on the art itself, and its repair.
+
+The simulation works on meshes and skins; what a user gets is the art mapped through
+them. :func:`verify_and_repair` checks the promises (no overlap, inside the container a
+margin from its edge, a gap floor between elements) on the exact art polygons and
+repairs what breaks them; :func:`straighten` replaces copies bent too far by their
+unbent copy first.
+
+* :mod:`.checks` – measuring what holds (:class:`Verification`, the per-element needs).
+* :mod:`.repairs` – the repairs: move, shrink, drop, grow, gather, straighten.
+"""
+
+from .checks import Verification
+from .repairs import scaled_art, similar_copy, straighten, verify_and_repair
+
+__all__ = ["Verification", "scaled_art", "similar_copy", "straighten", "verify_and_repair"]
