@@ -80,7 +80,7 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
                     plot: str | None = None) -> None:
     """ms per simulation iteration on square containers filled with the example library,
     measured after ``warmup`` iterations (elements grown, neighbours in contact)."""
-    from repulsionpak.sim.kernels import set_threads
+    from repulsionpak._jit.kernels import set_threads
 
     print("| vertices | elements | threads | ms/iteration | peak RSS so far (MB) |")
     print("| ---: | ---: | ---: | ---: | ---: |")
@@ -121,7 +121,7 @@ def bench_threads(counts=(4, 8, 16, 33, 130), warmup=600, steps=300) -> None:
     ``sim.parallel_threshold`` should lie."""
     import numba
 
-    from repulsionpak.sim.kernels import set_threads
+    from repulsionpak._jit.kernels import set_threads
     from repulsionpak.sim.runner import Simulator
 
     n = numba.config.NUMBA_NUM_THREADS

@@ -1,4 +1,5 @@
-"""Kernels compiled when the package is built (repulsionpak.kernel_cache, setup.py)."""
+"""Kernels compiled when the package is built (repulsionpak.kernel_cache, setup.py) and
+installed at run time (repulsionpak._jit.prebuilt)."""
 
 from __future__ import annotations
 
@@ -38,9 +39,9 @@ def _python(code: str, cache: Path, path: Path | None = None) -> dict:
 CALL = textwrap.dedent("""\
     import json, sys
     from pathlib import Path
-    from repulsionpak import kernel_cache
+    from repulsionpak._jit import prebuilt
     import rpk_probe
-    installed = kernel_cache.install(Path(sys.argv[1])) if len(sys.argv) > 1 else None
+    installed = prebuilt.install(Path(sys.argv[1])) if len(sys.argv) > 1 else None
     value = rpk_probe.twice_plus_one(3.0)
     st = rpk_probe.twice_plus_one.stats
     print(json.dumps({"installed": installed, "value": value,
@@ -63,10 +64,10 @@ def shipped(tmp_path: Path) -> Path:
     (built / "rpk_probe.py").write_text(PROBE)
     code = textwrap.dedent("""\
         import json, sys
-        from repulsionpak import kernel_cache
+        from repulsionpak._jit import prebuilt
         import rpk_probe
         rpk_probe.twice_plus_one(1.0)
-        print(json.dumps(kernel_cache.export(sys.argv[1], modules=["rpk_probe"])))
+        print(json.dumps(prebuilt.export(sys.argv[1], modules=["rpk_probe"])))
     """).replace("sys.argv[1]", repr(str(tmp_path / "shipped")))
     assert _python(code, tmp_path / "build-cache", built) == 1
     installed = tmp_path / "installed"
@@ -192,7 +193,8 @@ def test_built_kernels_cover_the_demo_and_its_measurement(tmp_path):
         import json, sys
         from pathlib import Path
         from numba.core import event
-        from repulsionpak import examples, kernel_cache
+        from repulsionpak import examples
+        from repulsionpak._jit import prebuilt
         from repulsionpak.cli import app
 
         compiled = []
@@ -205,7 +207,7 @@ def test_built_kernels_cover_the_demo_and_its_measurement(tmp_path):
                 pass
 
         event.register("numba:compile", Listener())
-        installed = kernel_cache.install(Path(SHIPPED))
+        installed = prebuilt.install(Path(SHIPPED))
         out = Path(SHIPPED).parent / "demo.svg"
         for args in (["demo", "-q", "-o", str(out)],
                      ["evaluate", str(out), "--elements", str(examples.element_files()[0].parent)]):
@@ -213,7 +215,7 @@ def test_built_kernels_cover_the_demo_and_its_measurement(tmp_path):
                 app(args)
             except SystemExit as exc:
                 assert not exc.code, exc.code
-        from repulsionpak.sim.kernels import parallel_cached
+        from repulsionpak._jit.kernels import parallel_cached
         print(json.dumps({"installed": installed, "compiled": compiled, "parallel": parallel_cached()}))
     """).replace("SHIPPED", repr(str(shipped)))
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "fresh"), "REPULSIONPAK_NO_WARMUP": "1"}

@@ -1,4 +1,4 @@
-"""The serial/parallel kernel builds (repulsionpak.sim.kernels) and the CLI's first-run
+"""The serial/parallel kernel builds (repulsionpak._jit.kernels) and the CLI's first-run
 message."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from repulsionpak.errors import ParameterError
-from repulsionpak.sim import kernels
+from repulsionpak._jit import kernels
 from repulsionpak.sim.forces import edge_force
 from repulsionpak.sim.integrate import euler_step
 
@@ -128,15 +128,15 @@ def test_threading_is_prepared_for_fast_handovers_unless_the_user_chose(monkeypa
 
 
 def test_parallel_cached_wants_every_recorded_kernel(monkeypatch):
-    from repulsionpak import warmup
+    from repulsionpak._jit.signatures import load_signatures
 
-    recorded = {id(d) for d, _ in warmup.load_signatures()}
-    used = [k for k in kernels._KERNELS if id(k.serial) in recorded]
+    recorded = {id(d) for d, _ in load_signatures()}
+    used = [k for k in kernels.KERNELS if id(k.serial) in recorded]
     assert used
-    monkeypatch.setattr(kernels, "_cached", lambda d: True)
+    monkeypatch.setattr(kernels, "is_cached", lambda d: True)
     assert kernels.parallel_cached()
     missing = used[-1].parallel
-    monkeypatch.setattr(kernels, "_cached", lambda d: d is not missing)
+    monkeypatch.setattr(kernels, "is_cached", lambda d: d is not missing)
     assert kernels.parallel_cached() == bool(missing.signatures)  # compiled in this process counts
 
 

@@ -18,14 +18,14 @@ import numba
 import numpy as np
 import pytest
 
-from repulsionpak.sim import kernels
+from repulsionpak._jit import kernels
 
 # a parallel kernel of the simulation, run from a worker thread with two numba threads
 _OFF_MAIN_THREAD = textwrap.dedent("""
     import threading
     import numpy as np
     import numba
-    from repulsionpak.sim import kernels
+    from repulsionpak._jit import kernels
     from repulsionpak.sim.integrate import euler_step
 
     def work():
@@ -91,7 +91,7 @@ def test_layer_order_leaves_tbb_last_unless_the_user_chose():
 
 
 def test_the_users_choice_of_layer_is_kept():
-    code = ("import os, numba; from repulsionpak.sim import kernels; "
+    code = ("import os, numba; from repulsionpak._jit import kernels; "
             "print(kernels.choose_threading_layer(), numba.config.THREADING_LAYER_PRIORITY)")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
                          env=_child_env(NUMBA_THREADING_LAYER_PRIORITY="workqueue omp tbb"))

@@ -1,5 +1,6 @@
 """The first run's background warm-up compiles exactly the kernels a packing uses."""
 
+import dataclasses
 import os
 import subprocess
 import sys
@@ -22,11 +23,13 @@ PACK = textwrap.dedent("""
         def on_end(self, ev):
             pass
     event.register("numba:compile", L())
-    from repulsionpak import examples, warmup
+    from repulsionpak import examples
+    from repulsionpak._jit.warmup import is_cold
     from repulsionpak.io import load_container, load_elements
     from repulsionpak.pack import pack
     from repulsionpak.params import params_from_dict
-    cold = warmup.is_cold()
+    from repulsionpak.warmup import WORKLOAD
+    cold = is_cold(WORKLOAD)
     cont = load_container(examples.container_file(examples.DEFAULT_CONTAINER))
     elems = load_elements(examples.element_files()[:3])
     params = params_from_dict({"gap": examples.DEFAULT_GAP, "seed": 3,
@@ -60,7 +63,7 @@ def test_packing_after_warm_up_compiles_no_kernel(tmp_path):
 
 def test_specialisations_cover_the_simulation_kernels():
     from repulsionpak import warmup
-    from repulsionpak.sim import kernels
+    from repulsionpak._jit import kernels
 
     calls = warmup.simulation_specialisations()
     names = [d.py_func.__name__ for d, _ in calls]
@@ -69,7 +72,7 @@ def test_specialisations_cover_the_simulation_kernels():
     order = ["contact_query", "repulsion_force", "edge_force", "boundary_force", "overlap_force",
              "euler_step", "grow", "skin_areas", "contact_update", "project_inside"]
     assert [n for n in names if n in order] == order
-    serial = {k.serial for k in kernels._KERNELS}
+    serial = {k.serial for k in kernels.KERNELS}
     assert sum(d in serial for d, _ in calls) >= 8
     # recording ran the plain Python functions: the real kernels are back in place
     from repulsionpak.sim import forces, runner
@@ -78,23 +81,25 @@ def test_specialisations_cover_the_simulation_kernels():
 
 
 def test_start_does_nothing_when_cached(monkeypatch):
-    from repulsionpak import warmup
+    from repulsionpak._jit import warmup
+    from repulsionpak.warmup import WORKLOAD
 
-    warmup.warm_up(parallel=False)  # compiles or loads in this process: the cache now holds the kernels
-    assert not warmup.is_cold()
+    warmup.warm_up(WORKLOAD, parallel=False)  # compiles or loads in this process: the cache now holds the kernels
+    assert not warmup.is_cold(WORKLOAD)
     monkeypatch.setattr(warmup, "parallel_missing", lambda: False)  # (their ~13 s compile: see below)
-    assert warmup.start() is None
+    assert warmup.start(WORKLOAD) is None
     warmup.stop(None)
     warmup.wait()  # nothing running: returns at once
 
 
 def test_start_can_be_turned_off(monkeypatch):
-    from repulsionpak import warmup
+    from repulsionpak._jit import warmup
+    from repulsionpak.warmup import WORKLOAD
 
-    monkeypatch.setattr(warmup, "is_cold", lambda: True)
+    monkeypatch.setattr(warmup, "is_cold", lambda w: True)
     monkeypatch.setattr(warmup, "_spare_cores", lambda: 1)
     monkeypatch.setenv("REPULSIONPAK_NO_WARMUP", "1")
-    assert warmup.start() is None
+    assert warmup.start(WORKLOAD) is None
 
 
 def test_shipped_signatures_are_current():
@@ -103,11 +108,12 @@ def test_shipped_signatures_are_current():
     import json
 
     from repulsionpak import warmup
+    from repulsionpak._jit.signatures import SIGNATURES, encode, load_signatures
 
-    shipped = json.loads(warmup.SIGNATURES.read_text(encoding="utf-8"))["kernels"]
-    recorded = warmup._encode(warmup.simulation_specialisations())
+    shipped = json.loads(SIGNATURES.read_text(encoding="utf-8"))["kernels"]
+    recorded = encode(warmup.simulation_specialisations())
     assert shipped == recorded, "stale: python -m repulsionpak.warmup --write-signatures"
-    loaded = warmup.load_signatures()
+    loaded = load_signatures()
     assert loaded == warmup.simulation_specialisations()
     names = [d.py_func.__name__ for d, _ in loaded]
     assert names[:2] == ["_greedy_chords", "squared_edt"]  # preprocessing first
@@ -119,10 +125,12 @@ def test_stale_signatures_fall_back_to_recording(tmp_path, monkeypatch):
 
     from numba.core import types
 
-    from repulsionpak import warmup
+    from repulsionpak._jit import signatures, warmup
+    from repulsionpak._jit.signatures import SIGNATURES, load_signatures
+    from repulsionpak.warmup import WORKLOAD
 
-    data = json.loads(warmup.SIGNATURES.read_text(encoding="utf-8"))
-    assert warmup.load_signatures(tmp_path / "missing.json") is None
+    data = json.loads(SIGNATURES.read_text(encoding="utf-8"))
+    assert load_signatures(tmp_path / "missing.json") is None
     renamed = json.loads(json.dumps(data))
     renamed["kernels"][0]["params"][0] = "renamed"  # a kernel's parameters changed
     gone = json.loads(json.dumps(data))
@@ -132,23 +140,24 @@ def test_stale_signatures_fall_back_to_recording(tmp_path, monkeypatch):
     for k, bad in enumerate([renamed, gone, odd]):
         path = tmp_path / f"bad{k}.json"
         path.write_text(json.dumps(bad), encoding="utf-8")
-        assert warmup.load_signatures(path) is None
+        assert load_signatures(path) is None
     good = tmp_path / "good.json"
     good.write_text(json.dumps(data), encoding="utf-8")
-    calls = warmup.load_signatures(good)
+    calls = load_signatures(good)
     assert calls[1][1] == (types.Array(types.boolean, 2, "C"),)  # squared_edt(mask)
     # the warm-up uses the file when it matches, and records when it does not
-    monkeypatch.setattr(warmup, "simulation_specialisations", lambda: ["recorded"])
-    assert warmup.specialisations() == warmup.load_signatures()
-    monkeypatch.setattr(warmup, "SIGNATURES", tmp_path / "bad0.json")
-    monkeypatch.setattr(warmup.load_signatures, "__defaults__", (tmp_path / "bad0.json",))
-    assert warmup.specialisations() == ["recorded"]
+    recording = dataclasses.replace(WORKLOAD, record=lambda: ["recorded"])
+    assert warmup.specialisations(recording) == load_signatures()
+    monkeypatch.setattr(signatures, "SIGNATURES", tmp_path / "bad0.json")
+    monkeypatch.setattr(load_signatures, "__defaults__", (tmp_path / "bad0.json",))
+    assert warmup.specialisations(recording) == ["recorded"]
 
 
 def test_cli_starts_the_warm_up_first_and_stops_it_on_an_input_error(tmp_path, monkeypatch):
-    from repulsionpak import warmup
+    from repulsionpak._jit import warmup
     from repulsionpak.cli import run_pack
     from repulsionpak.errors import RepulsionPakError
+    from repulsionpak.warmup import WORKLOAD
 
     events = []
 
@@ -156,16 +165,17 @@ def test_cli_starts_the_warm_up_first_and_stops_it_on_an_input_error(tmp_path, m
         pass
 
     proc = Fake()
-    monkeypatch.setattr(warmup, "start", lambda: events.append("start") or proc)
+    monkeypatch.setattr(warmup, "start", lambda w: events.append(("start", w)) or proc)
     monkeypatch.setattr(warmup, "stop", lambda p: events.append(("stop", p)))
     with pytest.raises((RepulsionPakError, OSError)):
         run_pack(tmp_path / "missing.svg", [examples.element_files()[0]], tmp_path / "out.svg",
                  progress=False)
-    assert events == ["start", ("stop", proc)]
+    assert events == [("start", WORKLOAD), ("stop", proc)]
 
 
 def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_path, monkeypatch):
-    from repulsionpak import warmup
+    from repulsionpak._jit import warmup
+    from repulsionpak.warmup import WORKLOAD
 
     class Running:
         def poll(self):
@@ -176,8 +186,9 @@ def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_
 
     calls = []
     monkeypatch.setattr(warmup, "_current", Running())
-    monkeypatch.setattr(warmup, "_warm_tps", lambda: calls.append("tps"))
-    monkeypatch.setattr(warmup, "_warm_flatten", lambda: calls.append("flatten"))
+    render = dict(WORKLOAD.render, _warm_tps=lambda: calls.append("tps"),
+                  _warm_flatten=lambda: calls.append("flatten"))
+    monkeypatch.setattr(warmup, "_workload", dataclasses.replace(WORKLOAD, render=tuple(render.items())))
     monkeypatch.setattr(warmup, "_claims", str(tmp_path))
     checks = []
 
@@ -185,7 +196,7 @@ def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_
         checks.append(d)
         return len(checks) > 6
 
-    monkeypatch.setattr(warmup, "_cached", cached)
+    monkeypatch.setattr(warmup, "is_cached", cached)
     warmup.wait()  # the warm-up still compiles the curve fitter
     # in the order the renderer calls them; then until the render kernels are cached, not
     # until the warm-up ends (it goes on with the parallel builds: it never ends here)
@@ -201,9 +212,11 @@ def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_
 def test_claims_split_the_kernels_between_the_two_processes(tmp_path, monkeypatch):
     """compile_forward claims kernels in the order of use until it meets one the warm-up
     claimed; the warm-up (reverse order) stops at the first one the packing claimed."""
-    from repulsionpak import warmup
+    from repulsionpak._jit import warmup
+    from repulsionpak._jit.signatures import load_signatures
+    from repulsionpak.warmup import WORKLOAD
 
-    calls = warmup.load_signatures()
+    calls = load_signatures()
     names = [warmup._name(d) for d, _ in calls]
     claims = tmp_path / "claims"
     claims.mkdir()
@@ -217,7 +230,7 @@ def test_claims_split_the_kernels_between_the_two_processes(tmp_path, monkeypatc
     compiled = []
     monkeypatch.setattr(warmup, "_current", Running())
     monkeypatch.setattr(warmup, "_claims", str(claims))
-    monkeypatch.setattr(warmup, "_cached", lambda d: True)  # the warm-up's kernel is done
+    monkeypatch.setattr(warmup, "is_cached", lambda d: True)  # the warm-up's kernel is done
     for d, sig in calls:
         monkeypatch.setattr(d, "compile", lambda sig, d=d: compiled.append(warmup._name(d)))
         monkeypatch.setattr(d, "overloads", {})
@@ -227,32 +240,34 @@ def test_claims_split_the_kernels_between_the_two_processes(tmp_path, monkeypatc
     assert compiled == names[:12]
     assert sorted(p.name for p in claims.iterdir()) == sorted(names)
     compiled.clear()
-    warmup.warm_up(render=False, parallel=False)  # everything is claimed: the warm-up compiles nothing more
+    warmup.warm_up(WORKLOAD, render=False, parallel=False)  # everything is claimed: the warm-up compiles nothing more
     assert compiled == []
 
 
 def test_warm_up_compiles_the_parallel_builds_for_the_recorded_types(tmp_path, monkeypatch):
     """The parallel builds get the serial builds' argument types, in the order of use,
     each claimed once (a second warm-up finds them claimed)."""
-    from repulsionpak import warmup
-    from repulsionpak.sim import kernels
+    from repulsionpak._jit import kernels, warmup
+    from repulsionpak._jit.signatures import load_signatures
+    from repulsionpak.warmup import WORKLOAD
 
-    builds = {id(k.serial): k for k in kernels._KERNELS}
-    calls = [(builds[id(d)], sig) for d, sig in warmup.load_signatures() if id(d) in builds]
+    builds = {id(k.serial): k for k in kernels.KERNELS}
+    calls = [(builds[id(d)], sig) for d, sig in load_signatures() if id(d) in builds]
     assert len(calls) >= 8  # the forces, the neighbour query and update, the relaxation
     compiled = []
     for k, _ in calls:
         monkeypatch.setattr(k.parallel, "compile", lambda sig, k=k: compiled.append((k, sig)))
     monkeypatch.setattr(warmup, "_claims", str(tmp_path))
-    warmup.warm_up_parallel()
+    warmup.warm_up_parallel(WORKLOAD)
     assert compiled == calls
     compiled.clear()
-    warmup.warm_up_parallel()
+    warmup.warm_up_parallel(WORKLOAD)
     assert compiled == []
 
 
 def test_a_later_run_starts_a_warm_up_for_the_missing_parallel_builds(monkeypatch):
-    from repulsionpak import warmup
+    from repulsionpak._jit import warmup
+    from repulsionpak.warmup import WORKLOAD
 
     started = []
 
@@ -268,17 +283,17 @@ def test_a_later_run_starts_a_warm_up_for_the_missing_parallel_builds(monkeypatc
 
     monkeypatch.delenv("REPULSIONPAK_NO_WARMUP", raising=False)
     monkeypatch.setattr(warmup, "_spare_cores", lambda: 1)
-    monkeypatch.setattr(warmup, "is_cold", lambda: False)
+    monkeypatch.setattr(warmup, "is_cold", lambda w: False)
     monkeypatch.setattr(warmup.subprocess, "Popen", lambda args, **kw: started.append(args) or Proc())
     monkeypatch.setattr(warmup, "parallel_missing", lambda: False)
-    assert warmup.start() is None and started == []  # everything cached
+    assert warmup.start(WORKLOAD) is None and started == []  # everything cached
     monkeypatch.setattr(warmup, "parallel_missing", lambda: True)
-    proc = warmup.start()
+    proc = warmup.start(WORKLOAD)
     assert started[0][-2:] == ["repulsionpak.warmup", "--parallel"]
     assert warmup.compiles_parallel_only()
     warmup.stop(proc)
     assert started[-1] == "terminated" and not warmup.compiles_parallel_only()
-    monkeypatch.setattr(warmup, "is_cold", lambda: True)  # a first run: everything, parallel last
-    proc = warmup.start()
+    monkeypatch.setattr(warmup, "is_cold", lambda w: True)  # a first run: everything, parallel last
+    proc = warmup.start(WORKLOAD)
     assert started[-1][-1] == "repulsionpak.warmup" and not warmup.compiles_parallel_only()
     warmup.stop(proc)

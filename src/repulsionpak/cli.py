@@ -273,10 +273,11 @@ def _warm_up_meanwhile(run):
     the inputs are read, and end it however the run ends (an input error included)."""
     @functools.wraps(run)
     def wrapped(*args, **kwargs):
-        from . import kernel_cache, warmup
+        from ._jit import prebuilt, warmup
+        from .warmup import WORKLOAD
 
-        kernel_cache.install()  # kernels compiled when the package was built: nothing to warm up
-        compiling = warmup.start()
+        prebuilt.install()  # kernels compiled when the package was built: nothing to warm up
+        compiling = warmup.start(WORKLOAD)
         try:
             return run(*args, **kwargs)
         finally:
@@ -375,8 +376,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
             def on_checkpoint(states: dict) -> None:
                 save_checkpoint(checkpoint, {k: dict(v, seed=params.seed) for k, v in states.items()}, fp)
     if progress:
-        from . import warmup
-        from .sim.kernels import cache_is_cold
+        from ._jit import warmup
+        from ._jit.kernels import cache_is_cold
 
         cold = cache_is_cold()
         if cold:
@@ -389,7 +390,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
             if fit_is_cold():
                 typer.echo("compiling the report's distortion kernels, first run only…", err=True)
-    from . import warmup
+    from ._jit import warmup
 
     viewer = None
     try:
@@ -719,7 +720,7 @@ def evaluate(
 
             sources = source_geometries(load_elements(elements))
             from .geometry.overlap import is_cold as fit_is_cold
-            from .kernel_cache import install
+            from ._jit.prebuilt import install
 
             install()  # the distortion kernels compiled when the package was built, if any
 

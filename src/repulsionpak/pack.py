@@ -333,9 +333,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     secondary one; "mapping the art", "verifying", "filling pockets", "filling holes" after
     them): they take seconds on large scenes.
     """
-    from . import kernel_cache, warmup  # here, not at import: `python -m repulsionpak.warmup` runs it as __main__
+    from ._jit import prebuilt, warmup
 
-    kernel_cache.install()  # kernels compiled when the package was built, if any (once)
+    prebuilt.install()  # kernels compiled when the package was built, if any (once)
     secondary = () if secondary is None else secondary
     _check_arguments(container, elements, secondary, params)
     params = params.validate()

@@ -15,7 +15,7 @@ not depend on which one ran.
 
 **Two threads, when they pay.** A run with ``sim.threads = 0`` (the default) uses the
 parallel builds on every core once :func:`parallel_ready`: they are in numba's disk cache
-(the warm-up process compiles them in the background, :mod:`repulsionpak.warmup`: ~13 CPU
+(the warm-up process compiles them in the background, :mod:`repulsionpak._jit.warmup`: ~13 CPU
 seconds once, against ~6 for the serial builds), and the threading layer hands work
 between threads without putting them to sleep. GNU OpenMP's idle threads by default spin
 so briefly that on a VM they sleep between two kernels of one iteration, and two threads
@@ -33,21 +33,23 @@ other than the main one while TBB sees a single core (numba issue #10556), and i
 workers ran the heart scene at 10–12 ms an iteration against 0.4 ms on one thread.
 Neither OpenMP nor the workqueue can hang at exit. Where the layer does not suit the
 simulation (the workqueue), an automatic run stays on one thread (:func:`threading_ok`);
-while it runs, :class:`repulsionpak.sim.threadgov.ThreadGovernor` drops to one thread when
+while it runs, the simulation's thread governor drops to one thread when
 other processes make the second one a burden.
 """
 
 from __future__ import annotations
 
 import functools
+import importlib
 import os
 import types
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numba
 from numba import njit
 
-_KERNELS: list["Kernel"] = []
+#: every :class:`Kernel` created so far (a kernel registers itself when its module is imported)
+KERNELS: list["Kernel"] = []
 _parallel = False
 
 #: the threading layers in the order this package lets numba try them (TBB last: never
@@ -91,7 +93,7 @@ class Kernel:
         self.serial = njit(cache=True)(func)
         self._parallel = None
         self._impl = self.parallel if _parallel else self.serial
-        _KERNELS.append(self)
+        KERNELS.append(self)
 
     @property
     def parallel(self):
@@ -179,25 +181,27 @@ def threading_ok() -> bool:
     return layer == "tbb"
 
 
-def _cached(dispatcher) -> bool:
+def is_cached(dispatcher) -> bool:
+    """Whether numba's disk cache holds an entry for ``dispatcher`` (reads only its small
+    index file; numba's private cache API, so callers guard against its changes)."""
     return bool(dispatcher._cache._cache_file._load_index())
 
 
 def parallel_cached() -> bool:
     """True when every kernel a default run calls (those recorded in the warm-up's
-    signature file, :mod:`repulsionpak.warmup`) has its parallel build cached or compiled in
+    signature file, :mod:`repulsionpak._jit.signatures`) has its parallel build cached or compiled in
     this process. Kernels only some runs call (designer controls, the shape force) compile
     their parallel build when first used. Reads only the small cache index files; False
     when that cannot be told."""
-    from ..warmup import load_signatures
+    from .signatures import load_signatures
 
     try:
         calls = load_signatures()
         if calls is None:
             return False
         serial = {id(d) for d, _ in calls}
-        used = [k for k in _KERNELS if id(k.serial) in serial]
-        return bool(used) and all(k.parallel.signatures or _cached(k.parallel) for k in used)
+        used = [k for k in KERNELS if id(k.serial) in serial]
+        return bool(used) and all(k.parallel.signatures or is_cached(k.parallel) for k in used)
     except Exception:  # noqa: BLE001  (private numba API: stay with one thread)
         return False
 
@@ -217,7 +221,7 @@ def set_threads(n: int) -> int:
     numba.set_num_threads(n)
     if (n > 1) != _parallel:
         _parallel = n > 1
-        for k in _KERNELS:
+        for k in KERNELS:
             k._select(_parallel)
     return old
 
@@ -226,19 +230,32 @@ def uses_parallel_builds() -> bool:
     return _parallel
 
 
-def cache_is_cold() -> bool:
+def cache_is_cold(modules: Sequence[str] = ()) -> bool:
     """Whether the simulation kernels still have to be compiled: True when numba's disk
     cache holds no valid entry for the serial build of any kernel (the first run, or the
     sources changed since). Not *some* kernel: one a run never calls (a force switched
-    off by default) is never cached. Reads only the small cache index files; False when
-    that cannot be told (a numba without these internals)."""
-    from . import runner  # noqa: F401  (imports, and so registers, every kernel a run calls)
+    off by default) is never cached.
 
+    Parameters
+    ----------
+    modules
+        Modules to import first (by name): a kernel registers itself in :data:`KERNELS`
+        when its module is imported, and only registered kernels count.
+
+    Returns
+    -------
+    bool
+        Reads only the small cache index files; False when that cannot be told (a numba
+        without these internals).
+    """
+    for name in modules:
+        importlib.import_module(name)
     try:
-        return not any(_cached(k.serial) for k in _KERNELS)
+        return not any(is_cached(k.serial) for k in KERNELS)
     except Exception:  # noqa: BLE001  (private numba API: stay silent rather than fail)
         return False
 
 
-__all__ = ["Kernel", "parallel_kernel", "set_threads", "choose_threading_layer", "LAYER_PRIORITY", "uses_parallel_builds", "cache_is_cold",
-           "parallel_cached", "parallel_ready", "threading_ok", "GOMP_SPINCOUNT"]
+__all__ = ["Kernel", "KERNELS", "parallel_kernel", "set_threads", "choose_threading_layer", "LAYER_PRIORITY",
+           "uses_parallel_builds", "cache_is_cold", "is_cached", "parallel_cached", "parallel_ready",
+           "threading_ok", "GOMP_SPINCOUNT"]

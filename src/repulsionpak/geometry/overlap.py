@@ -556,9 +556,9 @@ def intersection_areas(a: Rings, b: OverlapGrid, params: np.ndarray) -> np.ndarr
 def is_cold() -> bool:
     """True when numba's disk cache lacks the fit's kernels (the first distortion fit
     compiles them, several seconds); False when that cannot be told."""
-    from ..warmup import _cached  # noqa: PLC0415  (the warm-up's test of numba's disk cache)
+    from .._jit.kernels import is_cached  # noqa: PLC0415
 
     try:
-        return not all(_cached(d) for d in (_nelder_mead, _many_areas))
+        return not all(is_cached(d) for d in (_nelder_mead, _many_areas))
     except Exception:  # noqa: BLE001  (private numba API)
         return False

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import prange
 
-from .kernels import parallel_kernel
+from .._jit.kernels import parallel_kernel
 from .forces import _spring
 from .shape import similarity_sums
 

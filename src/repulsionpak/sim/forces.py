@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit, prange
 
 from .grid import cell_of
-from .kernels import parallel_kernel
+from .._jit.kernels import parallel_kernel
 from .shape import similarity_sums
 
 

@@ -24,7 +24,7 @@ from .forces import (boundary_force, contact_query, contact_update, corner_candi
 from .grid import Grid, bin_points
 from .integrate import (confined_contacts, count_inside, euler_step, grow, growth_speed_caps, skin_areas,
                         window_change)
-from .kernels import parallel_ready, set_threads
+from .._jit.kernels import parallel_ready, set_threads
 from .threadgov import WINDOW as GOV_WINDOW
 from .threadgov import ThreadGovernor
 from .model import Model, State, element_ranges
@@ -322,7 +322,7 @@ class Simulator:
         (``sim.threads = 0``) uses one thread below ``parallel_threshold`` vertices (on
         small scenes handing work between threads costs more than it saves) or while the
         parallel builds are not cached or the threading layer does not suit them
-        (:func:`repulsionpak.sim.kernels.parallel_ready`); otherwise it starts on one thread
+        (:func:`repulsionpak._jit.kernels.parallel_ready`); otherwise it starts on one thread
         and a :class:`~repulsionpak.sim.threadgov.ThreadGovernor` moves it between one and
         the cores allowed (:func:`auto_threads`) as measured iteration times say: a
         thread sharing its core with another busy process holds up every parallel loop, and

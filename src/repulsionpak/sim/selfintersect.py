@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numba import prange
 
-from .kernels import parallel_kernel
+from .._jit.kernels import parallel_kernel
 
 
 @parallel_kernel

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .kernels import parallel_kernel
+from .._jit.kernels import parallel_kernel
 
 
 @njit(cache=True, inline="always")

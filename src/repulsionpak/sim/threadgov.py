@@ -10,7 +10,7 @@ itself: :class:`ThreadGovernor` times the iterations (the step alone, not the ca
 compares the mean of a window of iterations on each thread count, and keeps the faster.
 
 Both builds of every kernel compute the same numbers in the same order
-(:mod:`repulsionpak.sim.kernels`), so switching between them changes the speed of a run,
+(:mod:`repulsionpak._jit.kernels`), so switching between them changes the speed of a run,
 never its packing.
 """
 
