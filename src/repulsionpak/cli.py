@@ -975,6 +975,25 @@ def study(
                        f"mean deformation {s['deformation']:.3f}")
 
 
+@app.command()
+def studio(
+    inputs: Annotated[Optional[list[Path]], typer.Argument(
+        help="Optional: the container SVG, then element SVGs or folders, opened in the page.")] = None,
+    port: Annotated[int, typer.Option(help="Port of the studio's server (127.0.0.1 only; 0: any free one).")] = 8765,
+    no_browser: Annotated[bool, typer.Option("--no-browser", help="Only print the URL.")] = False,
+    debug: DebugOpt = False,
+) -> None:
+    """A packing studio in the browser: open or paint the container, tune, steer, export (see docs/studio.md)."""
+    global _DEBUG
+    _DEBUG = debug
+    with _errors():
+        from .studio import run_studio
+
+        inputs = inputs or []
+        with _StopFlag() as stop:
+            run_studio(inputs[0] if inputs else None, inputs[1:], port=port, open_browser=not no_browser, stop=stop)
+
+
 @app.command("params")
 def params_cmd() -> None:
     """List every parameter with its default, unit and meaning (for --config TOML files)."""

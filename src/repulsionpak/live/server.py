@@ -47,6 +47,9 @@ class _Client:
 
 
 class LiveServer:
+    #: largest request body (bytes); a server built on this one may take more
+    client_max_size = 1 << 20
+
     def __init__(self, controller: LiveController, port: int = 8765, token: str | None = None,
                  estimate_every: float = 1.0):
         self.controller = controller
@@ -98,13 +101,14 @@ class LiveServer:
 
     async def _serve(self) -> None:
         self._stop = asyncio.Event()
-        app = web.Application()
+        app = web.Application(client_max_size=self.client_max_size)
         app.router.add_get("/", self._index)
         app.router.add_get("/packing.svg", self._packing)
         app.router.add_get("/ws", self._ws)
         app.router.add_get("/favicon.ico", lambda request: web.Response(status=204))
         for name in STATIC:
             app.router.add_get(f"/{name}", self._static)
+        self.add_routes(app)
         self._runner = web.AppRunner(app, handle_signals=False, access_log=None)
         await self._runner.setup()
         site = web.TCPSite(self._runner, HOST, self.port, reuse_address=False)
@@ -126,6 +130,9 @@ class LiveServer:
         for c in list(self.clients):
             await c.ws.close()
         await self._runner.cleanup()
+
+    def add_routes(self, app: web.Application) -> None:
+        """More routes of a server built on this one (the studio's); none here."""
 
     # -- publishing (called from the simulation thread) --------------------------------
     def publish(self, kind: str, payload) -> None:

@@ -1,0 +1,538 @@
+"""One designer's studio session: the inputs, their edits, the run and what comes out.
+
+The session keeps every input file in a private temporary folder (mode 0700) and reads it
+with the library's hardened readers (:func:`repulsionpak.load_container`,
+:func:`repulsionpak.load_elements`), so an uploaded file is checked as a file given to
+``repulsionpak pack`` is. A run reads its inputs through :func:`repulsionpak.inputs.load_inputs`
+and packs with :func:`repulsionpak.pack` in a thread of its own, steered by the
+:class:`~.controller.StudioController`; its exports are the :class:`repulsionpak.Packing`'s
+own writers, so a finished run exports the bytes ``repulsionpak pack`` writes for the same
+inputs, options and seed (:meth:`Session.command` says which command that is).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import json
+import re
+import secrets
+import shutil
+import tempfile
+import threading
+import tomllib
+import zipfile
+from pathlib import Path
+
+import shapely
+
+from ..errors import InputError, ParameterError, RepulsionPakError
+from .controller import StudioController
+from .document import Document, History, InputFile
+from .region import Stroke, painted_region, region_svg, rings_of
+from .settings import DEFAULTS, coerce, command_line, run_settings
+
+#: largest input file accepted (bytes)
+MAX_FILE_BYTES = 5 * 2**20
+#: largest project archive accepted, and its unpacked contents (bytes)
+MAX_PROJECT_BYTES = 50 * 2**20
+#: most element files in a session
+MAX_ELEMENTS = 200
+#: the canvas of a session without a container file (container units)
+BLANK_CANVAS = (0.0, 0.0, 1000.0, 1000.0)
+#: the name of a painted container, in a project and on the command line
+PAINTED_NAME = "container.svg"
+INPUT_SUFFIXES = (".svg", ".path")
+PROJECT_MANIFEST = "project.toml"
+
+
+class UploadTooLarge(ParameterError):
+    """An uploaded file or project is larger than the studio accepts."""
+
+
+def safe_name(name: str, suffixes=INPUT_SUFFIXES) -> str:
+    """A file name of the user's safe to create in the session folder: the last path
+    component, other characters than letters, digits, ``.``, ``-``, ``_`` replaced by
+    ``_``; raises :class:`ParameterError` for a suffix other than ``suffixes``."""
+    base = re.split(r"[\\/]", str(name))[-1]
+    base = re.sub(r"[^A-Za-z0-9._-]", "_", base).lstrip(".") or "file"
+    if not base.lower().endswith(tuple(suffixes)):
+        raise ParameterError(f"{name}: not an input file the studio reads (expected {' or '.join(suffixes)})")
+    return base[:120]
+
+
+def _named(exc: RepulsionPakError, path: Path, name: str) -> RepulsionPakError:
+    """``exc`` with the session's private path of a file replaced by the file's name."""
+    def swap(text):
+        return None if text is None else str(text).replace(str(path), name)
+
+    if isinstance(exc, InputError):
+        return InputError(swap(exc.path), swap(exc.problem))
+    try:
+        return type(exc)(swap(str(exc)))
+    except TypeError:  # an error class of other arguments: as it is
+        return exc
+
+
+def check_size(name: str, size: int, limit: int = MAX_FILE_BYTES) -> None:
+    if size > limit:
+        raise UploadTooLarge(f"{name}: the file is {size / 2**20:.1f} MB; the studio accepts files of "
+                             f"up to {limit / 2**20:.0f} MB")
+
+
+class Session:
+    """The studio's state. Thread-safe: the server calls it from worker threads."""
+
+    def __init__(self):
+        self.dir = Path(tempfile.mkdtemp(prefix="repulsionpak-studio-"))  # mode 0700
+        self.history = History()
+        self.controller = StudioController(BLANK_CANVAS)
+        self.lock = threading.RLock()
+        self.packing = None  # the last finished run's Packing
+        self.packing_doc: Document | None = None  # the document it was made from
+        self.error: str | None = None
+        self._thread: threading.Thread | None = None
+        self._gen = 0
+        self._n_files = 0
+        self._containers: dict[Path, object] = {}
+        self._painted: dict[tuple, tuple[Path, object]] = {}
+
+    @property
+    def doc(self) -> Document:
+        return self.history.doc
+
+    def close(self) -> None:
+        """End any run and delete the session's files."""
+        self.cancel(wait=5.0)
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    # -- inputs ------------------------------------------------------------------------------
+    def _store(self, name: str, data: bytes) -> Path:
+        check_size(name, len(data))
+        self._n_files += 1
+        d = self.dir / "files" / f"{self._n_files:05d}"
+        d.mkdir(parents=True)
+        path = d / name
+        path.write_bytes(data)
+        return path
+
+    def _read_container(self, path: Path, name: str):
+        from .. import load_container
+
+        if path not in self._containers:
+            try:
+                self._containers[path] = load_container(path)
+            except RepulsionPakError as exc:
+                raise _named(exc, path, name) from None
+        return self._containers[path]
+
+    def open_container(self, name: str, data: bytes) -> dict:
+        """Make the file ``name`` (contents ``data``) the container; the strokes painted
+        so far are dropped (they belong to the canvas of the container before)."""
+        with self.lock:
+            name = safe_name(name)
+            path = self._store(name, data)
+            try:
+                self._read_container(path, name)
+            except RepulsionPakError:
+                shutil.rmtree(path.parent, ignore_errors=True)
+                raise
+            self._edit(f"open {name}", dataclasses.replace(self.doc, container=InputFile(name, path), strokes=()))
+            return self.state()
+
+    def add_elements(self, files: list[tuple[str, bytes]]) -> dict:
+        """Add element files (name, contents); each is read as ``repulsionpak pack`` reads it."""
+        from .. import load_elements
+
+        with self.lock:
+            have = {e.name for e in self.doc.elements}
+            if len(have) + len(files) > MAX_ELEMENTS:
+                raise ParameterError(f"the studio takes at most {MAX_ELEMENTS} element files")
+            added = []
+            for name, data in files:
+                name = safe_name(name)
+                stem, dot, ext = name.rpartition(".")
+                k = 2
+                while name in have:
+                    name, k = f"{stem}-{k}.{ext}", k + 1
+                path = self._store(name, data)
+                try:
+                    load_elements([path])
+                except RepulsionPakError as exc:
+                    shutil.rmtree(path.parent, ignore_errors=True)
+                    raise _named(exc, path, name) from None
+                have.add(name)
+                added.append(InputFile(name, path))
+            if added:
+                label = f"add {added[0].name}" + (f" and {len(added) - 1} more" if len(added) > 1 else "")
+                self._edit(label, dataclasses.replace(self.doc, elements=self.doc.elements + tuple(added)))
+            return self.state()
+
+    def remove_element(self, index: int) -> dict:
+        with self.lock:
+            els = list(self.doc.elements)
+            if not 0 <= index < len(els):
+                raise ParameterError(f"no element file {index}")
+            gone = els.pop(index)
+            self._edit(f"remove {gone.name}", dataclasses.replace(self.doc, elements=tuple(els)))
+            return self.state()
+
+    def use_examples(self, container: str | None = None, elements: list[str] | None = None) -> dict:
+        """Open a shipped example container and/or example elements (by stem; ``elements``
+        empty: all of them)."""
+        from .. import examples
+
+        with self.lock:
+            if container is not None:
+                if container not in examples.container_names():
+                    raise ParameterError(f"no example container {container!r}; the examples are "
+                                         f"{', '.join(examples.container_names())}")
+                p = examples.container_file(container)
+                self.open_container(p.name, p.read_bytes())
+            if elements is not None:
+                files = {p.stem: p for p in examples.element_files()}
+                wanted = elements or sorted(files)
+                bad = [w for w in wanted if w not in files]
+                if bad:
+                    raise ParameterError(f"no example element {bad[0]!r}; the examples are {', '.join(sorted(files))}")
+                self.add_elements([(files[w].name, files[w].read_bytes()) for w in wanted])
+            return self.state()
+
+    # -- edits ---------------------------------------------------------------------------------
+    def _edit(self, label: str, after: Document, redo_cmd=None, undo_cmd=None) -> None:
+        before = self.doc
+        self.history.push(label, after, redo_cmd, undo_cmd)
+        self._apply_change(before, after)
+
+    def _apply_change(self, before: Document, after: Document) -> None:
+        """Show the new document; a changed region reaches a running simulation at once."""
+        if (before.container, before.strokes) == (after.container, after.strokes):
+            return
+        if after.container != before.container:
+            self._set_canvas(after)
+        cont = self.container_of(after)
+        if self.running and cont is not None:
+            self.controller.submit({"cmd": "region", "container": cont})
+        elif not self.running:
+            self.controller.show(cont)
+
+    def _set_canvas(self, doc: Document) -> None:
+        """The page's canvas: the container file's view box, widened to hold its region
+        with a margin to paint in; the blank canvas without a file."""
+        if doc.container is None:
+            self.controller.view_box = list(BLANK_CANVAS)
+            return
+        c = self._read_container(doc.container.path, doc.container.name)
+        minx, miny, maxx, maxy = c.bounds
+        vb = c.svg_root.get("viewBox") if isinstance(c.svg_root, dict) else None
+        try:
+            x, y, w, h = (float(v) for v in re.split(r"[\s,]+", vb.strip()))
+            minx, miny, maxx, maxy = min(minx, x), min(miny, y), max(maxx, x + w), max(maxy, y + h)
+        except (AttributeError, ValueError):
+            pass
+        pad = 0.1 * max(maxx - minx, maxy - miny)
+        self.controller.view_box = [minx - pad, miny - pad, maxx - minx + 2 * pad, maxy - miny + 2 * pad]
+
+    def stroke(self, msg: object) -> dict:
+        """Paint or erase one brush stroke (see :meth:`repulsionpak.studio.region.Stroke.parse`)."""
+        s = Stroke.parse(msg)
+        with self.lock:
+            self._edit("paint" if s.mode == "paint" else "erase", dataclasses.replace(
+                self.doc, strokes=self.doc.strokes + (s,)))
+            return self.state()
+
+    def set_setting(self, name: str, value: object) -> dict:
+        """Change one setting; refused (nothing changes) with the CLI's message when the
+        settings together are not a valid run."""
+        with self.lock:
+            v = coerce(name, value)
+            after = self.doc.with_settings(**{name: v})
+            run_settings(after.settings_dict)
+            if after.settings != self.doc.settings:
+                self._edit(f"{name} = {v}", after)
+            return self.state()
+
+    def pin(self, index: int, pinned: bool) -> dict:
+        """Pin or unpin element ``index`` of the running simulation (undoable)."""
+        with self.lock:
+            cmd = {"cmd": "pin", "index": int(index), "pinned": bool(pinned)}
+            self.controller.submit(cmd)
+            self.history.push(("pin" if pinned else "unpin") + f" element {index}", self.doc, cmd,
+                              dict(cmd, pinned=not pinned))
+            return self.state()
+
+    def moved(self, index: int, dx: float, dy: float) -> dict:
+        """Record a drag the page made (it moved the element itself): undo moves it back."""
+        with self.lock:
+            cmd = {"cmd": "move", "index": int(index), "dx": float(dx), "dy": float(dy)}
+            self.history.push(f"move element {index}", self.doc, cmd, dict(cmd, dx=-cmd["dx"], dy=-cmd["dy"]))
+            return self.state()
+
+    def undo(self) -> dict:
+        with self.lock:
+            e = self.history.undo()
+            if e is not None:
+                if e.undo_cmd is not None and self.running:
+                    self.controller.submit(e.undo_cmd)
+                self._apply_change(e.after, e.before)
+            return self.state()
+
+    def redo(self) -> dict:
+        with self.lock:
+            e = self.history.redo()
+            if e is not None:
+                if e.redo_cmd is not None and self.running:
+                    self.controller.submit(e.redo_cmd)
+                self._apply_change(e.before, e.after)
+            return self.state()
+
+    # -- the container ---------------------------------------------------------------------------
+    def region_of(self, doc: Document) -> shapely.Geometry:
+        base = None if doc.container is None else self._read_container(doc.container.path, doc.container.name).region
+        if not doc.strokes:
+            return shapely.Polygon() if base is None else base
+        vb = self.controller.view_box
+        return painted_region(base, doc.strokes, min_area=1e-6 * vb[2] * vb[3])
+
+    def container_file(self, doc: Document) -> InputFile | None:
+        """The container file a run reads: the opened file, or (strokes painted) the
+        painted region written as an SVG file; None when there is no region."""
+        if not doc.strokes:
+            return doc.container
+        key = (doc.container, doc.strokes)
+        if key not in self._painted:
+            region = self.region_of(doc)
+            if region.is_empty:
+                return None
+            d = self.dir / "painted" / f"{len(self._painted):05d}"
+            d.mkdir(parents=True)
+            path = d / PAINTED_NAME
+            path.write_text(region_svg(region, self.controller.view_box), encoding="utf-8")
+            self._painted[key] = (path, None)
+        return InputFile(PAINTED_NAME, self._painted[key][0])
+
+    def container_of(self, doc: Document):
+        """The :class:`repulsionpak.Container` of ``doc`` as read from its file (None: no region)."""
+        f = self.container_file(doc)
+        return None if f is None else self._read_container(f.path, f.name)
+
+    # -- the run -------------------------------------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive() and not self.controller.cancelled
+
+    def start(self, new_seed: bool = False, paused: bool = False) -> dict:
+        """Start a run of the current document (``new_seed``: with a seed drawn anew; a
+        run in progress is ended first). A paused run is resumed instead, unless ``new_seed``."""
+        with self.lock:
+            if self.running and not new_seed:
+                self.controller.submit({"cmd": "resume"})
+                return self.state()
+            self.cancel(wait=60.0)
+            doc = self.doc
+            if new_seed or doc.settings_dict["seed"] is None:  # the command line names the seed
+                doc = doc.with_settings(seed=secrets.randbelow(2**31))
+                self.history.replace_current(doc)
+            params, controls = run_settings(doc.settings_dict)
+            cfile = self.container_file(doc)
+            if cfile is None:
+                raise ParameterError("there is no container: open a container file or paint one with the brush")
+            if not doc.elements:
+                raise ParameterError("there are no elements: open element files or take the examples")
+            from ..inputs import load_inputs
+
+            inputs = load_inputs(cfile.path, [e.path for e in doc.elements], params, controls=controls)
+            self.controller.reset(inputs.container, inputs.params, paused=paused)
+            self.packing, self.packing_doc, self.error = None, None, None
+            self._gen += 1
+            self._thread = threading.Thread(target=self._run, args=(self._gen, inputs, doc),
+                                            name="repulsionpak-studio-run", daemon=True)
+            self._thread.start()
+            return self.state()
+
+    def cancel(self, wait: float = 0.0) -> None:
+        """End the run in progress (its result is thrown away)."""
+        t = self._thread
+        if t is None or not t.is_alive():
+            return
+        self._gen += 1
+        self.controller.cancel()
+        t.join(wait)
+
+    def _run(self, gen: int, inputs, doc: Document) -> None:
+        from .. import pack
+
+        ctl = self.controller
+        try:
+            packing = pack(inputs.container, list(inputs.elements), inputs.params,
+                           secondary=list(inputs.secondary), on_snapshot=ctl.on_snapshot,
+                           should_stop=ctl.should_stop)
+            if gen != self._gen:
+                return
+            packing.placed = ctl.drop_removed(packing.placed)  # as `pack --live` writes it
+            text = packing.svg_text()
+            m = packing.metrics(distortion=False)
+            with self.lock:
+                if gen != self._gen:
+                    return
+                self.packing, self.packing_doc = packing, doc
+            ctl.finish(text, dict(packing.stopped_by), m["area_fraction"], m["gap"]["median"])
+        except Exception as exc:  # noqa: BLE001  (told to the page; the session goes on)
+            if gen == self._gen:
+                self.error = str(exc) if isinstance(exc, RepulsionPakError) else f"{type(exc).__name__}: {exc}"
+                ctl.phase = "failed"
+                ctl.publish("json", {"type": "error", "message": self.error})
+                ctl.publish("json", dict(ctl.status(), phase="failed"))
+
+    # -- out ---------------------------------------------------------------------------------------
+    def export(self, kind: str) -> bytes:
+        """The packing as ``svg``, ``pdf`` or ``png``: the finished run's through the
+        packing's writers (what ``repulsionpak pack`` writes), a running one's as the live
+        view draws it (partial)."""
+        if kind not in ("svg", "pdf", "png"):
+            raise ParameterError(f"cannot export {kind!r}; use svg, pdf or png")
+        packing = self.packing
+        if packing is not None:
+            if kind == "svg":
+                return packing.svg_text().encode("utf-8")
+            if kind == "png":
+                return packing.png_bytes()
+            from ..render.pdf import pdf_bytes
+
+            return pdf_bytes(packing.svg_text(), "packing.pdf")
+        if not self.running or self.controller.sim is None:
+            raise ParameterError("nothing to export yet: start a run first")
+        if kind == "png":
+            return self._running_png()
+        text = self.controller.render_svg()
+        if kind == "svg":
+            return text.encode("utf-8")
+        from ..render.pdf import pdf_bytes
+
+        return pdf_bytes(text, "packing.pdf")
+
+    def _running_png(self) -> bytes:
+        from concurrent.futures import Future
+
+        from ..render.png import png_bytes
+
+        ctl = self.controller
+        fut: Future = Future()
+        ctl.commands.put({"cmd": "placed", "future": fut})
+        placed = fut.result(timeout=120)
+        return png_bytes(ctl.container, placed, 1200, container_paint=ctl.container_paint, gap=ctl.gap)
+
+    def command(self, doc: Document | None = None) -> str | None:
+        """The ``repulsionpak pack`` command that makes ``doc``'s packing, with the files
+        named as a saved project holds them (None: no container or no elements)."""
+        doc = doc or self.doc
+        cfile = self.container_file(doc) if (doc.container or doc.strokes) else None
+        if cfile is None or not doc.elements:
+            return None
+        return command_line(doc.settings_dict, cfile.name, [f"elements/{e.name}" for e in doc.elements])
+
+    def project_zip(self) -> bytes:
+        """The project: the container file, the element files under ``elements/`` and
+        ``project.toml`` (the files, every setting and the command)."""
+        with self.lock:
+            doc = self.doc
+            cfile = self.container_file(doc)
+            buf = io.BytesIO()
+            with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+                lines = ["# a repulsionpak studio project: `repulsionpak studio` opens it (Open project)",
+                         "[studio]", "format = 1"]
+                if cfile is not None:
+                    zf.write(cfile.path, cfile.name)
+                    lines.append(f"container = {json.dumps(cfile.name)}")
+                names = [f"elements/{e.name}" for e in doc.elements]
+                for e, n in zip(doc.elements, names):
+                    zf.write(e.path, n)
+                lines.append(f"elements = [{', '.join(json.dumps(n) for n in names)}]")
+                cmd = self.command(doc)
+                if cmd:
+                    lines.append(f"command = {json.dumps(cmd)}")
+                lines += ["", "[settings]  # missing: chosen by the run (auto gap and count, random seed)"]
+                for k, v in doc.settings_dict.items():
+                    if v is not None:
+                        lines.append(f"{k} = {json.dumps(v)}")
+                zf.writestr(PROJECT_MANIFEST, "\n".join(lines) + "\n")
+            return buf.getvalue()
+
+    def open_project(self, data: bytes) -> dict:
+        """Open a project saved by :meth:`project_zip` (one undoable edit)."""
+        check_size("project", len(data), MAX_PROJECT_BYTES)
+        try:
+            zf = zipfile.ZipFile(io.BytesIO(data))
+        except zipfile.BadZipFile:
+            raise ParameterError("the project is not a zip archive (save one with Save project)") from None
+        with zf:
+            infos = {i.filename: i for i in zf.infolist()}
+            if sum(i.file_size for i in infos.values()) > MAX_PROJECT_BYTES:
+                raise UploadTooLarge(f"the project unpacks to more than {MAX_PROJECT_BYTES / 2**20:.0f} MB")
+
+            def read(name: str) -> bytes:
+                if name not in infos:
+                    raise ParameterError(f"the project names {name!r} but does not hold it")
+                check_size(name, infos[name].file_size)
+                return zf.read(infos[name])
+
+            try:
+                manifest = tomllib.loads(read(PROJECT_MANIFEST).decode("utf-8"))
+            except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+                raise ParameterError(f"{PROJECT_MANIFEST}: not a valid TOML file ({exc})") from None
+            studio = manifest.get("studio", {})
+            settings = dict(DEFAULTS)
+            for k, v in manifest.get("settings", {}).items():
+                settings[k] = coerce(k, v)
+            run_settings(settings)
+            with self.lock:
+                doc = Document(settings=tuple(settings.items()))
+                if studio.get("container"):
+                    name = safe_name(studio["container"])
+                    path = self._store(name, read(studio["container"]))
+                    self._read_container(path, name)
+                    doc = dataclasses.replace(doc, container=InputFile(name, path))
+                elements = studio.get("elements", [])
+                if not isinstance(elements, list) or len(elements) > MAX_ELEMENTS:
+                    raise ParameterError(f"{PROJECT_MANIFEST}: 'elements' must be a list of at most "
+                                         f"{MAX_ELEMENTS} file names")
+                from .. import load_elements
+
+                files = []
+                for n in elements:
+                    name = safe_name(str(n))
+                    path = self._store(name, read(str(n)))
+                    try:
+                        load_elements([path])
+                    except RepulsionPakError as exc:
+                        raise _named(exc, path, str(n)) from None
+                    files.append(InputFile(name, path))
+                doc = dataclasses.replace(doc, elements=tuple(files))
+                self._edit("open project", doc)
+                return self.state()
+
+    # -- what the page shows ---------------------------------------------------------------------------
+    def state(self) -> dict:
+        """The document as the page shows it (JSON)."""
+        doc = self.doc
+        region = self.region_of(doc)
+        st = self.controller.status()
+        return {
+            "container": None if doc.container is None else doc.container.name,
+            "painted": bool(doc.strokes),
+            "region": rings_of(region),
+            "region_area": float(region.area),
+            "view_box": list(self.controller.view_box),
+            "elements": [e.name for e in doc.elements],
+            "settings": doc.settings_dict,
+            "command": self.command(doc),
+            "history": self.history.state(),
+            "running": self.running,
+            "paused": bool(st.get("paused")),
+            "phase": st.get("phase"),
+            "finished": self.packing is not None,
+            "error": self.error,
+        }
+
+
+__all__ = ["MAX_FILE_BYTES", "Session", "UploadTooLarge", "safe_name"]

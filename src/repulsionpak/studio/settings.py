@@ -1,0 +1,160 @@
+"""The studio's settings: the ``repulsionpak pack`` options a designer tunes in the page.
+
+Defaults, ranges and error messages come from the library (:class:`repulsionpak.params.Params`
+and its ``validate``, :func:`repulsionpak.controls.cli_controls` for the element controls), so
+the page refuses exactly what the command line refuses, with the same words. The page's
+values arrive as strings or JSON scalars; :func:`coerce` types them, :func:`run_settings`
+turns the whole set into the run's parameters and element controls, and :func:`command_line`
+into the equivalent command.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import shlex
+from collections.abc import Sequence
+
+from ..controls import cli_controls
+from ..types import ElementControls
+from ..errors import ParameterError
+from ..params import MAX_COUNT, Params
+
+_P = Params()
+_C = ElementControls()
+
+#: the settings and their defaults (the CLI's: None = chosen by the run)
+DEFAULTS: dict[str, object] = {
+    "gap": _P.gap,                      # None: 1% of the container's size (library policy)
+    "count": _P.placement.count,        # None: from the container's area and the gap
+    "seed": _P.seed,                    # None: drawn at random when a run starts
+    "rotation": _C.rotation,            # free | fixed[:ANGLE] | limited:DEG
+    "rigid": _C.rigid,
+    "stiffness": _C.stiffness,
+    "pocket_fill": _P.secondary.auto,
+}
+
+#: what the page shows beside each setting (kind, range, the CLI option)
+SPEC: dict[str, dict] = {
+    "gap": {"kind": "number", "min_exclusive": 0, "option": "--gap", "empty": "auto"},
+    "count": {"kind": "integer", "min": 1, "max": MAX_COUNT, "option": "--count", "empty": "auto"},
+    "seed": {"kind": "integer", "min": 0, "max": 2**64 - 1, "option": "--seed", "empty": "random"},
+    "rotation": {"kind": "rotation", "choices": ["free", "fixed", "limited"], "option": "--rotation"},
+    "rigid": {"kind": "boolean", "option": "--rigid"},
+    "stiffness": {"kind": "number", "min_exclusive": 0, "option": "--stiffness"},
+    "pocket_fill": {"kind": "boolean", "option": "--no-pocket-fill"},
+}
+
+
+def coerce(name: str, value: object) -> object:
+    """The page's ``value`` of setting ``name`` typed (an empty string: the default);
+    raises :class:`ParameterError` naming the option when it is not of the right kind."""
+    if name not in DEFAULTS:
+        raise ParameterError(f"unknown setting {name!r}; the settings are {', '.join(DEFAULTS)}")
+    kind = SPEC[name]["kind"]
+    option = SPEC[name]["option"]
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return DEFAULTS[name]
+    if kind == "boolean":
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str) and value.lower() in ("true", "false", "on", "off"):
+            return value.lower() in ("true", "on")
+        raise ParameterError(f"{option}: expected true or false, got {value!r}")
+    if kind == "rotation":
+        if not isinstance(value, str):
+            raise ParameterError(f"{option} must be free, fixed[:ANGLE] or limited:DEG, got {value!r}")
+        return value.strip()
+    if isinstance(value, bool):
+        raise ParameterError(f"{option} must be a number, got {value!r}")
+    if kind == "integer":
+        if isinstance(value, int):
+            return value
+        if isinstance(value, float) and value.is_integer():
+            return int(value)
+        try:
+            return int(str(value).strip())
+        except ValueError:
+            raise ParameterError(f"{option} must be a whole number, got {value!r}") from None
+    try:
+        f = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{option} must be a number, got {value!r}") from None
+    if not math.isfinite(f):
+        raise ParameterError(f"{option} must be a finite number, got {value!r}")
+    return f
+
+
+def run_settings(settings: dict) -> tuple[Params, ElementControls | None]:
+    """The parameters and element controls of ``repulsionpak pack`` with these options.
+
+    Parameters
+    ----------
+    settings : dict
+        Keys of :data:`DEFAULTS` (missing ones take their default).
+
+    Returns
+    -------
+    params : Params
+        Validated; ``gap`` and ``seed`` stay None when not set.
+    controls : ElementControls or None
+        The ``--rotation``/``--rigid``/``--stiffness`` defaults of every element (None: none given).
+
+    Raises
+    ------
+    ParameterError
+        With the library's message, prefixed by the option it concerns.
+    """
+    s = dict(DEFAULTS, **settings)
+    p = Params()
+    try:
+        if s["gap"] is not None:
+            p = dataclasses.replace(p, gap=s["gap"])
+        if s["seed"] is not None:
+            p = dataclasses.replace(p, seed=s["seed"])
+        if s["count"] is not None:
+            p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=s["count"]))
+        if not s["pocket_fill"]:  # as --no-pocket-fill: no copies in the pockets, none in holes
+            p = dataclasses.replace(p, secondary=dataclasses.replace(
+                p.secondary, auto=False, fill_holes=False, fill_leftover=False))
+        p = p.validate()
+    except ParameterError as exc:
+        option = next((SPEC[k]["option"] for k in ("gap", "seed", "count") if k in str(exc).split(" ")[0]), None)
+        raise ParameterError(f"{option}: {exc}" if option else str(exc)) from None
+    controls = cli_controls(*_control_options(s))
+    return p, controls
+
+
+def _control_options(s: dict) -> tuple[str | None, bool, float | None]:
+    rotation = None if s["rotation"] == DEFAULTS["rotation"] else s["rotation"]
+    stiffness = None if s["stiffness"] == DEFAULTS["stiffness"] else s["stiffness"]
+    return rotation, bool(s["rigid"]), stiffness
+
+
+def _num(v: float) -> str:
+    return f"{v:g}" if float(v) == float(f"{v:g}") else repr(float(v))
+
+
+def command_line(settings: dict, container: str, elements: Sequence[str], output: str = "packing.svg") -> str:
+    """The ``repulsionpak pack`` command with these settings (paths as given, quoted for a shell)."""
+    s = dict(DEFAULTS, **settings)
+    args = ["repulsionpak", "pack", container, *elements, "-o", output]
+    if s["gap"] is not None:
+        args += ["--gap", _num(s["gap"])]
+    if s["seed"] is not None:
+        args += ["--seed", str(s["seed"])]
+    if s["count"] is not None:
+        args += ["--count", str(s["count"])]
+    rotation, rigid, stiffness = _control_options(s)
+    if rotation is not None:
+        args += ["--rotation", rotation]
+    if rigid:
+        args.append("--rigid")
+    if stiffness is not None:
+        args += ["--stiffness", _num(stiffness)]
+    if not s["pocket_fill"]:
+        args.append("--no-pocket-fill")
+    return shlex.join(args)
+
+
+__all__ = ["DEFAULTS", "SPEC", "coerce", "command_line", "run_settings"]

@@ -1,0 +1,233 @@
+// repulsionpak studio: the inputs, settings, brush, history and exports around the live
+// view's page (app.js draws the stage, drags, pins over the WebSocket and shows the status).
+// Routes: see src/repulsionpak/studio/server.py.
+"use strict";
+(function () {
+  const NS = "http://www.w3.org/2000/svg";
+  const token = new URLSearchParams(location.search).get("token") || "";
+  const q = (s) => document.querySelector(s);
+  const stage = q("#stage"), regionLayer = q("#region-layer"), brushLayer = q("#brush-layer");
+  const withToken = (path) => path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(token);
+  let state = null, mode = null, stroke = null, drag = null, lastPhase = null, busy = 0;
+  const SETTINGS = ["gap", "count", "seed", "stiffness"];
+
+  for (const k of ["svg", "pdf", "png"]) q("#export-" + k).setAttribute("href", withToken("/export." + k));
+  q("#save-project").setAttribute("href", withToken("/project.zip"));
+
+  function showError(msg) { q("#setting-error").textContent = msg || ""; }
+
+  async function call(path, opts) {
+    busy++;
+    try {
+      const r = await fetch(withToken(path), opts);
+      const text = await r.text();
+      let body = null;
+      try { body = JSON.parse(text); } catch (e) { body = { error: text }; }
+      if (!r.ok) { showError(body.error || ("error " + r.status)); render(state); return null; }
+      showError("");
+      render(body);
+      return body;
+    } finally { busy--; }
+  }
+  const post = (path, obj) => call(path, { method: "POST", headers: { "Content-Type": "application/json" },
+                                           body: JSON.stringify(obj) });
+  const edit = (obj) => post("/edit", obj);
+  async function upload(path, files) {
+    const fd = new FormData();
+    for (const f of files) fd.append("file", f, f.name);
+    return call(path, { method: "POST", body: fd });
+  }
+
+  // -- the document ---------------------------------------------------------------------
+  function render(s) {
+    if (!s) return;
+    state = s;
+    window.repulsionpakStudio.state = s;
+    q("#container-name").textContent = s.container ? s.container + (s.painted ? " + painted" : "")
+      : (s.painted ? "painted" : "none: paint one with the brush");
+    const ul = q("#element-list");
+    ul.innerHTML = "";
+    s.elements.forEach((name, i) => {
+      const li = document.createElement("li");
+      li.textContent = name;
+      const b = document.createElement("button");
+      b.textContent = "×"; b.title = "remove " + name;
+      b.addEventListener("click", () => edit({ op: "remove-element", index: i }));
+      li.appendChild(b); ul.appendChild(li);
+    });
+    const st = s.settings;
+    for (const k of SETTINGS) {
+      const el = q("#" + k);
+      if (document.activeElement !== el) el.value = st[k] === null ? "" : String(st[k]);
+    }
+    const [rot, ang] = String(st.rotation).split(":");
+    if (document.activeElement !== q("#rotation")) q("#rotation").value = rot;
+    if (document.activeElement !== q("#rotation-angle")) q("#rotation-angle").value = ang === undefined ? "" : ang;
+    q("#rigid").checked = !!st.rigid;
+    q("#pocket-fill").checked = !!st.pocket_fill;
+    q("#command").textContent = s.command || "(open a container and elements)";
+    q("#undo").disabled = !s.history.can_undo;
+    q("#redo").disabled = !s.history.can_redo;
+    q("#undo").title = s.history.undo_label ? "Undo " + s.history.undo_label : "Undo";
+    q("#redo").title = s.history.redo_label ? "Redo " + s.history.redo_label : "Redo";
+    let d = "";
+    for (const ring of s.region) d += "M" + ring.map((p) => p[0] + " " + p[1]).join("L") + "Z";
+    regionLayer.innerHTML = "";
+    if (d) {
+      const p = document.createElementNS(NS, "path");
+      p.setAttribute("d", d); p.setAttribute("fill-rule", "evenodd");
+      regionLayer.appendChild(p);
+    }
+    stage.setAttribute("viewBox", s.view_box.join(" "));
+    if (s.error) q("#message").textContent = "Failed: " + s.error;
+  }
+  window.repulsionpakStudio = { state: null, get busy() { return busy; } };
+
+  // -- inputs ----------------------------------------------------------------------------
+  q("#open-container").addEventListener("change", (ev) => {
+    if (ev.target.files.length) upload("/open-container", ev.target.files);
+    ev.target.value = "";
+  });
+  q("#open-elements").addEventListener("change", (ev) => {
+    if (ev.target.files.length) upload("/open-elements", ev.target.files);
+    ev.target.value = "";
+  });
+  q("#open-project").addEventListener("change", (ev) => {
+    if (ev.target.files.length) upload("/open-project", ev.target.files);
+    ev.target.value = "";
+  });
+  q("#example-container").addEventListener("change", (ev) => {
+    if (ev.target.value) edit({ op: "examples", container: ev.target.value });
+    ev.target.value = "";
+  });
+  q("#example-elements").addEventListener("click", () => edit({ op: "examples", elements: [] }));
+  fetch(withToken("/examples")).then((r) => r.json()).then((ex) => {
+    for (const name of ex.containers) {
+      const o = document.createElement("option"); o.value = name; o.textContent = name;
+      q("#example-container").appendChild(o);
+    }
+  });
+
+  // -- settings --------------------------------------------------------------------------
+  for (const k of SETTINGS) q("#" + k).addEventListener("change", (ev) => edit({ op: "setting", name: k, value: ev.target.value }));
+  function sendRotation() {
+    const r = q("#rotation").value, a = q("#rotation-angle").value.trim();
+    edit({ op: "setting", name: "rotation", value: a && r !== "free" ? r + ":" + a : r });
+  }
+  q("#rotation").addEventListener("change", sendRotation);
+  q("#rotation-angle").addEventListener("change", sendRotation);
+  q("#rigid").addEventListener("change", (ev) => edit({ op: "setting", name: "rigid", value: ev.target.checked }));
+  q("#pocket-fill").addEventListener("change", (ev) => edit({ op: "setting", name: "pocket_fill", value: ev.target.checked }));
+
+  // -- run -------------------------------------------------------------------------------
+  q("#start").addEventListener("click", () => post("/run", { action: "start" }));
+  q("#restart").addEventListener("click", () => post("/run", { action: "restart" }));
+  q("#undo").addEventListener("click", () => edit({ op: "undo" }));
+  q("#redo").addEventListener("click", () => edit({ op: "redo" }));
+
+  // pins go through the history (undoable): taken before app.js sends them itself
+  q("#pin").addEventListener("click", (ev) => {
+    ev.stopImmediatePropagation();
+    const g = stage.querySelector(".element.selected");
+    if (!g) return;
+    edit({ op: "pin", index: Number(g.dataset.index), pinned: g.dataset.pinned !== "true" });
+  }, true);
+
+  // -- brush -----------------------------------------------------------------------------
+  function setMode(m) {
+    mode = mode === m ? null : m;
+    q("#brush").classList.toggle("on", mode === "paint");
+    q("#eraser").classList.toggle("on", mode === "erase");
+    stage.classList.toggle("painting", mode !== null);
+    if (!mode) cursor(null);
+  }
+  q("#brush").addEventListener("click", () => setMode("paint"));
+  q("#eraser").addEventListener("click", () => setMode("erase"));
+  function svgPoint(ev) {
+    const p = stage.createSVGPoint(); p.x = ev.clientX; p.y = ev.clientY;
+    return p.matrixTransform(stage.getScreenCTM().inverse());
+  }
+  function radius() {  // the slider is the brush's diameter in screen pixels
+    const m = stage.getScreenCTM();
+    return Number(q("#brush-size").value) / 2 / Math.hypot(m.a, m.b);
+  }
+  function cursor(p) {
+    let c = brushLayer.querySelector(".cursor");
+    if (!p) { if (c) c.remove(); return; }
+    if (!c) { c = document.createElementNS(NS, "circle"); c.setAttribute("class", "cursor"); brushLayer.appendChild(c); }
+    c.setAttribute("cx", p.x); c.setAttribute("cy", p.y); c.setAttribute("r", radius());
+  }
+  const body = q("#body");
+  // capture phase on an ancestor: while painting, app.js never sees the pointer
+  body.addEventListener("pointerdown", (ev) => {
+    if (!mode || !stage.contains(ev.target)) {
+      const g = ev.target.closest ? ev.target.closest(".element") : null;
+      if (g && stage.contains(g) && !mode) drag = { index: Number(g.dataset.index), start: svgPoint(ev), end: null };
+      return;
+    }
+    ev.stopPropagation(); ev.preventDefault();
+    const p = svgPoint(ev), r = radius();
+    const path = document.createElementNS(NS, "path");
+    path.setAttribute("class", "stroke " + mode);
+    path.setAttribute("stroke-width", 2 * r);
+    brushLayer.appendChild(path);
+    stroke = { mode, radius: r, points: [[p.x, p.y]], path };
+    drawStroke();
+    stage.setPointerCapture(ev.pointerId);
+  }, true);
+  function drawStroke() {
+    const pts = stroke.points;
+    stroke.path.setAttribute("d", "M" + pts.map((p) => p[0].toFixed(2) + " " + p[1].toFixed(2)).join("L") +
+      (pts.length === 1 ? "l0.01 0" : ""));
+  }
+  body.addEventListener("pointermove", (ev) => {
+    if (mode) cursor(svgPoint(ev));
+    if (drag) drag.end = svgPoint(ev);
+    if (!stroke) return;
+    ev.stopPropagation();
+    const p = svgPoint(ev), last = stroke.points[stroke.points.length - 1];
+    if (Math.hypot(p.x - last[0], p.y - last[1]) < stroke.radius * 0.2) return;
+    stroke.points.push([p.x, p.y]);
+    drawStroke();
+  }, true);
+  async function endStroke(ev) {
+    if (drag) {
+      const d = drag; drag = null;
+      if (d.end && (d.end.x !== d.start.x || d.end.y !== d.start.y))
+        edit({ op: "moved", index: d.index, dx: d.end.x - d.start.x, dy: d.end.y - d.start.y });
+    }
+    if (!stroke) return;
+    ev.stopPropagation();
+    const s = stroke; stroke = null;
+    await edit({ op: "stroke", stroke: { mode: s.mode, radius: s.radius, points: s.points } });
+    s.path.remove();
+  }
+  body.addEventListener("pointerup", endStroke, true);
+  body.addEventListener("pointercancel", endStroke, true);
+  stage.addEventListener("pointerleave", () => cursor(null));
+
+  document.addEventListener("keydown", (ev) => {
+    if (ev.target.tagName === "INPUT" || ev.target.tagName === "SELECT") return;
+    if ((ev.ctrlKey || ev.metaKey) && ev.key.toLowerCase() === "z") {
+      ev.preventDefault(); edit({ op: ev.shiftKey ? "redo" : "undo" });
+    } else if (ev.key === "b") setMode("paint");
+    else if (ev.key === "e") setMode("erase");
+  });
+
+  // -- the run's status, as app.js receives it ---------------------------------------------
+  setInterval(() => {
+    const st = (window.repulsionpak && window.repulsionpak.status) || {};
+    const key = st.phase + "/" + !!st.done + "/" + !!st.paused;
+    if (key === lastPhase) return;
+    lastPhase = key;
+    if (st.done) {
+      q("#message").textContent = (st.converged ? "Converged" : "Finished") +
+        ": export it, or change something and Start again.";
+    } else if (st.phase && st.phase !== "idle") {
+      ["#pause", "#step"].forEach((s) => { q(s).disabled = false; });
+    }
+    if (st.phase === "failed") q("#message").textContent = "Failed";
+    call("/state");
+  }, 250);
+  call("/state");
+})();
