@@ -12,7 +12,8 @@ import shapely
 from typer.testing import CliRunner
 
 from repulsionpak.cli import app
-from repulsionpak.controls import ElementControls, Pin, cli_controls, weighted_assignment
+from repulsionpak.controls import cli_controls, weighted_assignment
+from repulsionpak.types import ElementControls, Pin
 from repulsionpak.errors import InputError, ParameterError
 from repulsionpak.geometry.outline import art_area
 from repulsionpak.io import load_container, load_elements, read_packing_svg
@@ -242,7 +243,7 @@ def test_pins_on_a_secondary_element_are_refused(tmp_path):
     import dataclasses as _dc
 
     from repulsionpak import examples as _ex
-    from repulsionpak.controls import ElementControls as _EC, Pin as _Pin
+    from repulsionpak.types import ElementControls as _EC, Pin as _Pin
     from repulsionpak.errors import ParameterError as _PE
     from repulsionpak.io import load_container as _lc, load_elements as _le
     from repulsionpak.pack import pack as _pack

@@ -10,7 +10,7 @@ import pytest
 import shapely
 
 from repulsionpak import scenes
-from repulsionpak.controls import ElementControls
+from repulsionpak.types import ElementControls
 from repulsionpak.errors import ConfigError, ParameterError
 from repulsionpak.measure import art_geometry, scp
 from repulsionpak.geometry.outline import art_area

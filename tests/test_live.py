@@ -200,7 +200,7 @@ def test_added_copy_keeps_its_sources_designer_controls():
     """A copy of a stiff, upright element (issue 12's controls) is stiff and upright too."""
     import dataclasses
 
-    from repulsionpak.controls import ElementControls
+    from repulsionpak.types import ElementControls
     from repulsionpak.io import load_container, load_elements
     from repulsionpak.live import LiveController
     from repulsionpak.pack import pack

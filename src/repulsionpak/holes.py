@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from .controls import ElementControls
+from .types import ElementControls
 from .geometry.outline import art_area
 from .geometry.robust import overlay
 from .geometry.robust import union_all as robust_union_all

@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
+
+from .errors import ParameterError
 
 
 @dataclass(frozen=True)
@@ -177,7 +180,7 @@ class Element:
     paths: tuple[ArtPath, ...]
     #: gradients and patterns the paths refer to: id -> self-contained SVG markup
     paint_servers: dict = field(default_factory=dict)
-    #: designer controls (:class:`repulsionpak.controls.ElementControls`); None: defaults
+    #: designer controls (:class:`ElementControls`); None: defaults
     controls: object | None = None
 
     def all_points(self) -> np.ndarray:
@@ -247,3 +250,77 @@ class PlacedArt:
         from .geometry.outline import art_area  # noqa: PLC0415  (outline imports this module)
 
         return art_area(self.paths, self.stroke_scale)
+
+
+# --------------------------------------------------------------------------- designer controls
+
+
+ROTATIONS = ("free", "fixed", "limited")
+
+
+@dataclass(frozen=True)
+class Pin:
+    """A fixed copy: the centre of the art's bounding box at (``x``, ``y``) (container
+    units), turned by ``angle`` degrees clockwise, at ``scale`` × the source's units."""
+
+    x: float
+    y: float
+    angle: float = 0.0
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class ElementControls:
+    """How the copies of one element may move and deform.
+
+    rotation: "free" | "fixed" (every copy at ``angle``) | "limited" (within
+    ± ``max_rotation`` of ``angle``), degrees clockwise. rigid: the art never deforms
+    (translation, rotation and growth only). stiffness: multiplier of the spring and
+    shape-keeping constants (ignored when rigid). weight: relative frequency of free
+    copies (0: none). pins: fixed copies that never move.
+    """
+
+    rotation: str = "free"
+    angle: float = 0.0
+    max_rotation: float = 20.0
+    rigid: bool = False
+    stiffness: float = 1.0
+    weight: float = 1.0
+    pins: tuple[Pin, ...] = ()
+
+    def __post_init__(self):
+        object.__setattr__(self, "pins", tuple(self.pins))
+        if self.rotation not in ROTATIONS:
+            raise ParameterError(f"rotation must be one of {', '.join(ROTATIONS)}, got {self.rotation!r}")
+        for name in ("angle", "max_rotation", "stiffness", "weight"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ParameterError(f"{name} must be a finite number, got {v!r}")
+        if not 0 <= self.max_rotation <= 180:
+            raise ParameterError(f"max_rotation must be between 0 and 180 degrees, got {self.max_rotation:g}")
+        if not self.stiffness > 0:
+            raise ParameterError(f"stiffness must be > 0, got {self.stiffness:g}")
+        if not self.weight >= 0:
+            raise ParameterError(f"weight must be >= 0, got {self.weight:g}")
+        if not isinstance(self.rigid, bool):
+            raise ParameterError(f"rigid must be true or false, got {self.rigid!r}")
+        for p in self.pins:
+            if not isinstance(p, Pin):
+                raise ParameterError("pins must be Pin(x, y, angle, scale) values")
+            if not (math.isfinite(p.x) and math.isfinite(p.y) and math.isfinite(p.angle)) or not p.scale > 0:
+                raise ParameterError(f"pin {p}: x, y and angle must be finite and scale > 0")
+
+    @property
+    def is_default(self) -> bool:
+        return self == ElementControls()
+
+    @property
+    def limits(self) -> tuple[float, float] | None:
+        """(low, high) absolute orientation in radians, or None when free."""
+        if self.rotation == "fixed":
+            a = math.radians(self.angle)
+            return a, a
+        if self.rotation == "limited" and self.max_rotation < 180:
+            a, d = math.radians(self.angle), math.radians(self.max_rotation)
+            return a - d, a + d
+        return None

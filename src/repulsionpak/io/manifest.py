@@ -24,9 +24,8 @@ import tomllib
 from collections.abc import Sequence
 from pathlib import Path
 
-from ..controls import ElementControls, Pin
 from ..errors import InputError, ParameterError
-from ..types import Element
+from ..types import Element, ElementControls, Pin
 from .load import load_elements
 
 KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight")
