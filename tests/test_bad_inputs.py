@@ -537,7 +537,8 @@ def test_too_fine_a_gap_is_refused_before_anything_is_built_unless_the_limit_is_
     import time
 
     from repulsionpak.io import load_container, load_elements
-    from repulsionpak.pack import check_fineness, pack
+    from repulsionpak.inputs import check_fineness
+    from repulsionpak.pack import pack
     from repulsionpak.params import Params
 
     cont = load_container(CIRCLE)
@@ -580,7 +581,7 @@ def test_a_single_element_without_neighbours_is_summarised(tmp_path):
 
 
 def test_counts_are_of_what_the_verification_kept():
-    from repulsionpak.pack import Packing
+    from repulsionpak.packing import Packing
     from repulsionpak.verify import Verification
 
     class Model:
@@ -664,14 +665,14 @@ def test_small_option_and_reading_messages(tmp_path):
 
 
 def test_a_packing_that_breaks_a_promise_is_written_with_exit_6(tmp_path, monkeypatch):
-    from repulsionpak import packing_output
+    from repulsionpak import packing as packing_module
 
-    real = packing_output.invariants
+    real = packing_module.invariants
 
     def broken(packing, metrics):
         return dict(real(packing, metrics), ok=False, overlap_ok=False)
 
-    monkeypatch.setattr(packing_output, "invariants", broken)
+    monkeypatch.setattr(packing_module, "invariants", broken)
     out = tmp_path / "o.svg"
     r = CliRunner().invoke(app, ["pack", str(CIRCLE), str(APPLE), "-o", str(out), *TINY])
     assert r.exit_code == 6 and out.exists()

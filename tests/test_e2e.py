@@ -241,9 +241,9 @@ def test_a_signal_after_the_simulation_still_writes_the_packing(tmp_path, monkey
     import os
     import signal
 
-    from repulsionpak import packing_output
+    from repulsionpak import packing as packing_module
 
-    real = packing_output.invariants
+    real = packing_module.invariants
 
     def signalled(*args, **kwargs):  # the signal arrives while the packing is measured
         os.kill(os.getpid(), getattr(signal, signame))
@@ -251,7 +251,7 @@ def test_a_signal_after_the_simulation_still_writes_the_packing(tmp_path, monkey
             pass
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(packing_output, "invariants", signalled)
+    monkeypatch.setattr(packing_module, "invariants", signalled)
     E = Path(examples.__file__).parent
     out, rep, png = tmp_path / "o.svg", tmp_path / "o.json", tmp_path / "o.png"
     r = CliRunner().invoke(app, ["pack", str(E / "containers" / "circle.svg"), str(E / "elements" / "apple.svg"),
@@ -294,7 +294,7 @@ def test_a_signal_while_the_art_is_mapped_aborts_at_once(tmp_path, monkeypatch):
 def test_the_thread_cap_also_caps_the_report_fits(monkeypatch):
     """REPULSIONPAK_THREADS=1 kept the simulation on one thread, but a report's distortion
     fits still ran on up to 4 (113 % CPU with the variable set)."""
-    from repulsionpak.cli import _fit_workers
+    from repulsionpak.packing import fit_workers as _fit_workers
 
     monkeypatch.setenv("REPULSIONPAK_THREADS", "1")
     assert _fit_workers() == 1

@@ -217,7 +217,7 @@ def test_elements_vary_in_size():
 
 def test_default_gap_follows_the_width_of_long_thin_containers():
     from repulsionpak.io import load_container
-    from repulsionpak.pack import default_gap
+    from repulsionpak.inputs import default_gap
     from repulsionpak.types import Container
 
     # the examples keep 1 % of their larger side
@@ -237,7 +237,7 @@ def test_default_gap_follows_the_width_of_long_thin_containers():
 def test_default_gap_leaves_room_for_the_count_asked():
     import dataclasses
 
-    from repulsionpak.pack import default_gap
+    from repulsionpak.inputs import default_gap
     from repulsionpak.params import Params
     from repulsionpak.placement import estimate_count
     from repulsionpak.types import Container

@@ -155,10 +155,9 @@ def test_the_builds_workload_needs_no_cli_or_picture_packages(tmp_path):
 
         sys.meta_path.insert(0, Block())
         from repulsionpak import examples
-        from repulsionpak.measure import evaluate, evaluate_file
+        from repulsionpak.measure import evaluate_file
         from repulsionpak.io import load_container, load_elements
-        from repulsionpak.pack import margin_of, pack
-        from repulsionpak.packing_output import invariants, packing_svg_text
+        from repulsionpak.pack import pack
         from repulsionpak.params import params_from_dict
 
         gap = examples.DEFAULT_GAP
@@ -167,10 +166,8 @@ def test_the_builds_workload_needs_no_cli_or_picture_packages(tmp_path):
         params = params_from_dict({"gap": gap, "seed": 1, "placement": {"count": 4},
                                    "sim": {"max_iterations": 200, "settle_iterations": 10, "threads": 1}})
         packing = pack(container, elements, params)
-        metrics = evaluate(container, packing.placed, gap, with_scp=False, margin=margin_of(params, gap),
-                           sources=elements)
-        svg = Path(sys.argv[1]) / "w.svg"
-        svg.write_text(packing_svg_text(packing, metrics, invariants(packing, metrics), path=svg))
+        packing.metrics(distortion=True)
+        svg = packing.save(Path(sys.argv[1]) / "w.svg")
         print(round(evaluate_file(svg, sources=elements)["area_fraction"], 6))
     """)
     env = {**os.environ, "REPULSIONPAK_NO_WARMUP": "1"}

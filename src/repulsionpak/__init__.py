@@ -3,9 +3,10 @@
 An implementation of RepulsionPak (Saputra, Kaplan, Asente, Graphics Interface 2018):
 fill a container shape with deformable copies of vector elements, SVG in, SVG out.
 
->>> from repulsionpak import load_container, load_elements, pack, Params, write_packing_svg
+>>> from repulsionpak import load_container, load_elements, pack, Params
 >>> packing = pack(load_container("heart.svg"), load_elements(["animals/"]), Params(gap=5.2, seed=1))
->>> write_packing_svg("out.svg", packing.container, packing.placed, packing.gap)
+>>> packing.save("out.svg")       # what `repulsionpak pack ... --gap 5.2 --seed 1` writes
+>>> packing.report()["area_fraction"]
 """
 
 import sys as _sys
@@ -38,7 +39,8 @@ from .errors import (ConfigError, DivergedError, InputError, OutputError, Parame
 from .io import load_container, load_element, load_elements, read_packing_svg  # noqa: E402
 from .render.png import render_png  # noqa: E402
 from .render.svg import write_packing_svg  # noqa: E402
-from .pack import Packing, pack  # noqa: E402
+from .pack import pack  # noqa: E402
+from .packing import Packing  # noqa: E402
 from .params import Params, load_config  # noqa: E402
 from .types import ArtPath, Container, Element, PlacedArt, Style  # noqa: E402
 from .measure import evaluate  # noqa: E402

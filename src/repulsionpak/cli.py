@@ -66,20 +66,6 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def _fit_workers() -> int:
-    """Threads for the distortion fits of a report (this process's cores, at most 4, and
-    at most ``$REPULSIONPAK_THREADS``, which caps the simulation's threads too)."""
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on every platform
-        n = os.cpu_count() or 1
-    if os.environ.get("REPULSIONPAK_THREADS", "").strip():
-        from .sim.runner import auto_threads
-
-        n = min(n, auto_threads())
-    return max(1, min(4, n))
-
-
 #: suffixes of raster pictures: not an output SVG (its picture is --png)
 _RASTER = (".png", ".jpg", ".jpeg", ".gif", ".webp", ".bmp", ".tif", ".tiff")
 
@@ -303,7 +289,6 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     serves the run in the browser and writes the outputs only at Ctrl-C (see
     :mod:`repulsionpak.live`). ``container_paint`` (``outline``, ``as-drawn``, ``none``;
     None: the config's, else ``outline``) is how every output draws the container."""
-    from .io import load_container
     from .pack import pack
 
     t_start = time.perf_counter()
@@ -337,28 +322,10 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     if fill_holes and pocket_fill:  # --fill-holes: copies go into the holes of the art too
         params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, fill_holes=True))
-    from .io.files import TooManyPoints
-    from .pack import CONTAINER_TOLERANCE, check_fineness, default_gap
+    from .inputs import load_inputs
 
-    # the container's curves are flattened finely (gap/1000; without a gap, read twice:
-    # the default gap comes from the container's size), so the edge margin is checked
-    # against the outline as drawn, not a polygon that cuts its curves by the tolerance
-    # (on a concave stretch the chords lie outside the curve: art kept gap/2 from a
-    # gap/100 polygon came 0.494 gap from the drawn curve inside a letter C)
-    tol = None if params.gap is None else CONTAINER_TOLERANCE * params.gap
-    try:
-        cont = load_container(container, tolerance=tol)
-    except TooManyPoints:  # a gap far too fine for the container flattens it to millions of points
-        check_fineness(load_container(container), params.gap, params)  # says so, if that is why
-        raise
-    g = params.gap if params.gap is not None else default_gap(cont, params.placement)
-    if tol is None:
-        cont = load_container(container, tolerance=CONTAINER_TOLERANCE * g)
-    params = dataclasses.replace(params, gap=g)
-    from .io.manifest import load_element_args  # element manifests (.toml) and controls
-
-    elems = load_element_args(elements, controls)
-    secs = load_element_args(secondary, controls) if secondary else []
+    run_in = load_inputs(container, elements, params, secondary or (), controls)
+    cont, elems, secs, params = run_in.container, run_in.elements, run_in.secondary, run_in.params
     on_checkpoint = None
     if checkpoint is not None or resume is not None:
         from .checkpoint import fingerprint, load_checkpoint, save_checkpoint
@@ -411,7 +378,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
                            should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
                            resume=resumed, on_stage=lambda name: (prog.stage(name), stop.at_stage(name)),
-                           **snap_kw)
+                           sources=run_in.sources, **snap_kw)
     except BaseException as exc:
         if viewer is not None:
             viewer.close()
@@ -424,22 +391,15 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     # report are written (the outputs still to come are left out); a second one aborts
     with _StopFlag() as late:
         late.polled = True
-        return _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start, container,
-                              elements, secondary, output, report, png, pdf, recorder, progress,
+        return _write_outputs(packing, late, viewer, t_start, output, report, png, pdf, recorder, progress,
                               debug_layers)
 
 
-def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start, container, elements,
-                   secondary, output, report, png, pdf, recorder, progress, debug_layers) -> dict:
+def _write_outputs(packing, late, viewer, t_start, output, report, png, pdf, recorder, progress,
+                   debug_layers) -> dict:
     """Evaluate ``packing`` and write its outputs (the second half of :func:`run_pack`).
     After a signal (``late.stop``) only the SVG and the report are still written; the
     report then lists the outputs left out (``not_written``)."""
-    from .measure import evaluate
-    from .render.png import render_png
-    from .io.files import atomic_write_bytes
-    from .pack import margin_of
-    from .packing_output import container_paint_of, invariants, packing_svg_text, paint_warning
-
     if viewer is not None:
         viewer.drop_removed(packing)
     t_eval = time.perf_counter()
@@ -447,17 +407,14 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
     with _Progress(progress and viewer is None, counters=False) as stages:
         stages.stage("measuring")
         # area, gaps, overlap, edge distances: exact; the distortion fit only for a report
-        metrics = evaluate(cont, packing.placed, g, with_scp=False, margin=margin_of(params, g),
-                           sources=[*elems, *secs] if report is not None else None, workers=_fit_workers(),
-                           primary_scp=report is not None)  # the primaries' Q_s ratio: for the report
-        checks = invariants(packing, metrics)
+        metrics = packing.metrics(distortion=report is not None)
         stages.stage("writing")
-        hiding = paint_warning(packing)
+        hiding = packing.paint_warning()
         if hiding is not None:
             import warnings
 
             warnings.warn(hiding, stacklevel=1)
-        text = packing_svg_text(packing, metrics, checks, debug_layers=debug_layers, path=output)
+        text = packing.svg_text(debug_layers=debug_layers, path=output)
         if viewer is not None:  # serve the result until Ctrl-C, then write it
             viewer.finish(packing, metrics, text)
             served = time.perf_counter()
@@ -467,24 +424,17 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
             viewer.close()
             served = time.perf_counter() - served  # not part of the run's times in the report
             t_start, t_eval = t_start + served, t_eval + served
-        if output.suffix.lower() == ".pdf" or pdf is not None:
-            from .render.pdf import pdf_bytes
-        if output.suffix.lower() == ".pdf":
-            atomic_write_bytes(output, pdf_bytes(text, output))
-        else:
-            atomic_write_bytes(output, text.encode("utf-8"))
+        packing.save(output, debug_layers=debug_layers, format="pdf" if output.suffix.lower() == ".pdf" else "svg")
         not_written: list[str] = []
-        if pdf is not None:
+        for extra, kind, stage in ((pdf, "pdf", None), (png, "png", "drawing the picture")):
+            if extra is None:
+                continue
             if late.stop:
-                not_written.append(str(pdf))
+                not_written.append(str(extra))
             else:
-                atomic_write_bytes(pdf, pdf_bytes(text, pdf))
-        if png is not None:
-            if late.stop:
-                not_written.append(str(png))
-            else:
-                stages.stage("drawing the picture")
-                render_png(png, cont, packing.placed, container_paint=container_paint_of(packing), gap=g)
+                if stage:
+                    stages.stage(stage)
+                packing.save(extra, debug_layers=debug_layers, format=kind)
     seconds = dict(packing.seconds)
     seconds["render"] = seconds.get("render", 0.0) + (time.perf_counter() - t_eval)
     movie_info = None
@@ -505,30 +455,10 @@ def _write_outputs(packing, late, viewer, cont, elems, secs, params, g, t_start,
     if recorder is not None and movie_info is None:
         not_written.append(str(recorder.path))
     seconds["total"] = time.perf_counter() - t_start
-    rep = {
-        "n_primary": packing.n_primary, "n_secondary": packing.n_secondary,
-        "n_vertices": int(packing.model.n_vertices),
-        "iterations": dict(packing.iterations), "seconds": seconds,
-        "area_fraction": metrics["area_fraction"], "overlap_area": metrics["overlap_area"],
-        "gap": g, "gap_stats": metrics["gap"], "seed": params.seed,
-        "outside_area": metrics["outside_area"], "edge": metrics["edge"],
-        "distortion": metrics["distortion"],
-        # the primaries without the pocket copies, and the smallest copy (evaluate())
-        **{k: metrics[k] for k in ("area_fraction_primary", "scp_ratio_primary", "median_primary_size",
-                                   "smallest_secondary_rel")},
-        "partial": packing.partial,
-        "stopped_by": dict(packing.stopped_by, **({"outputs": "interrupted"} if not_written else {})),
-        "invariants": checks,
-        "inputs": {"container": str(container), "elements": [str(e) for e in elements],
-                   "secondary": [str(s) for s in secondary or []]},
-        "params": dict(params.to_dict(), gap=g, margin=margin_of(params, g)),  # as resolved for the run
-    }
-    if movie_info is not None:
-        rep["movie"] = {"file": movie_info.path, "frames": movie_info.frames, "fps": movie_info.fps,
-                        "seconds": movie_info.seconds, "bytes": movie_info.bytes,
-                        "every": movie_info.stride}
-    if not_written:
-        rep["not_written"] = not_written
+    movie_entry = None if movie_info is None else {
+        "file": movie_info.path, "frames": movie_info.frames, "fps": movie_info.fps,
+        "seconds": movie_info.seconds, "bytes": movie_info.bytes, "every": movie_info.stride}
+    rep = packing.report(seconds=seconds, not_written=not_written, movie=movie_entry)
     if report is not None:
         _write_json_atomic(report, rep)
     return rep
@@ -705,6 +635,7 @@ def evaluate(
     _DEBUG = debug
     from .io.files import atomic_write_bytes
     from .measure import evaluate_file, format_table, scp_plot_png
+    from .packing import fit_workers
 
     with _errors():
         if gap is not None and not gap > 0:
@@ -731,7 +662,7 @@ def evaluate(
             for p in packings:
                 prog.stage(f"measuring {p.name}")
                 results.append((p, evaluate_file(p, gap=gap, grid=grid, sources=sources,
-                                                 workers=_fit_workers(), margin=margin)))
+                                                 workers=fit_workers(), margin=margin)))
         for p, r in results if sources is not None else ():
             values = (r.get("distortion") or {}).get("values") or []
             if values and all(v is None for v in values):

@@ -116,7 +116,7 @@ def prepare_controlled(container, elements, params, rng, gap):
     pinned mask (M,), controls (M,))."""
     import shapely  # noqa: PLC0415
 
-    from .pack import margin_of
+    from .inputs import margin_of
     from .placement import Placement, assign_elements, estimate_count, final_scale, place, placed_vertices
     from .preprocess import build_template, outline_of
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
@@ -14,88 +14,18 @@ import shapely
 from .blas import with_one_blas_thread
 from .controls import any_controls, prepare_controlled, setup_model, straighten_limits
 from .errors import ParameterError
-from .params import Params, PlacementParams
-from .placement import Placement, assign_elements, estimate_count, final_scale, gap_for_count, place
+from .inputs import check_fineness, default_gap, load_inputs, margin_of
+from .packing import Packing
+from .params import Params
+from .placement import Placement, assign_elements, estimate_count, final_scale, place
 from .preprocess import Outline, Template, build_template, outline_of
-from .render import is_convex, placed_art, rest_art, skin_polygons
+from .render import is_convex, placed_art, rest_art
 from .room import room_of
 from .sim.model import Model, SimFrame, State, build_model
 from .sim.runner import Simulator, Snapshot
 from .sizing import UNEVEN_SHARE, is_even, narrow_share, plan_sizes
 from .types import Container, Element, PlacedArt
-from .verify import Verification, straighten, verify_and_repair
-
-
-@dataclass(eq=False)
-class Packing:
-    """Result of :func:`pack`: the placed art plus everything needed to inspect or resume."""
-
-    container: Container
-    gap: float
-    placed: list[PlacedArt]
-    templates: list[Template]
-    model: Model
-    state: State
-    frame: SimFrame
-    params: Params
-    iterations: dict[str, int] = field(default_factory=dict)
-    seconds: dict[str, float] = field(default_factory=dict)
-    stopped_by: dict[str, str] = field(default_factory=dict)
-    area_fraction_meshes: float = 0.0
-    verification: Verification | None = None
-
-    @property
-    def partial(self) -> bool:
-        return any(v == "interrupted" for v in self.stopped_by.values())
-
-    @property
-    def n_primary(self) -> int:
-        """Primary elements in the result (after the verification, which may drop some)."""
-        if self.placed or self.verification is not None:
-            return sum(1 for p in self.placed if p.kind == "primary")
-        return sum(1 for k in self.model.kind if k == "primary")
-
-    @property
-    def n_secondary(self) -> int:
-        if self.placed or self.verification is not None:
-            return sum(1 for p in self.placed if p.kind == "secondary")
-        return sum(1 for k in self.model.kind if k == "secondary")
-
-    def skins(self) -> list[np.ndarray]:
-        return skin_polygons(self.model, self.state, self.frame)
-
-
-def default_gap(container: Container, placement: PlacementParams | None = None) -> float:
-    """The gap of a run that names none.
-
-    Parameters
-    ----------
-    container : Container
-    placement : PlacementParams, optional
-        With a ``count``, the gap is also at most the one at which that many elements are
-        ``element_size`` gaps across (the inverse of :func:`repulsionpak.placement.estimate_count`).
-
-    Returns
-    -------
-    float
-        1% of the container's larger side, at most 4% of the widest circle it holds (and
-        at most the count's gap), to 4 significant digits (a readable data-gap).
-
-    Notes
-    -----
-    The circle cap only binds on containers much longer than wide: a 20:1 strip got a gap
-    of a fifth of its height from its length, and held 3 elements. The count cap binds
-    when many elements are asked for: 1,000 copies in a 1000 × 1500 poster at a gap of 15
-    could be 24 units across at most, 1.6 gaps, and covered a fifth of it. The example
-    containers keep 1% of their larger side.
-    """
-    minx, miny, maxx, maxy = container.bounds
-    gap = 0.01 * max(maxx - minx, maxy - miny)
-    circle = shapely.maximum_inscribed_circle(container.region, 1e-3 * gap)
-    gap = min(gap, 0.04 * 2 * circle.length)
-    if placement is not None and placement.count:
-        gap = min(gap, gap_for_count(container.region.area, placement.count, placement))
-    return float(f"{gap:.4g}")
+from .verify import straighten, verify_and_repair
 
 
 def bend_limits(templates, template_index, sim) -> np.ndarray:
@@ -119,12 +49,6 @@ def bend_limits(templates, template_index, sim) -> np.ndarray:
     return np.array([out[int(ti)] for ti in template_index])
 
 
-#: ``repulsionpak pack`` and ``batch`` flatten the container's curves to within this
-#: share of the gap: the edge margin is checked against that polygon, whose chords lie
-#: outside the drawn curve on concave stretches by up to this much
-CONTAINER_TOLERANCE = 0.001
-
-
 #: the automatic pocket fill's cap on its copies is 10 per primary, and at least this
 AUTO_FILL_MIN = 50
 
@@ -138,11 +62,6 @@ def skin_excess(params: Params, gap: float) -> float:
     the verification's growth closes it (:func:`repulsionpak.verify.verify_and_repair`)."""
     pp = params.preprocess
     return max(0.0, pp.skin_offset - 0.5) * gap + pp.skin_tolerance * gap
-
-
-def margin_of(params: Params, gap: float) -> float:
-    """The edge margin in container units: ``params.margin``, or half the gap."""
-    return 0.5 * gap if params.margin is None else float(params.margin)
 
 
 def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float:
@@ -205,25 +124,6 @@ def checked_gap(container: Container, elements: Sequence[Element], params: Param
             f"(its largest inscribed circle), which leaves less than a gap for an element's art between the "
             f"edge margins ({margin:g} on each side); use a gap below {most:.3g}")
     return gap
-
-
-def check_fineness(container: Container, gap: float, params: Params) -> None:
-    """Refuse a gap so fine for the container that its meshes would need more than
-    ``placement.max_vertices`` vertices (estimated as area / gap²: skins are sampled a gap
-    apart and the elements grow until they fill the container, however many there are)."""
-    need = container.area / (gap * gap)
-    limit = params.placement.max_vertices
-    if need > limit:
-        minx, miny, maxx, maxy = container.bounds
-        size = max(maxx - minx, maxy - miny)
-        least = math.sqrt(container.area / limit)
-        about = f"{need:,.0f}" if need < 1e12 else f"{need:.1e}"
-        raise ParameterError(
-            f"the gap ({gap:g}, {100 * gap / size:.2g}% of the container's {size:g} units) is too fine: its "
-            f"meshes would need about {about} vertices (the container's area / gap²), more than "
-            f"placement.max_vertices = {limit:,}; use a gap of at least {least:.3g} "
-            f"({100 * least / size:.2g}% of the container's size; 1% is typical), or raise "
-            "placement.max_vertices in a --config file to try anyway")
 
 
 def prepare(container: Container, elements: Sequence[Element], params: Params,
@@ -291,35 +191,61 @@ def room_placement(container: Container, outlines: Sequence[Outline], gap: float
 def _check_arguments(container, elements, secondary, params) -> None:
     """ParameterError naming the argument of :func:`pack` of the wrong kind (they failed
     deep inside with an AttributeError or a TypeError)."""
-    from pathlib import Path  # noqa: PLC0415
+    import os  # noqa: PLC0415
 
-    if not isinstance(container, Container):
-        raise ParameterError(f"pack(): the container must be a Container (load_container(path) reads one), "
-                             f"got {type(container).__name__}")
+    if not isinstance(container, (Container, str, os.PathLike)):
+        raise ParameterError(f"pack(): the container must be a Container (load_container(path) reads one) "
+                             f"or its file's path, got {type(container).__name__}")
     for name, seq in (("elements", elements), ("secondary", secondary)):
-        if isinstance(seq, (str, bytes, Path, Element)) or not hasattr(seq, "__iter__"):
+        if isinstance(seq, (str, os.PathLike)) and name == "elements":
+            continue
+        if isinstance(seq, (str, bytes, os.PathLike, Element)) or not hasattr(seq, "__iter__"):
             raise ParameterError(f"pack(): {name} must be a list of Element (load_elements(paths) reads "
-                                 f"them), got {type(seq).__name__}")
+                                 f"them) or of paths, got {type(seq).__name__}")
+        kinds = {isinstance(e, Element) for e in seq if isinstance(e, (Element, str, os.PathLike))}
         for e in seq:
-            if not isinstance(e, Element):
+            if not isinstance(e, (Element, str, os.PathLike)) or len(kinds) > 1:
                 raise ParameterError(f"pack(): {name} must be a list of Element (load_elements(paths) reads "
-                                     f"them), got a {type(e).__name__} in it")
+                                     f"them) or of paths, got a {type(e).__name__} in it")
     if not isinstance(params, Params):
         raise ParameterError(f"pack(): params must be a Params (params_from_dict(d) builds one from a dict), "
                              f"got {type(params).__name__}")
 
 
 @with_one_blas_thread
-def pack(container: Container, elements: Sequence[Element], params: Params = Params(),
-         secondary: Sequence[Element] = (), on_snapshot: Callable[[Snapshot], None] | None = None,
+def pack(container: Container | str | os.PathLike, elements: Sequence[Element] | Sequence[str | os.PathLike],
+         params: Params = Params(), secondary: Sequence[Element] | Sequence[str | os.PathLike] = (),
+         on_snapshot: Callable[[Snapshot], None] | None = None,
          should_stop: Callable[[], bool] | None = None,
          on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 500,
          resume: dict | None = None, snapshot_every: int = 25,
-         on_stage: Callable[[str], None] | None = None) -> Packing:
+         on_stage: Callable[[str], None] | None = None, sources: dict | None = None) -> Packing:
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
-    ``params.seed`` fixes every random choice; without one a seed is drawn at random and
-    recorded in the result's ``params`` (a packing can always be made again).
+    Parameters
+    ----------
+    container : Container or path
+        Read (or read again) as every run reads it: flattened to a thousandth of the gap
+        (:func:`repulsionpak.inputs.run_container`).
+    elements, secondary : sequence of Element, or of paths
+        Paths: files, folders and element manifests, as the command line takes them.
+        Without ``secondary`` the pockets get small copies of the elements
+        (``params.secondary.auto``).
+    params : Params
+        ``gap`` None: the container's default gap; ``seed`` None: drawn at random and
+        recorded in the result (a packing can always be made again).
+    sources : dict, optional
+        The inputs' names for the report (default: the paths given, or the files the
+        container and elements were read from).
+
+    Returns
+    -------
+    Packing
+        Byte-identical files (:meth:`Packing.save`) to ``repulsionpak pack`` given the
+        same inputs, seed and parameters.
+
+    Notes
+    -----
     ``on_snapshot`` receives progress snapshots (every ``snapshot_every`` iterations, and
     at the end of each phase); ``should_stop()`` (or Ctrl-C) ends the current phase early
     and the result is marked partial.
@@ -343,6 +269,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
         import secrets  # noqa: PLC0415
 
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
+    inputs = load_inputs(container, elements, params, secondary)  # the gap; the container re-read for it
+    container, elements, secondary, params = inputs.container, inputs.elements, inputs.secondary, inputs.params
+    asked, given_secondary = params, tuple(secondary)
     for e in secondary:
         if getattr(e, "controls", None) is not None and e.controls.pins:
             raise ParameterError(f"{e.source}: pins are for primary elements; give the pinned "
@@ -375,7 +304,9 @@ def pack(container: Container, elements: Sequence[Element], params: Params = Par
     packing = Packing(container, gap, [], templates, model, state, frame, params,
                       iterations={"primary": res.iterations, "secondary": 0},
                       seconds={"preprocess": t1 - t0, "primary": t2 - t1, "secondary": 0.0},
-                      stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction)
+                      stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction,
+                      asked=asked, elements=tuple(elements), secondary=given_secondary,
+                      sources=inputs.sources if sources is None else sources)
     user_cap = params.secondary.max_count  # a bound on every secondary copy, the fills' too
     auto = not secondary and params.secondary.auto  # pockets get copies of the primaries
     if auto:
@@ -480,4 +411,4 @@ def _room(cap: int | None, placed: list[PlacedArt]) -> int | None:
     return None if cap is None else max(0, cap - sum(1 for p in placed if p.kind == "secondary"))
 
 
-__all__ = ["Packing", "pack", "prepare", "default_gap"]
+__all__ = ["pack", "prepare"]

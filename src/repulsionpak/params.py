@@ -6,7 +6,7 @@ side is 1000 units. The simulation runs in such normalised units (see
 ``sim.model.SimFrame``), which is how the defaults "work for any container size".
 
 Parameters are data: load them from TOML with :func:`load_config`, change them with
-``dataclasses.replace``.
+:meth:`Params.with_` (``Params(gap=5).with_(sim__k_edge=40)``).
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ class PlacementParams:
     element_size: float = _doc(
         15.0, "× gap", "Typical final element diameter used to estimate the count (when count is None): "
         "the larger, the fewer and bigger the elements, and the less of the container their gaps take "
-        "(12 until November 28; 15 covers more on 48 of the 53 suite scenes, see docs/quality.md).")
+        "(15 covers more than 12 on 48 of the 53 suite scenes, see docs/quality.md).")
     initial_fraction: float = _doc(
         0.075, "-", "Share of the container area the skins occupy at the start (paper: 5–10%).")
     follow_room: bool = _doc(
@@ -229,8 +229,8 @@ class SecondaryParams:
         "secondary copies, like a hole; part of the pocket fill (off with it).")
     hole_min_radius: float = _doc(
         0.5, "× gap", "Smallest inscribed circle of a hole's free part (the hole shrunk by the gap) "
-        "that gets a copy (1.0 until November 26: 5-pointed stars at a 0.5% gap kept "
-        "Q_s(gap/2)/Q_s(0) at 0.46-0.48; see docs/algorithm.md).")
+        "that gets a copy (at 1.0, 5-pointed stars at a 0.5% gap kept Q_s(gap/2)/Q_s(0) at "
+        "0.46-0.48; see docs/algorithm.md).")
     hole_depth: int = _doc(2, "-", "Holes of hole copies are filled too, this many levels deep.")
 
 
@@ -498,6 +498,48 @@ class Params:
                                      + (f"; did you mean '{close[0]}'?" if close else ""))
         return self
 
+    def with_(self, **changes) -> "Params":
+        """These parameters with some changed, validated.
+
+        Parameters
+        ----------
+        **changes
+            Top-level names (``gap=5``, ``seed=1``) and nested ones with a double
+            underscore between section and name (``sim__k_edge=40``,
+            ``placement__count=30``).
+
+        Returns
+        -------
+        Params
+            A new, validated :class:`Params` (see :meth:`validate`).
+
+        Raises
+        ------
+        ParameterError
+            An unknown name (the message lists the valid ones) or a value that cannot work.
+        """
+        top_valid = [f.name for f in fields(Params)]
+        top: dict = {}
+        nested: dict[str, dict] = {}
+        for key, value in changes.items():
+            section, sep, name = key.partition("__")
+            if not sep:
+                if key not in top_valid:
+                    raise _unknown_name(key, top_valid + [f"{s}__{f.name}" for s, c in _SECTIONS.items()
+                                                          for f in fields(c)])
+                top[key] = value
+            elif section not in _SECTIONS:
+                raise _unknown_name(key, [f"{s}__NAME" for s in _SECTIONS], "section ")
+            else:
+                valid = [f.name for f in fields(_SECTIONS[section])]
+                if name not in valid:
+                    raise _unknown_name(key, [f"{section}__{v}" for v in valid])
+                nested.setdefault(section, {})[name] = value
+        new = dataclasses.replace(self, **top)
+        for section, sub in nested.items():
+            new = dataclasses.replace(new, **{section: dataclasses.replace(getattr(new, section), **sub)})
+        return new.validate()
+
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
 
@@ -508,6 +550,13 @@ MAX_COUNT = 100_000
 _SECTIONS = {"preprocess": PreprocessParams, "placement": PlacementParams,
              "sim": SimParams, "secondary": SecondaryParams, "render": RenderParams,
              "verify": VerifyParams, "output": OutputParams}
+
+
+def _unknown_name(key: str, valid: list[str], what: str = "") -> ParameterError:
+    """ParameterError for :meth:`Params.with_`: the unknown name, the closest valid one or all."""
+    close = difflib.get_close_matches(key, valid, n=1, cutoff=0.6)
+    hint = f"did you mean '{close[0]}'? " if close else ""
+    return ParameterError(f"Params.with_(): unknown {what}name '{key}'; {hint}valid names: {', '.join(valid)}")
 
 
 def _check_type(value, tp, where: str, source: str):

@@ -203,6 +203,11 @@ class Container:
     svg_root: dict = field(default_factory=dict)
     #: gradients and patterns the outlines refer to: id -> self-contained SVG markup
     paint_servers: dict = field(default_factory=dict)
+    #: the file it was read from (None: built in memory)
+    path: str | None = None
+    #: the curve tolerance it was flattened to (None: the reader's default, which
+    #: :func:`repulsionpak.inputs.run_container` replaces by the run's)
+    tolerance: float | None = None
 
     @property
     def area(self) -> float:

@@ -24,7 +24,7 @@ from ..errors import OutputError
 from ..params import Params
 from .jobs import MAX_JOBS, THUMBNAIL_PX, Job, make_jobs, parse_seeds, parse_set, thumbnail_size
 from .outputs import CSV_COLUMNS, best_result, check_outdir, results_csv, write_summary, write_svg
-from .tasks import BatchInputs, JobFailed, JobResult, dask_client, run_job, run_jobs
+from .tasks import BatchInputs, JobFailed, JobResult, dask_client, require_dask, run_job, run_jobs
 
 
 @dataclass
@@ -53,15 +53,6 @@ def _n_combos(settings) -> int:
     return n
 
 
-def _tolerance(jobs: Sequence[Job]) -> float:
-    """Curve flattening tolerance of the shared container read: gap/1000 like
-    ``repulsionpak pack`` (the edge margin is checked against the outline as drawn), for
-    the smallest gap of the batch (the same read as ``pack`` when all jobs share a gap)."""
-    from ..pack import CONTAINER_TOLERANCE
-
-    return CONTAINER_TOLERANCE * min(j.params.gap for j in jobs)
-
-
 def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: str,
               sets: Sequence[str] = (), base: Params = Params(), secondary: Sequence[Path] = (),
               workers: int | None = None, scheduler: str | None = None,
@@ -77,22 +68,21 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
     (element manifests among ``elements`` are read as by ``pack``). A Ctrl-C (KeyboardInterrupt) cancels the rest and still
     writes the outputs of what finished (``summary.interrupted``).
     """
-    from ..io import load_container
-    from ..pack import default_gap
+    from ..inputs import load_inputs, run_container
 
+    require_dask("repulsionpak batch")
     t0 = time.perf_counter()
     check_outdir(outdir, [container, *elements, *secondary], [*elements, *secondary])
     seed_list = parse_seeds(seeds)
     settings = [parse_set(s) for s in sets]
     make_jobs(base, seed_list, settings)  # all parameter errors before any work
-    if base.gap is None:  # as pack: the default gap comes from the container's size
-        base = dataclasses.replace(base, gap=default_gap(load_container(container), base.placement))
-    jobs = make_jobs(base, seed_list, settings, thumbnail_size(len(seed_list) * _n_combos(settings)))
-    cont = load_container(container, tolerance=_tolerance(jobs))
-    from ..io.manifest import load_element_args
-
-    inputs = BatchInputs(cont, tuple(load_element_args(list(elements), controls)),
-                         tuple(load_element_args(list(secondary), controls)) if secondary else ())
+    read = load_inputs(container, list(elements), base, list(secondary), controls)  # the gap, as pack reads
+    jobs = make_jobs(read.params, seed_list, settings, thumbnail_size(len(seed_list) * _n_combos(settings)))
+    cont = read.container
+    least = min(j.params.gap for j in jobs)
+    if least != read.params.gap:  # --set gap=...: the container flattened for the finest gap
+        cont, _ = run_container(container, dataclasses.replace(read.params, gap=least))
+    inputs = BatchInputs(cont, read.elements, read.secondary)
     outdir = Path(outdir)
     files: dict[int, str] = {}
     best: list = [None, None]  # ((scp_half_gap, job index), svg text) of the best so far
@@ -123,4 +113,4 @@ def run_batch(container: Path, elements: Sequence[Path], outdir: Path, seeds: st
 
 __all__ = ["BatchInputs", "BatchSummary", "CSV_COLUMNS", "MAX_JOBS", "THUMBNAIL_PX", "Job", "JobFailed",
            "JobResult", "best_result", "check_outdir", "dask_client", "make_jobs", "parse_seeds", "parse_set",
-           "results_csv", "run_batch", "run_job", "run_jobs", "thumbnail_size", "write_summary", "write_svg"]
+           "require_dask", "results_csv", "run_batch", "run_job", "run_jobs", "thumbnail_size", "write_summary", "write_svg"]

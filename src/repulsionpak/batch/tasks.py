@@ -118,9 +118,7 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
     simulation runs on one thread: a batch already keeps every core busy with one task
     per worker thread.
     """
-    from ..measure import evaluate
-    from ..pack import margin_of, pack
-    from ..packing_output import container_paint_of, invariants, packing_svg_text, paint_warning
+    from ..pack import pack
 
     started, t0, c0 = time.time(), time.perf_counter(), time.thread_time()
     res = JobResult(name=job.name, seed=job.seed, setting=job.setting,
@@ -134,22 +132,18 @@ def run_job(inputs: BatchInputs, job: Job) -> JobResult:
             packing = pack(inputs.container, inputs.elements, params, secondary=inputs.secondary,
                            should_stop=_cancel_probe())
         res.warnings = [" ".join(str(w.message).split()) for w in caught]
-        hiding = paint_warning(packing)  # --container-paint as-drawn over art of its colour
+        hiding = packing.paint_warning()  # --container-paint as-drawn over art of its colour
         if hiding is not None:
             res.warnings.append(" ".join(hiding.split()))
         res.iterations = dict(packing.iterations)
         if packing.partial:
             raise JobFailed("cancelled before it finished", 130)
-        metrics = evaluate(inputs.container, packing.placed, packing.gap, with_scp=job.scp,
-                           margin=margin_of(params, packing.gap))
-        checks = invariants(packing, metrics)
+        metrics = packing.metrics(distortion=False, scp=job.scp)
+        checks = packing.checks()
         if job.svg:
-            res.svg = packing_svg_text(packing, metrics, checks, path=f"{job.name}.svg")
+            res.svg = packing.svg_text(path=f"{job.name}.svg")
         if job.thumbnail_px:
-            from ..render.png import png_bytes
-
-            res.thumbnail = png_bytes(inputs.container, packing.placed, size_px=job.thumbnail_px,
-                                      container_paint=container_paint_of(packing), gap=packing.gap)
+            res.thumbnail = packing.png_bytes(job.thumbnail_px)
         res.metrics = metrics
         if not checks["ok"]:  # written for inspection, like `pack` (exit code 6), never the best
             broken = sorted(k[:-3] for k, v in checks.items() if k.endswith("_ok") and v is False)
@@ -189,12 +183,23 @@ def _sigint_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, old)
 
 
+def require_dask(what: str = "running packings on Dask") -> None:
+    """Raise a one-line :class:`ParameterError` naming the install command when Dask
+    (the optional extra ``batch``: ``dask`` and ``distributed``) is missing."""
+    try:
+        import dask  # noqa: F401
+        import distributed  # noqa: F401
+    except ImportError:
+        raise ParameterError(f"{what} needs Dask: pip install 'repulsionpak[batch]'") from None
+
+
 @contextlib.contextmanager
 def dask_client(workers: int | None = None, scheduler: str | None = None,
                 timeout: float = 10.0) -> Iterator:
     """A :class:`distributed.Client`: on a new :class:`~distributed.LocalCluster` of
     ``workers`` single-threaded worker processes (default: one per core), or on the
     running scheduler at ``scheduler`` (``tcp://HOST:PORT``). Closed on exit."""
+    require_dask()
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
@@ -277,4 +282,4 @@ def run_jobs(client, inputs: BatchInputs, jobs: Sequence[Job],
     return results, False
 
 
-__all__ = ["BatchInputs", "JobFailed", "JobResult", "dask_client", "run_job", "run_jobs"]
+__all__ = ["BatchInputs", "JobFailed", "JobResult", "dask_client", "require_dask", "run_job", "run_jobs"]

@@ -12,6 +12,7 @@ naming the file (:func:`~.files.guard`), never as a deep traceback.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 from ..errors import InputError
@@ -63,8 +64,10 @@ def load_container(path: str | Path, tolerance: float | None = None) -> Containe
     with guard(p, "container file"):
         data = read_input_bytes(p, "container file")
         if sniff_kind(p, data) == "path":
-            return container_from_pathfile(p, data, tol)
-        return container_from_svg(p, data, tol)
+            c = container_from_pathfile(p, data, tol)
+        else:
+            c = container_from_svg(p, data, tol)
+    return dataclasses.replace(c, path=str(path), tolerance=tol)  # a run may re-read it (inputs.py)
 
 
 def load_elements(paths, tolerance: float | None = None) -> list[Element]:

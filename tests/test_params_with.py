@@ -1,0 +1,31 @@
+"""``Params.with_``: one call changes top-level and nested parameters, validated."""
+
+from __future__ import annotations
+
+import pytest
+
+from repulsionpak import Params
+from repulsionpak.errors import ParameterError
+
+
+def test_nested_names_take_a_double_underscore():
+    base = Params(gap=5, seed=1)
+    p = base.with_(sim__k_edge=40, placement__count=30, margin=2)
+    assert (p.sim.k_edge, p.placement.count, p.margin, p.gap, p.seed) == (40.0, 30, 2.0, 5.0, 1)
+    assert type(p.sim.k_edge) is float  # as validate() types it (TOML gives floats)
+    assert (base.sim.k_edge, base.placement.count) == (Params().sim.k_edge, None)  # frozen: a new one
+    assert p.sim.k_repulsion == base.sim.k_repulsion and p.preprocess is base.preprocess
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"sim__k_edg": 1}, r"unknown name 'sim__k_edg'; did you mean 'sim__k_edge'\?.*sim__k_repulsion"),
+    ({"simm__k_edge": 1}, r"unknown section name 'simm__k_edge'.*sim__NAME, secondary__NAME"),
+    ({"gapp": 3}, r"unknown name 'gapp'; did you mean 'gap'\?.*seed, margin"),
+    ({"sim__k_edge": -1}, r"sim\.k_edge must be >= 0"),
+    ({"placement__count": "x"}, r"placement\.count must be an int, got 'x'"),
+    ({"gap": 0}, r"gap must be a positive number"),
+    ({"output__container_paint": "asdrawn"}, r"did you mean 'as-drawn'"),
+])
+def test_unknown_names_and_bad_values_are_parameter_errors(kw, message):
+    with pytest.raises(ParameterError, match=message):
+        Params().with_(**kw)
