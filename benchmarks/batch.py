@@ -2,7 +2,7 @@
 
     python benchmarks/batch.py speedup [--seeds 1-8] [--repeat 2]  # 8 heart packings: in-process, 1 and 2 workers
     python benchmarks/batch.py overhead [--tasks 200]  # per-task cost of the Dask path (instant jobs)
-    python benchmarks/batch.py study                    # `repulsionpak study` (2 k_e x 2 runs), 1 and 2 workers
+    python benchmarks/batch.py study                    # benchmarks/deformation_study.py (2 k_e x 2 runs), 1 and 2 workers
 
 The heart scene is the paper's (``../shared/data``, gap 5.2, no secondaries); without
 it the shipped heart and example library are used. Results are printed as Markdown for
@@ -134,12 +134,12 @@ def bench_overhead(tasks: int = 200) -> None:
 
 def bench_study() -> None:
     print(machine())
-    print("| workers | `repulsionpak study --runs 2 --k-edge 10 --k-edge 1000` wall |")
+    print("| workers | `python benchmarks/deformation_study.py --runs 2 --k-edge 10 --k-edge 1000` wall |")
     print("| ---: | ---: |")
     for workers in (1, 2):
         with tempfile.TemporaryDirectory() as tmp:
             t = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "repulsionpak.cli", "study", "-o", f"{tmp}/s.png", "--runs", "2",
+            subprocess.run([sys.executable, str(HERE / "deformation_study.py"), "-o", f"{tmp}/s.png", "--runs", "2",
                             "--k-edge", "10", "--k-edge", "1000", "--workers", str(workers), "-q"], check=True)
             print(f"| {workers} | {time.perf_counter() - t:.1f} s |")
 

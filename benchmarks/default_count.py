@@ -3,7 +3,7 @@
 Without ``--count`` a packing has container area / (``placement.element_size`` × gap)²
 primaries. This packs every scene of a suite at its own gap and seed but with the count
 left to that estimate, once per element size, measures it as ``benchmarks/contract.py``
-does (:func:`repulsionpak.scenes.measure`, the seven promises) and prints one line per
+does (:func:`scenes.measure`, the seven promises) and prints one line per
 scene and size, then a summary per size (the table in docs/quality.md, "The default
 count").
 
@@ -30,7 +30,7 @@ import contract  # noqa: E402  (benchmarks/contract.py: the suites' own measurin
 
 
 def _suite(name: str):
-    from repulsionpak import scenes
+    import scenes
 
     return scenes.suite() if name == "main" else scenes.holdout_suite()
 
@@ -38,7 +38,7 @@ def _suite(name: str):
 def run_one(task: tuple[str, str, float, str]) -> dict:
     """Pack one scene with the default count at one element size; its numbers."""
     suite, name, size, workdir = task
-    from repulsionpak import scenes
+    import scenes
 
     scene = {s.name: s for s in _suite(suite)}[name]
     base = Path(workdir) / f"es{size:g}"

@@ -12,7 +12,7 @@ and prints both (markdown table).
         --out-dir /tmp/equal-gap heart convex-circle stars-circle ...
 
 ``heart`` is the paper's scene (../shared/data, gap 5.2, seed 1); other names are scenes of
-:func:`repulsionpak.scenes.suite` or :func:`repulsionpak.scenes.holdout_suite`. Nothing here
+:func:`scenes.suite` or :func:`scenes.holdout_suite`. Nothing here
 writes into the repository.
 """
 
@@ -26,7 +26,7 @@ import sys
 import time
 from pathlib import Path
 
-from repulsionpak import scenes
+import scenes
 from repulsionpak.cli import run_pack
 from repulsionpak.measure import evaluate_file
 from repulsionpak.io import load_elements
@@ -50,7 +50,7 @@ def old_pack(args, container, elements, out, gap, seed, count) -> float:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("scenes", nargs="+", help="'heart' or names from repulsionpak.scenes.suite() or "
+    ap.add_argument("scenes", nargs="+", help="'heart' or names from scenes.suite() or "
                     "holdout_suite()")
     ap.add_argument("--old-src", type=Path, required=True, help="src/ folder of the old checkout")
     ap.add_argument("--old-python", default=sys.executable, help="Python with the old version's dependencies")

@@ -1,7 +1,7 @@
 """Random scenes beyond both suites: look for a broken promise where nobody looked yet.
 
 Each scene combines the suites' own element kinds (plus glyphs, most of which neither
-suite uses, and the probe kinds of :mod:`repulsionpak.scenes` no suite uses: a bullseye
+suite uses, and the probe kinds of :mod:`scenes` no suite uses: a bullseye
 with a disc in its hole, three separate dots, a spiral, a comb, a lightning bolt, stroked
 line art) with one of their containers (or a crescent, a cross, a target with a disc in
 its ring), a gap of 0.5–3 % of the container, 5–100
@@ -37,7 +37,7 @@ def random_scenes(count: int, seed: int, gaps=None, counts=None):
     """``count`` random scenes (names ``rp<seed>-<i>``, packing seeds 1000 + i); ``gaps``
     and ``counts``, when given, replace the lists the gap and the number of primaries are
     drawn from (to search one corner, e.g. few primaries at a fine gap)."""
-    from repulsionpak.scenes import CONTAINER_KINDS, ELEMENT_KINDS, Scene
+    from scenes import CONTAINER_KINDS, ELEMENT_KINDS, Scene
 
     rnd = random.Random(seed)
     kinds = list(ELEMENT_KINDS) + [f"glyph-{c}" for c in EXTRA_GLYPHS]

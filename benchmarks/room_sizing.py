@@ -6,7 +6,7 @@ two-region scenes.
     python benchmarks/room_sizing.py --scenes archipelago --seeds 1-3 --elements animals
     python benchmarks/room_sizing.py --scenes thin-two     # a suite scene (its own gap, count, seed)
 
-Region scenes (``repulsionpak.region_scenes``: archipelago, band, country; container seed =
+Region scenes (``region_scenes``: archipelago, band, country; container seed =
 packing seed) are packed at a gap of 1.5 % of the container's width (1000 units: gap 15),
 default count, with the paper's animals (``../shared/data/animals``; ``--elements
 examples`` for the shipped library). Every run is ``repulsionpak pack ... --no-pocket-fill``
@@ -26,8 +26,8 @@ import tempfile
 from importlib import resources
 from pathlib import Path
 
-from repulsionpak.region_scenes import REGION_KINDS, container_svg
-from repulsionpak.scenes import suite, write_suite
+from region_scenes import REGION_KINDS, container_svg
+from scenes import suite, write_suite
 
 ANIMALS = Path(__file__).resolve().parents[2] / "shared" / "data" / "animals"
 

@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import ParameterError
-from .io.svg_write import atomic_write_bytes
+from repulsionpak.errors import ParameterError
+from repulsionpak.io.svg_write import atomic_write_bytes
 
 __all__ = [
     "ELEMENT_KINDS",
@@ -667,9 +667,9 @@ def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None)
     (:func:`repulsionpak.measure.check_promises`) and ``sources`` (each element's
     ``data-source``).
     """
-    from .evaluate import evaluate
-    from .io import load_container, load_elements, read_packing_svg
-    from .metrics import check_promises, source_geometries
+    from repulsionpak.measure import evaluate
+    from repulsionpak.io import load_container, load_elements, read_packing_svg
+    from repulsionpak.measure import check_promises, source_geometries
 
     container = load_container(files.container, tolerance=files.gap / 2000)
     _, placed, _ = read_packing_svg(packing_svg)
@@ -695,7 +695,7 @@ def run_scene(scene: Scene, workdir: str | Path, grid: int | None = None, png: b
     """
     import time
 
-    from .cli import run_pack
+    from repulsionpak.cli import run_pack
 
     files = scene.write(workdir)
     base = files.container.parent

@@ -33,7 +33,8 @@ from repulsionpak.measure import evaluate, evaluate_file
 from repulsionpak.io import load_container, load_elements
 from repulsionpak.pack import pack
 from repulsionpak.params import params_from_dict
-from repulsionpak.study import deformation_study, study_jobs
+from deformation_study import deformation_study, study_jobs
+from deformation_study import main as study_main
 
 pytest.importorskip("distributed")
 
@@ -202,6 +203,19 @@ def test_study_runs_on_the_batch_machinery_with_the_same_results(local_client):
     assert set(res["summary"]) == {"k_e=10", "k_e=1000"}
     for label, group in res["groups"].items():
         assert res["summary"][label]["area_fraction"] == pytest.approx(group[0]["area_fraction"])
+
+
+def test_study_script_names_a_bad_option(tmp_path, capsys):
+    """benchmarks/deformation_study.py: a bad --k-edge is one error line naming the option,
+    the exit code of a parameter error, and no plot."""
+    out = tmp_path / "s.png"
+    assert study_main(["--runs", "1", "--k-edge", "-5", "-o", str(out), "-q"]) == 3
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert err.strip().splitlines() == ["deformation_study: error: --k-edge must be a number >= 0, got -5"]
+    assert not out.exists()
+    assert study_main(["--runs", "0", "-o", str(out), "-q"]) == 3
+    assert "--runs must be >= 1, got 0" in capsys.readouterr().err
 
 
 @pytest.mark.slow

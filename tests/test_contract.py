@@ -1,4 +1,4 @@
-"""Issue 10's promises on the fast scenes of repulsionpak.scenes (the same measurements
+"""Issue 10's promises on the fast scenes of benchmarks/scenes.py (the same measurements
 ``python benchmarks/contract.py`` makes on the whole suite, see docs/quality.md).
 
 Each scene is packed once through ``repulsionpak pack``'s code path and measured on the
@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 
-from repulsionpak import scenes
+import scenes
 from repulsionpak.measure import ContractLimits
 
 LIMITS = ContractLimits()

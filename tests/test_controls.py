@@ -21,7 +21,7 @@ from repulsionpak.io.manifest import load_element_args, load_manifest
 from repulsionpak.measure import distortion, source_geometries
 from repulsionpak.pack import pack
 from repulsionpak.params import Params
-from repulsionpak.scenes import container_svg, element_svg, glyph_svg
+from scenes import container_svg, element_svg, glyph_svg
 
 
 @pytest.fixture(scope="module")

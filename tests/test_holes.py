@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import shapely
 
-from repulsionpak import scenes
+import scenes
 from repulsionpak.types import ElementControls
 from repulsionpak.errors import ConfigError, ParameterError
 from repulsionpak.measure import art_geometry, scp

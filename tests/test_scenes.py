@@ -1,4 +1,4 @@
-"""Tests of repulsionpak.scenes: the generated SVGs read back as the shapes they claim
+"""Tests of benchmarks/scenes.py: the generated SVGs read back as the shapes they claim
 (areas, holes, regions, scale) and the suite spans issue 10's matrix."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 import pytest
 import shapely
 
-from repulsionpak import scenes
+import scenes
 from repulsionpak.errors import ParameterError
 from repulsionpak.geometry.outline import art_area
 from repulsionpak.io import load_container, load_element

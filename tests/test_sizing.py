@@ -13,7 +13,7 @@ from repulsionpak import load_container, load_elements
 from repulsionpak.params import PlacementParams, params_from_dict
 from repulsionpak.pack import pack
 from repulsionpak.preprocess import outline_of
-from repulsionpak.region_scenes import REGION_KINDS, container_svg
+from region_scenes import REGION_KINDS, container_svg
 from repulsionpak.room import room_of
 from repulsionpak.sizing import is_even, part_counts, plan_sizes, size_field
 

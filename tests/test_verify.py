@@ -243,7 +243,7 @@ def test_pair_distances_memo_reuses_only_unchanged_pairs():
 
 def _crosses(tmp_path):
     """A small scene: a circle 400 across and a cross element (12 copies at gap 8)."""
-    from repulsionpak import scenes
+    import scenes
     from repulsionpak.io import load_container, load_element
 
     (tmp_path / "c.svg").write_text(scenes.container_svg("circle", size=400))
@@ -421,7 +421,7 @@ def test_gathering_in_a_curved_band_turns_the_copies_to_slide_along_it():
 def test_ten_keyholes_in_a_glyph_c_keep_the_median_gap(tmp_path):
     """The scene benchmarks/probe.py found (seed 1152): width-limited copies in a narrow
     curved band with a small explicit count ended with median gap 1.22 (promise: 0.9-1.1)."""
-    from repulsionpak import scenes
+    import scenes
 
     r = scenes.run_scene(scenes.Scene("keyholes-c", "glyph", ("keyhole",), gap=0.03, count=10, seed=2), tmp_path)
     p = r["metrics"]["promises"]

@@ -845,68 +845,6 @@ def demo(
 
 
 @app.command()
-def study(
-    output: Annotated[Path, typer.Option("-o", "--output", help="Plot of Q_s(r) per k_e (PNG).")] = Path("deformation-study.png"),
-    container: Annotated[Optional[Path], typer.Option(help="Container file (default: the shipped heart).")] = None,
-    elements: Annotated[Optional[list[Path]], typer.Option(help="Element files or directories (default: the shipped library).")] = None,
-    gap: Annotated[Optional[float], typer.Option(help="Gap (default: the example gap, or 1% of the container).")] = None,
-    k_edge: Annotated[Optional[list[float]], typer.Option("--k-edge", help="Spring strengths to compare (paper: 10 250 1000).")] = None,
-    runs: Annotated[int, typer.Option(help="Packings per k_e (paper: 10).")] = 10,
-    seed: Annotated[int, typer.Option(help="Base seed.")] = 0,
-    json_out: Annotated[Optional[Path], typer.Option("--json", help="Also write all results as JSON.")] = None,
-    workers: Annotated[Optional[int], typer.Option(help="Worker processes of the local Dask cluster (default: one per core).")] = None,
-    scheduler: Annotated[Optional[str], typer.Option(help="Run on this Dask scheduler (tcp://HOST:PORT) instead of a local cluster.")] = None,
-    quiet: Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")] = False,
-    debug: DebugOpt = False,
-) -> None:
-    """The paper's deformation study (Fig. 10): SCP of packings with weak to stiff springs,
-    run as Dask tasks like `batch`."""
-    global _DEBUG
-    _DEBUG = debug
-    from . import examples
-    from .io.files import atomic_write_bytes
-    from .measure import scp_bands_png
-    from .io import load_container, load_elements
-    from .pack import default_gap
-    from .study import deformation_study
-
-    with _errors():
-        if runs < 1:
-            raise ParameterError(f"--runs must be >= 1, got {runs}")
-        cfile = container or examples.container_file(examples.DEFAULT_CONTAINER)
-        efiles = elements or examples.element_files()
-        _check_outputs([output, json_out], [cfile, *efiles])
-        cont = load_container(cfile)
-        g = gap if gap is not None else (examples.DEFAULT_GAP if container is None else default_gap(cont))
-        if not g > 0:
-            raise ParameterError(f"--gap must be a positive number, got {g:g}")
-        elems = load_elements(efiles)
-        ks = k_edge or [10.0, 250.0, 1000.0]
-        for k in ks:
-            if not k >= 0:
-                raise ParameterError(f"--k-edge must be a number >= 0, got {k:g}")
-
-        def on_run(k, i, r):
-            if not quiet:
-                typer.echo(f"k_e={k:g} run {i + 1}/{runs}: area {r['area_fraction']:.3f}, "
-                           f"Q_s(gap/2)/Q_s(0) {r['scp_ratio']:.3f}", err=True)
-
-        res = deformation_study(cont, elems, g, ks, runs=runs, seed=seed, on_run=on_run,
-                                workers=workers, scheduler=scheduler)
-        atomic_write_bytes(output, scp_bands_png(res["groups"], g))
-        if json_out is not None:
-            slim = {"gap": g, "summary": res["summary"],
-                    "groups": {k: [{"area_fraction": r["area_fraction"], "scp": r["scp"],
-                                    "scp_ratio": r["scp_ratio"], "deformation": r["deformation"]["mean"]}
-                                   for r in v] for k, v in res["groups"].items()}}
-            _write_json_atomic(json_out, slim)
-        for label, s in res["summary"].items():
-            typer.echo(f"{label:>10s}: mean area fraction {s['area_fraction']:.3f}, "
-                       f"Q_s(gap/2)/Q_s(0) {s['scp_ratio']:.3f} ± {s['scp_ratio_std']:.3f}, "
-                       f"mean deformation {s['deformation']:.3f}")
-
-
-@app.command()
 def studio(
     inputs: Annotated[Optional[list[Path]], typer.Argument(
         help="Optional: the container SVG, then element SVGs or folders, opened in the page.")] = None,
