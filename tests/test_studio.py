@@ -256,6 +256,34 @@ def test_painting_while_running_changes_the_simulations_container(session):
     session.cancel(wait=60)
 
 
+def test_pins_and_drags_of_a_running_simulation_are_undone(session):
+    session.use_examples("circle", ["apple"])
+    for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
+        session.set_setting(k, v)
+    session.start(paused=True)
+    ctl = session.controller
+    _wait(lambda: ctl.sim is not None)
+    _wait(lambda: ctl.paused and ctl.commands.empty())
+    m, st = ctl.sim.model, ctl.sim.state
+    a, b = int(m.elem_vstart[2]), int(m.elem_vstart[3])
+    x0 = st.x[a:b].copy()
+    ctl.submit({"cmd": "move", "index": 2, "dx": 30.0, "dy": -10.0})  # the page's drag
+    session.moved(2, 30.0, -10.0)
+    _wait(lambda: ctl.commands.empty() and abs((st.x[a:b] - x0)[:, 0].mean() * ctl.unit - 30.0) < 1e-6)
+    session.pin(2, True)
+    _wait(lambda: 2 in ctl.pinned)
+    assert session.state()["history"]["undo_label"] == "pin element 2"
+    session.undo()
+    _wait(lambda: 2 not in ctl.pinned)
+    session.undo()
+    _wait(lambda: np.abs(st.x[a:b] - x0).max() < 1e-9)  # back where it was (paused: exactly)
+    session.redo()
+    _wait(lambda: abs((st.x[a:b] - x0)[:, 1].mean() * ctl.unit + 10.0) < 1e-6)
+    session.redo()
+    _wait(lambda: 2 in ctl.pinned)
+    session.cancel(wait=60)
+
+
 # -- the server ------------------------------------------------------------------------------
 
 

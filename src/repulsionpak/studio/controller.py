@@ -36,6 +36,7 @@ class StudioController(LiveController):
         super().__init__(Container("canvas", shapely.box(x, y, x + w, y + h)), 0.01 * max(w, h))
         self.container = None  # nothing to show until a container is opened or painted
         self.cancelled = False
+        self.stage = None
         self.phase = "idle"
 
     def reset(self, container: Container, params, paused: bool = False) -> None:
@@ -50,10 +51,22 @@ class StudioController(LiveController):
                 cmd["future"].set_exception(RuntimeError("the run was restarted"))
         self.layout_id = layout_id  # the page tells layouts apart by id: never reuse one
         self.cancelled = False
+        self.stage = "meshing and placing"
         self.paused = bool(paused)
         self.phase = "preparing"
         self.publish("json", self.scene())
         self._status()
+
+    def on_stage(self, name: str) -> None:
+        """Told by :func:`repulsionpak.pack` which stage without snapshots begins."""
+        self.stage = name
+
+    @property
+    def takes_region(self) -> bool:
+        """Whether a new region can still reach this run (its primary simulation has not
+        ended: the secondary phase, the verification and the pocket fill work on the
+        container the primaries were packed in)."""
+        return self.stage == "meshing and placing" and self.final_svg is None and not self.cancelled
 
     def show(self, container: Container | None) -> None:
         """Between runs: show ``container`` (None: the blank canvas) on the pages."""
@@ -82,7 +95,10 @@ class StudioController(LiveController):
     # -- commands (simulation thread) ------------------------------------------------------
     def _apply(self, cmd: dict) -> None:
         if cmd["cmd"] == "region":
-            self._set_region(cmd["container"])
+            if self.takes_region:
+                self._set_region(cmd["container"])
+            else:
+                self._error("the run has passed its primary phase: the new region applies when you start again")
             return
         if cmd["cmd"] == "placed":
             try:

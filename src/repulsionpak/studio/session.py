@@ -211,10 +211,13 @@ class Session:
         if after.container != before.container:
             self._set_canvas(after)
         cont = self.container_of(after)
-        if self.running and cont is not None:
+        if self.running and self.controller.takes_region and cont is not None:
             self.controller.submit({"cmd": "region", "container": cont})
         elif not self.running:
             self.controller.show(cont)
+        else:  # a run past its primary phase keeps its region
+            self.controller.publish("json", {"type": "error", "message": "the run has passed its primary "
+                                             "phase: the new region applies when you start again"})
 
     def _set_canvas(self, doc: Document) -> None:
         """The page's canvas: the container file's view box, widened to hold its region
@@ -366,7 +369,7 @@ class Session:
         try:
             packing = pack(inputs.container, list(inputs.elements), inputs.params,
                            secondary=list(inputs.secondary), on_snapshot=ctl.on_snapshot,
-                           should_stop=ctl.should_stop)
+                           should_stop=ctl.should_stop, on_stage=ctl.on_stage)
             if gen != self._gen:
                 return
             packing.placed = ctl.drop_removed(packing.placed)  # as `pack --live` writes it
