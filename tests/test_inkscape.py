@@ -211,6 +211,22 @@ def test_install_writes_the_inx_and_a_pinned_entry_point(tmp_path):
     assert res.returncode != 0 and "max_rotation" in res.stderr and "Inkscape inkex" not in res.stderr
 
 
+def test_cli_inkscape_install(tmp_path):
+    """``repulsionpak inkscape-install --dir DIR`` writes both files and prints their paths;
+    ``--dry-run`` only prints them."""
+    from typer.testing import CliRunner
+
+    from repulsionpak.cli import app
+
+    res = CliRunner().invoke(app, ["inkscape-install", "--dir", str(tmp_path / "a"), "--dry-run"])
+    assert res.exit_code == 0 and not (tmp_path / "a").exists()
+    assert res.output.split() == [str(tmp_path / "a" / INX_NAME), str(tmp_path / "a" / ENTRY_NAME)]
+    res = CliRunner().invoke(app, ["inkscape-install", "--dir", str(tmp_path / "b")])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "b" / INX_NAME).read_text().startswith("<?xml")
+    assert "repulsionpak.inkscape" in (tmp_path / "b" / ENTRY_NAME).read_text()
+
+
 def test_default_dirs(tmp_path):
     home = tmp_path
     assert default_dir("linux", {}, home) == home / ".config" / "inkscape" / "extensions"

@@ -863,6 +863,19 @@ def studio(
             run_studio(inputs[0] if inputs else None, inputs[1:], port=port, open_browser=not no_browser, stop=stop)
 
 
+@app.command("inkscape-install")
+def inkscape_install(
+    dir: Annotated[Optional[Path], typer.Option("--dir", help="Extensions folder (default: the user's Inkscape one).")] = None,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="Only print where the files would go.")] = False,
+) -> None:
+    """Install the Inkscape extension (Extensions > Arrange > Pack into shape; see docs/inkscape.md)."""
+    with _errors():
+        from .inkscape.install import install
+
+        for path in install(dir, dry_run=dry_run):
+            typer.echo(str(path))
+
+
 @app.command("params")
 def params_cmd() -> None:
     """List every parameter with its default, unit and meaning (for --config TOML files)."""
