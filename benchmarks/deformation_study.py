@@ -117,7 +117,7 @@ def study(output: Path, container: Path | None = None, elements: Sequence[Path] 
     from repulsionpak import examples
     from repulsionpak.measure import scp_bands_png
     from repulsionpak.io import load_container, load_elements
-    from repulsionpak.io.svg_write import atomic_write_bytes
+    from repulsionpak.io.files import atomic_write_bytes
     from repulsionpak.pack import default_gap
 
     if runs < 1:

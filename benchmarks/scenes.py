@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from repulsionpak.errors import ParameterError
-from repulsionpak.io.svg_write import atomic_write_bytes
+from repulsionpak.io.files import atomic_write_bytes
 
 __all__ = [
     "ELEMENT_KINDS",
