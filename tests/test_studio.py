@@ -477,3 +477,62 @@ def _drive(browser, server, tmp_path):
         assert Path(dl.value.path()).read_bytes()[:len(magic)] == magic, sel
     assert not errors, errors
     page.close()
+
+
+def test_studio_command_prints_the_url_and_opens_its_files(tmp_path):
+    """``repulsionpak studio CONTAINER ELEMENTS --port 0 --no-browser``: the URL on a line of
+    its own, the files opened in the session, a clean exit at Ctrl-C."""
+    import signal
+    import subprocess
+    import sys
+
+    env = dict(os.environ, PYTHONPATH=str(EX.parent.parent) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "repulsionpak.cli", "studio", str(EX / "containers" / "circle.svg"),
+                             str(EX / "elements"), "--port", "0", "--no-browser"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        url = proc.stdout.readline().rstrip("\n")
+        assert url.startswith("http://127.0.0.1:") and "/?token=" in url, (url, proc.stderr.read())
+        code, text = _run(_status("GET", url.replace("/?token=", "/state?token=")))
+        st = json.loads(text)
+        assert code == 200 and st["container"] == "circle.svg"
+        assert st["elements"] == sorted(p.name for p in (EX / "elements").glob("*.svg"))
+        assert st["command"].startswith("repulsionpak pack circle.svg elements/apple.svg ")
+    finally:
+        proc.send_signal(signal.SIGINT)
+        rc = proc.wait(timeout=30)
+    assert rc == 0, proc.stderr.read()
+
+
+def test_page_drop_files_and_undo(server):
+    """Files dropped on the container's section open the container, elsewhere add elements;
+    Undo and Redo in the page walk the history."""
+    sync_api, exe = _browser()
+    circle = (EX / "containers" / "circle.svg").read_text()
+    apple = (EX / "elements" / "apple.svg").read_text()
+    with sync_api.sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=exe, args=["--no-sandbox"])
+        try:
+            page = browser.new_page()
+            page.goto(server.url)
+            page.wait_for_function("window.repulsionpakStudio.state !== null")
+            drop = """([sel, name, text]) => { const dt = new DataTransfer();
+                dt.items.add(new File([text], name, {type: 'image/svg+xml'}));
+                document.querySelector(sel).dispatchEvent(new DragEvent('drop', {bubbles: true, dataTransfer: dt})); }"""
+            page.evaluate(drop, ["#container-name", "circle.svg", circle])
+            page.wait_for_function("window.repulsionpakStudio.state.container === 'circle.svg'")
+            page.evaluate(drop, ["#stage", "apple.svg", apple])
+            page.wait_for_function("window.repulsionpakStudio.state.elements.join() === 'apple.svg'")
+            st = _state(page)
+            assert st["region_area"] == pytest.approx(
+                repulsionpak.load_container(EX / "containers" / "circle.svg").area, rel=1e-6)
+            assert st["command"] == "repulsionpak pack circle.svg elements/apple.svg -o packing.svg"
+            page.click("#undo")
+            page.wait_for_function("window.repulsionpakStudio.state.elements.length === 0")
+            page.click("#undo")
+            page.wait_for_function("window.repulsionpakStudio.state.container === null")
+            assert page.is_disabled("#undo") and not page.is_disabled("#redo")
+            page.click("#redo")
+            page.wait_for_function("window.repulsionpakStudio.state.container === 'circle.svg'")
+        finally:
+            browser.close()

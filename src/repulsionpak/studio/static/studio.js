@@ -96,6 +96,22 @@
     if (ev.target.files.length) upload("/open-project", ev.target.files);
     ev.target.value = "";
   });
+  // files dropped on the page: a zip is a project; an SVG dropped on the container's section
+  // opens the container; anywhere else, SVGs are added as elements
+  document.addEventListener("dragover", (ev) => { ev.preventDefault(); });
+  document.addEventListener("drop", async (ev) => {
+    ev.preventDefault();
+    const files = Array.from(ev.dataTransfer.files || []);
+    const zips = files.filter((f) => /\.zip$/i.test(f.name)), svgs = files.filter((f) => /\.(svg|path)$/i.test(f.name));
+    if (zips.length) { await upload("/open-project", zips.slice(0, 1)); return; }
+    if (!svgs.length) { showError("drop SVG or .path files, or a saved project (.zip)"); return; }
+    const onContainer = ev.target.closest && ev.target.closest("#panel section") === q("#open-container").closest("section");
+    if (onContainer) {
+      await upload("/open-container", svgs.slice(0, 1));
+      svgs.shift();
+    }
+    if (svgs.length) await upload("/open-elements", svgs);
+  });
   q("#example-container").addEventListener("change", (ev) => {
     if (ev.target.value) edit({ op: "examples", container: ev.target.value });
     ev.target.value = "";
