@@ -17,7 +17,7 @@ import numpy as np
 from .errors import ParameterError
 from .inputs import margin_of
 from .params import Params
-from .render import skin_polygons
+from .sim.art import skin_polygons
 from .sim.model import Model, SimFrame, State
 from .types import Container, Element, PlacedArt
 from .verify import Verification
@@ -102,6 +102,13 @@ class Packing:
     secondary: tuple[Element, ...] = ()
     sources: dict = field(default_factory=dict)
     _cache: dict = field(default_factory=dict, repr=False)
+
+    def __setattr__(self, name: str, value) -> None:
+        # measures, checks and SVG text are computed once; a field assigned anew (the
+        # live view's removals, the pocket fills while pack() runs) makes them stale
+        if not name.startswith("_") and "_cache" in self.__dict__:
+            self.__dict__["_cache"].clear()
+        object.__setattr__(self, name, value)
 
     @property
     def partial(self) -> bool:
