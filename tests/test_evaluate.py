@@ -559,3 +559,39 @@ except ImportError:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "no matplotlib"
+
+
+def _imports_of(path) -> set[str]:
+    """Absolute names of the repulsionpak modules ``path`` imports, inside functions too."""
+    import ast
+    from pathlib import Path
+
+    path = Path(path)
+    package = ["repulsionpak", *path.parent.relative_to(Path(repulsionpak.__file__).parent).parts]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            base = package[: len(package) - node.level + 1] if node.level else []
+            name = ".".join(base + ([node.module] if node.module else []))
+            out |= {name} if node.module else {f"{name}.{a.name}" for a in node.names}
+        elif isinstance(node, ast.Import):
+            out |= {a.name for a in node.names}
+    return {n for n in out if n.startswith("repulsionpak")}
+
+
+def test_measure_and_checks_point_down():
+    """measure/ imports no writer and nothing above it (stages, render, pack, the CLI);
+    verify/checks measures without the repairs."""
+    from pathlib import Path
+
+    root = Path(repulsionpak.__file__).parent
+    above = ("repulsionpak.render", "repulsionpak.io.files", "repulsionpak.pack", "repulsionpak.verify",
+             "repulsionpak.secondary", "repulsionpak.holes", "repulsionpak.sim", "repulsionpak.cli",
+             "repulsionpak.live", "repulsionpak.batch", "repulsionpak.kernel_cache")
+    files = sorted((root / "measure").glob("*.py"))
+    assert len(files) >= 10
+    for f in files:
+        bad = {n for n in _imports_of(f) if n == "repulsionpak" or n.startswith(above)}
+        assert not bad, f"{f.name} imports {sorted(bad)}"
+    assert "repulsionpak.measure.evaluation" in _imports_of(root / "measure" / "__init__.py")
+    assert not {n for n in _imports_of(root / "verify" / "checks.py") if n.startswith("repulsionpak.verify")}

@@ -41,38 +41,66 @@ def evaluate(
     workers: int = 1,
     primary_scp: bool | None = None,
 ) -> dict:
-    """All metrics of a packing as a JSON-serialisable dict (as ``repulsionpak evaluate --json`` prints it).
+    """All measures of a packing as a JSON-serialisable dict.
 
-    Keys: ``area_fraction``, ``overlap_area``, ``n_primary``, ``n_secondary``,
-    ``n_elements``, ``n_outside`` / ``outside`` (elements whose art lies more than
-    ``outside_tol`` outside the container, default 5 % of ``gap``; see :func:`outside`),
-    ``gap`` {median, p10, p90, mean, min, max, requested, values},
-    ``deformation`` {mean, max, values} (``None`` entries when unknown),
-    ``scp`` {r, q, h, q0, pixel_size, shape} (r includes gap/2 exactly),
-    ``scp_at_half_gap`` = Q_s(gap/2) and ``scp_ratio`` = Q_s(gap/2)/Q_s(0).
-    With ``with_scp=False`` the three SCP entries are ``None`` (the raster and its
-    distance transform are the slow part; ``pack`` reports do without them).
+    Parameters
+    ----------
+    container : Container
+        The container the packing fills.
+    placed : list of PlacedArt
+        The placed art (``packing.placed``, or ``read_packing_svg(path)[1]``).
+    gap : float
+        The gap asked for (container units, > 0).
+    grid : int
+        Pixels along the longer side of the SCP raster.
+    outside_tol : float, optional
+        An element counts as outside when its art lies farther than this outside the
+        container (default 5 % of ``gap``; see :func:`~repulsionpak.measure.outside`).
+    with_scp : bool
+        Compute the SCP (the raster and its distance transform are the slow part;
+        ``pack`` reports do without them). Without it the SCP entries are ``None``.
+    sources : mapping or iterable of Element, optional
+        The source art for the distortion: ``data-source`` name → shapely geometry, or
+        the library elements. Without it (or for an unknown name) the distortion values
+        are ``None``.
+    margin : float, optional
+        The edge margin checked (default gap/2).
+    workers : int
+        Threads fitting several copies' distortion at once (the values do not depend on it).
+    primary_scp : bool, optional
+        Compute ``scp_ratio_primary`` (default: as ``with_scp``).
 
-    What the primaries do alone (the pocket copies hide a loose packing from the
-    measures above, which count every copy): ``area_fraction_primary`` (the primaries'
-    art only), ``scp_ratio_primary`` = Q_s(gap/2)/Q_s(0) with only the primaries' art
-    (``None`` without SCP; ``primary_scp`` True computes it even with ``with_scp=False``,
-    default: as ``with_scp``), ``median_primary_size`` (the median primary's size, the
-    square root of its art's area, container units; ``None`` without primaries) and
-    ``smallest_secondary_rel``, the smallest secondary copy's size over it (``None``
-    without primaries or secondaries).
+    Returns
+    -------
+    dict
+        What ``repulsionpak evaluate --json`` prints: ``area_fraction``,
+        ``overlap_area``, ``n_primary``, ``n_secondary``, ``n_elements``, ``n_outside`` /
+        ``outside`` / ``outside_tol``, ``container_area``, ``gap`` {median, p10, p90,
+        mean, min, max, requested, values}, ``deformation`` {mean, max, values},
+        ``outside_area`` (art area outside the container, exact), ``edge`` {min, margin,
+        n_below_margin, values} (each element's art distance to the container's
+        boundary; how many are closer than 0.98 × margin), ``distortion`` {median, p95,
+        max, values, by_kind} (per element, area(best similar copy of its source △ the
+        placed art) / its area), ``scp`` {r, q, h, q0, pixel_size, shape} (r includes
+        gap/2 exactly), ``scp_at_half_gap`` = Q_s(gap/2), ``scp_ratio`` =
+        Q_s(gap/2)/Q_s(0); and what the primaries do alone: ``area_fraction_primary``,
+        ``scp_ratio_primary``, ``median_primary_size`` (the square root of the median
+        primary's art area) and ``smallest_secondary_rel`` (the smallest secondary
+        copy's size over it; ``None`` without primaries or secondaries).
 
-    The art-only measurements (:mod:`~repulsionpak.measure.coverage`,
-    :mod:`~repulsionpak.measure.similarity`): ``outside_area`` (art area outside the
-    container, exact), ``edge`` {min, margin, n_below_margin, values}: each element's
-    art distance to the container's boundary, and how many are closer than 0.98 ×
-    ``margin`` (default gap/2); ``distortion``
-    {median, p95, max, values}: per element, area(best similar copy of its source △
-    the placed art) / its area. ``sources`` gives the source art: a mapping
-    ``data-source`` name → shapely geometry, or the library :class:`Element` s; without
-    it (or for an unknown name) the distortion values are ``None``. A copy that carries its
-    ``frame`` starts the fit from that rotation; ``workers`` threads fit several copies at
-    once (the values do not depend on it).
+    Raises
+    ------
+    ParameterError
+        When the container, the placed art, the gap or the margin is not valid.
+
+    Notes
+    -----
+    The measures look at the art alone, never at the simulation's meshes
+    (:mod:`~repulsionpak.measure.coverage`, :mod:`~repulsionpak.measure.similarity`),
+    so they measure the output independently of the code that made it. The primaries
+    are also measured alone because the pocket copies, counted as art everywhere else,
+    hide a loose packing. A copy that carries its ``frame`` starts the distortion fit
+    from that rotation.
     """
     if not isinstance(container, Container):
         raise ParameterError(f"evaluate(): the container must be a Container, got {type(container).__name__}")
@@ -181,11 +209,28 @@ def evaluate_file(path: str | os.PathLike, gap: float | None = None, grid: int =
                   sources=None, workers: int = 1, margin: float | None = None) -> dict:
     """:func:`evaluate` of a packing SVG written by repulsionpak.
 
-    The gap is ``gap`` if given, else the root's ``data-gap``; :class:`ParameterError`
-    when neither is known. The edge margin is ``margin`` if given, else the one the
-    packing was made with (its metadata's verification, when the file's own gap is
-    used), else half the gap. ``sources``: the source element art for the distortion
-    (see :func:`evaluate`), e.g. ``load_elements([...])``.
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The packing SVG.
+    gap : float, optional
+        The gap; default: the root's ``data-gap``.
+    grid, sources, workers
+        As for :func:`evaluate` (``sources`` e.g. ``load_elements([...])``).
+    margin : float, optional
+        The edge margin; default: the one the packing was made with (its metadata's
+        verification, when the file's own gap is used), else half the gap.
+
+    Returns
+    -------
+    dict
+        The :func:`evaluate` dict, plus ``file`` (``str(path)``).
+
+    Raises
+    ------
+    ParameterError
+        When neither ``gap`` nor the file's ``data-gap`` is known, or ``data-gap`` is
+        not a number.
     """
     from ..io import read_packing_svg  # at call time: tests stand in for the reader
 

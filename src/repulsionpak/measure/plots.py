@@ -71,12 +71,30 @@ def _r_extent(curves: list[tuple[np.ndarray, np.ndarray]], gap: float | None) ->
 
 
 def scp_plot_png(results: list[tuple[str, dict]], gap: float | None = None, ideal: bool = True) -> bytes:
-    """A PNG plot of Q_s(r) of several packings overlaid (the file's bytes; the caller writes them).
+    """A PNG plot of Q_s(r) of several packings overlaid.
 
-    ``results``: ``(label, result)`` with ``result`` an :func:`evaluate` or :func:`scp`
-    dict. ``gap`` (default: the first result's requested gap) adds a vertical marker at
-    gap/2 and, when ``ideal``, the ideal stripes line from (0, Q_s(0)) to (gap/2, 0)
-    (dashed; one per curve in its colour for up to 3 curves, else one at the mean Q_s(0)).
+    Parameters
+    ----------
+    results : list of (str, dict)
+        ``(label, result)``, ``result`` an :func:`~repulsionpak.measure.evaluate` or
+        :func:`~repulsionpak.measure.scp` dict.
+    gap : float, optional
+        Adds a vertical marker at gap/2 (default: the first result's requested gap).
+    ideal : bool
+        With a gap, also the ideal stripes line from (0, Q_s(0)) to (gap/2, 0) (dashed;
+        one per curve in its colour for up to 3 curves, else one at the mean Q_s(0)).
+
+    Returns
+    -------
+    bytes
+        The PNG file's bytes; the caller writes them.
+
+    Raises
+    ------
+    ParameterError
+        When ``results`` is empty.
+    ImportError
+        When matplotlib is not installed.
     """
     if not results:
         raise ParameterError("scp_plot_png needs at least one result")
@@ -104,11 +122,30 @@ def scp_plot_png(results: list[tuple[str, dict]], gap: float | None = None, idea
 
 
 def scp_bands_png(groups: dict[str, list[dict]], gap: float | None) -> bytes:
-    """A PNG plot of the mean ± one standard deviation of Q_s(r) per group (the file's bytes).
+    """A PNG plot of the mean ± one standard deviation of Q_s(r) per group (Fig. 10).
 
-    ``groups`` maps a label (e.g. ``"k_e = 10"``) to a list of :func:`evaluate` /
-    :func:`scp` results; each curve is interpolated onto a common r grid (Q_s held at
-    its last value beyond its own r range) before averaging.
+    Parameters
+    ----------
+    groups : dict of str to list of dict
+        A label (e.g. ``"k_e = 10"``) → :func:`~repulsionpak.measure.evaluate` /
+        :func:`~repulsionpak.measure.scp` results.
+    gap : float or None
+        Adds the ideal stripes line at the mean Q_s(0) and a marker at gap/2.
+
+    Returns
+    -------
+    bytes
+        The PNG file's bytes; the caller writes them.
+
+    Raises
+    ------
+    ParameterError
+        When every group is empty.
+
+    Notes
+    -----
+    Each curve is interpolated onto a common r grid (Q_s held at its last value beyond
+    its own r range) before averaging.
     """
     groups = {k: v for k, v in groups.items() if v}
     if not groups:

@@ -259,18 +259,53 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                       grow_reach: float = 0.0, gather: float = 0.0) -> tuple[list[PlacedArt], Verification]:
     """Check (and, with ``repair``, enforce) the promises on the art of ``placed``.
 
-    ``margin`` and ``min_gap`` in container units. Returns the (possibly shrunk, with
-    dropped elements removed) art and the verification of what is returned.
-    After the repair, with ``grow_to`` > 0, elements grow into the room left around them
-    (:func:`_inflate`) up to ``max_scale`` of their size, or until their outermost point
-    has moved ``grow_reach`` when that is more (at most :data:`REACH_MAX_SCALE`): the room
-    the skins' extra width leaves between two arts is the same in container units whatever
-    the elements' size, so an element not much wider than the gap needs more than
-    ``max_scale`` to close it. With ``gather`` > ``grow_to`` (container units), elements
-    then farther than ``gather`` from their nearest neighbour move towards it until they
-    are ``grow_to`` apart (:func:`_gather`).
-    ``should_stop()`` true ends the repair rounds early (Ctrl-C while very detailed art is
-    repaired): what still violates is then dropped, so the promises hold all the same."""
+    Parameters
+    ----------
+    placed : list of PlacedArt
+        The packing's art.
+    region : shapely geometry
+        The container.
+    gap : float
+        The gap asked for (container units); the rounds simplify outlines by 1 % of it.
+    margin, min_gap : float
+        The edge margin and the gap floor enforced (container units).
+    min_scale : float
+        Below this share of its size a primary is dropped (half of it for secondaries).
+    rounds : int
+        Repair rounds (moves first, then shrinks).
+    repair : bool
+        False: only check.
+    straightened : list of int, optional
+        Indices :func:`straighten` replaced, passed into the result.
+    grow_to : float
+        > 0: elements then grow into the room left around them (:func:`_inflate`) until
+        they are this far from their neighbours, up to ``max_scale`` of their size, or
+        until their outermost point has moved ``grow_reach`` when that is more (at most
+        :data:`REACH_MAX_SCALE`).
+    max_scale, grow_reach : float
+        The growth's limits (see ``grow_to``).
+    should_stop : callable, optional
+        ``should_stop()`` true ends the repair rounds early (Ctrl-C while very detailed
+        art is repaired): what still violates is then dropped.
+    gather : float
+        > ``grow_to``: elements farther than this from their nearest neighbour then move
+        towards it until they are ``grow_to`` apart (:func:`_gather`).
+
+    Returns
+    -------
+    art : list of PlacedArt
+        The art, moved or shrunk where repaired, without the dropped elements.
+    verification : Verification
+        The exact check of what is returned.
+
+    Notes
+    -----
+    The room the skins' extra width leaves between two arts is the same in container
+    units whatever the elements' size, so an element not much wider than the gap needs
+    more than ``max_scale`` to close it: hence ``grow_reach``. Whatever is still violated
+    after the rounds is dropped (never a pinned copy), so the promises hold on the
+    returned art even when the rounds are stopped.
+    """
     region = _polygonal(region)
     boundary = region.boundary
     shapely.prepare(region)
