@@ -256,7 +256,7 @@ def test_painting_while_running_changes_the_simulations_container(session):
     session.cancel(wait=60)
 
 
-def test_pins_and_drags_of_a_running_simulation_are_undone(session):
+def test_pins_drags_and_removals_of_a_running_simulation_are_undone(session):
     session.use_examples("circle", ["apple"])
     for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
         session.set_setting(k, v)
@@ -281,6 +281,16 @@ def test_pins_and_drags_of_a_running_simulation_are_undone(session):
     _wait(lambda: abs((st.x[a:b] - x0)[:, 1].mean() * ctl.unit + 10.0) < 1e-6)
     session.redo()
     _wait(lambda: 2 in ctl.pinned)
+    # a removed element comes back where it was, moving again
+    c, d = int(m.elem_vstart[4]), int(m.elem_vstart[5])
+    y0 = st.x[c:d].copy()
+    session.remove(4)
+    _wait(lambda: 4 in ctl.removed and np.ptp(st.x[c:d], axis=0).max() < 0.05 * np.ptp(y0, axis=0).max())
+    session.undo()
+    _wait(lambda: 4 not in ctl.removed and np.abs(st.x[c:d] - y0).max() < 1e-9)
+    assert ctl.sim.state.moving[4] and 4 not in ctl.layout_message()["removed"]
+    session.redo()
+    _wait(lambda: 4 in ctl.removed)
     session.cancel(wait=60)
 
 

@@ -36,6 +36,7 @@ class StudioController(LiveController):
         super().__init__(Container("canvas", shapely.box(x, y, x + w, y + h)), 0.01 * max(w, h))
         self.container = None  # nothing to show until a container is opened or painted
         self.cancelled = False
+        self._removed_x: dict[int, object] = {}  # where removed elements were (for undo)
         self.stage = None
         self.phase = "idle"
 
@@ -51,6 +52,7 @@ class StudioController(LiveController):
                 cmd["future"].set_exception(RuntimeError("the run was restarted"))
         self.layout_id = layout_id  # the page tells layouts apart by id: never reuse one
         self.cancelled = False
+        self._removed_x = {}
         self.stage = "meshing and placing"
         self.paused = bool(paused)
         self.phase = "preparing"
@@ -100,6 +102,8 @@ class StudioController(LiveController):
             else:
                 self._error("the run has passed its primary phase: the new region applies when you start again")
             return
+        if cmd["cmd"] in ("remove", "unremove") and self._remove_undoable(cmd):
+            return
         if cmd["cmd"] == "placed":
             try:
                 cmd["future"].set_result(self._current_placed())
@@ -107,6 +111,25 @@ class StudioController(LiveController):
                 cmd["future"].set_exception(exc)
             return
         super()._apply(cmd)
+
+    def _remove_undoable(self, cmd: dict) -> bool:
+        """``remove`` as the live view does it, keeping where the element was;
+        ``unremove`` puts it back there, moving again. True when handled here."""
+        sim, i = self.sim, cmd["index"]
+        if sim is None or i >= sim.model.n_elements or sim.model.frozen[i]:
+            return cmd["cmd"] == "unremove"
+        a, b = int(sim.model.elem_vstart[i]), int(sim.model.elem_vstart[i + 1])
+        if cmd["cmd"] == "remove":
+            if i not in self.removed:
+                self._removed_x[i] = sim.state.x[a:b].copy()
+            return False  # the live view's remove
+        if i in self.removed and i in self._removed_x:
+            self.removed.discard(i)
+            sim.state.x[a:b] = self._removed_x.pop(i)
+            sim.state.v[a:b] = 0.0
+            sim.set_moving(i, True)
+            self.publish("json", self.layout_message())
+        return True
 
     def _set_region(self, new: Container) -> None:
         """Make ``new`` the container of the running simulation: its distance field, reflex

@@ -9,7 +9,7 @@ origin is refused with 403):
 - ``POST /open-container``      multipart, one file: the container
 - ``POST /open-elements``       multipart, files: element files added
 - ``POST /open-project``        multipart, one zip: a saved project
-- ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``pin``, ``moved``,
+- ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``pin``, ``remove``, ``moved``,
   ``undo``, ``redo``, ``examples``, ``remove-element``
 - ``POST /run``                 JSON ``{"action": "start" | "restart"}``
 - ``GET /export.svg``, ``/export.pdf``, ``/export.png``, ``/project.zip``   downloads
@@ -166,6 +166,7 @@ class StudioServer(LiveServer):
             "stroke": lambda: s.stroke(msg.get("stroke")),
             "setting": lambda: s.set_setting(str(msg.get("name")), msg.get("value")),
             "pin": lambda: s.pin(_index(msg), bool(msg.get("pinned", True))),
+            "remove": lambda: s.remove(_index(msg)),
             "moved": lambda: s.moved(_index(msg), _number(msg, "dx"), _number(msg, "dy")),
             "undo": s.undo,
             "redo": s.redo,

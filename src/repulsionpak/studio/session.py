@@ -264,6 +264,15 @@ class Session:
                               dict(cmd, pinned=not pinned))
             return self.state()
 
+    def remove(self, index: int) -> dict:
+        """Remove element ``index`` from the running simulation (undoable: it comes back
+        where it was)."""
+        with self.lock:
+            cmd = {"cmd": "remove", "index": int(index)}
+            self.controller.submit(cmd)
+            self.history.push(f"remove element {index}", self.doc, cmd, dict(cmd, cmd="unremove"))
+            return self.state()
+
     def moved(self, index: int, dx: float, dy: float) -> dict:
         """Record a drag the page made (it moved the element itself): undo moves it back."""
         with self.lock:

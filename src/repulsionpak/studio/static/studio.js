@@ -141,12 +141,17 @@
   q("#undo").addEventListener("click", () => edit({ op: "undo" }));
   q("#redo").addEventListener("click", () => edit({ op: "redo" }));
 
-  // pins go through the history (undoable): taken before app.js sends them itself
+  // pins and removals go through the history (undoable): taken before app.js sends them itself
   q("#pin").addEventListener("click", (ev) => {
     ev.stopImmediatePropagation();
     const g = stage.querySelector(".element.selected");
     if (!g) return;
     edit({ op: "pin", index: Number(g.dataset.index), pinned: g.dataset.pinned !== "true" });
+  }, true);
+  q("#remove").addEventListener("click", (ev) => {
+    ev.stopImmediatePropagation();
+    const g = stage.querySelector(".element.selected");
+    if (g) edit({ op: "remove", index: Number(g.dataset.index) });
   }, true);
 
   // -- brush -----------------------------------------------------------------------------
