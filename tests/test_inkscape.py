@@ -159,6 +159,44 @@ def test_same_seed_same_packing_and_rerun_on_the_layer(tmp_path, capsys):
     assert originals(doc4) == originals(doc1)
 
 
+def test_same_packing_as_the_command_line(tmp_path, capsys):
+    """The objects cut out as standalone files and packed by ``repulsionpak pack`` with the
+    same gap, count and seed give the copies the effect puts in the layer."""
+    from typer.testing import CliRunner
+
+    from repulsionpak.cli import app
+    from repulsionpak.inkscape.standalone import standalone_svg
+
+    status, doc, _ = run_effect(["--id=oval", "--id=square", "--id=star", "--gap=2", "--count=4", "--seed=5",
+                                 "--pocket_fill=false"], SCALED, capsys)
+    assert status == 0
+    svg = inkex.load_svg(str(SCALED)).getroot()
+    files = {}
+    for name in ("oval", "square", "star"):
+        files[name] = tmp_path / f"{name}.svg"
+        files[name].write_bytes(standalone_svg(svg, svg.getElementById(name)))
+    out = tmp_path / "cli.svg"
+    res = CliRunner().invoke(app, ["pack", str(files["oval"]), str(files["square"]), str(files["star"]), "-o",
+                                   str(out), "--gap", "8", "--count", "4", "--seed", "5", "--no-pocket-fill", "-q"])
+    assert res.exit_code == 0, res.output
+    cli = [g for g in etree.parse(str(out)).getroot().iter() if "element" in (g.get("class") or "").split()]
+    (layer,) = packing_layers(etree.fromstring(doc))
+    assert layer_geometry(layer) == [el.get("d") for g in cli for el in g.iter() if el.get("d")]
+
+
+def test_controls_reach_the_library(capsys):
+    """Rigid copies do not deform; free ones do."""
+    base = ["--id=oval", "--id=square", "--id=star", "--gap=2", "--count=4", "--seed=5", "--pocket_fill=false"]
+    deformation = {}
+    for rigid in ("true", "false"):
+        status, doc, err = run_effect([*base, f"--rigid={rigid}", "--rotation=fixed"], SCALED, capsys)
+        assert status == 0 and err == ""
+        (layer,) = packing_layers(etree.fromstring(doc))
+        assert layer.get("data-rp-rigid") == rigid and layer.get("data-rp-rotation") == "fixed"
+        deformation[rigid] = max(float(g.get("data-deformation")) for g in layer.iter() if g.get("data-deformation"))
+    assert deformation["true"] < 1e-3 < deformation["false"], deformation
+
+
 @pytest.mark.parametrize("args, words", [
     ([], "nothing selected"),
     (["--id=flower", "--id=leafclone"], "no closed shape"),
