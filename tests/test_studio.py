@@ -294,6 +294,25 @@ def test_pins_drags_and_removals_of_a_running_simulation_are_undone(session):
     session.cancel(wait=60)
 
 
+def test_restart_with_a_new_seed_ends_a_paused_run_at_once(session):
+    session.use_examples("circle", ["apple", "fish"])
+    for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
+        session.set_setting(k, v)
+    session.start(paused=True)
+    ctl = session.controller
+    _wait(lambda: ctl.sim is not None and ctl.paused)
+    old_sim = ctl.sim
+    t0 = time.monotonic()
+    st = session.start(new_seed=True)
+    assert time.monotonic() - t0 < 10.0  # not held up by the paused run
+    seed = st["settings"]["seed"]
+    assert seed != 5 and str(seed) in session.command()
+    _finish(session)
+    assert ctl.sim is not old_sim and ctl.status()["done"]
+    svg = session.export("svg").decode()
+    assert f'data-seed="{seed}"' in svg
+
+
 # -- the server ------------------------------------------------------------------------------
 
 

@@ -92,7 +92,9 @@ class Session:
         self.packing_doc: Document | None = None  # the document it was made from
         self.error: str | None = None
         self._thread: threading.Thread | None = None
-        self._gen = 0
+        self._gen = 0  # the run whose callbacks and result count
+        self._result_lock = threading.Lock()  # the run's result against a new run
+        self._callback_lock = threading.Lock()  # a run's call into the controller against a reset
         self._n_files = 0
         self._containers: dict[Path, object] = {}
         self._painted: dict[tuple, tuple[Path, object]] = {}
@@ -340,7 +342,6 @@ class Session:
             if self.running and not new_seed:
                 self.controller.submit({"cmd": "resume"})
                 return self.state()
-            self.cancel(wait=60.0)
             doc = self.doc
             if new_seed or doc.settings_dict["seed"] is None:  # the command line names the seed
                 doc = doc.with_settings(seed=secrets.randbelow(2**31))
@@ -354,43 +355,66 @@ class Session:
             from ..inputs import load_inputs
 
             inputs = load_inputs(cfile.path, [e.path for e in doc.elements], params, controls=controls)
+            self.cancel()
             self.controller.reset(inputs.container, inputs.params, paused=paused)
-            self.packing, self.packing_doc, self.error = None, None, None
-            self._gen += 1
-            self._thread = threading.Thread(target=self._run, args=(self._gen, inputs, doc),
+            with self._result_lock:
+                self.packing, self.packing_doc, self.error = None, None, None
+                self._gen += 1
+                gen = self._gen
+            self._thread = threading.Thread(target=self._run, args=(gen, inputs, doc),
                                             name="repulsionpak-studio-run", daemon=True)
             self._thread.start()
             return self.state()
 
     def cancel(self, wait: float = 0.0) -> None:
-        """End the run in progress (its result is thrown away)."""
+        """End the run in progress (its result is thrown away).
+
+        Returns once the run no longer calls the controller (a call in progress, such as
+        a pause, has returned): a new run may reset it. The old run's last stages (the
+        art, the verification) may still be working in its thread, ``wait`` seconds at
+        most are spent waiting for them; they end unseen."""
         t = self._thread
         if t is None or not t.is_alive():
             return
-        self._gen += 1
+        with self._result_lock:
+            self._gen += 1
         self.controller.cancel()
+        with self._callback_lock:  # the run's callback in progress has returned
+            pass
         t.join(wait)
 
     def _run(self, gen: int, inputs, doc: Document) -> None:
+        """The run's thread: :func:`repulsionpak.pack` with the controller's callbacks,
+        inert once the run was cancelled (``gen`` is no longer the session's)."""
         from .. import pack
 
         ctl = self.controller
+
+        def guarded(fn, stopped=None):
+            def call(*args):
+                with self._callback_lock:
+                    return fn(*args) if gen == self._gen else stopped
+            return call
+
         try:
             packing = pack(inputs.container, list(inputs.elements), inputs.params,
-                           secondary=list(inputs.secondary), on_snapshot=ctl.on_snapshot,
-                           should_stop=ctl.should_stop, on_stage=ctl.on_stage)
-            if gen != self._gen:
-                return
-            packing.placed = ctl.drop_removed(packing.placed)  # as `pack --live` writes it
+                           secondary=list(inputs.secondary), on_snapshot=guarded(ctl.on_snapshot),
+                           should_stop=guarded(ctl.should_stop, True), on_stage=guarded(ctl.on_stage))
+            with self._callback_lock:
+                if gen != self._gen:
+                    return
+                packing.placed = ctl.drop_removed(packing.placed)  # as `pack --live` writes it
             text = packing.svg_text()
             m = packing.metrics(distortion=False)
-            with self.lock:
+            with self._result_lock, self._callback_lock:
                 if gen != self._gen:
                     return
                 self.packing, self.packing_doc = packing, doc
-            ctl.finish(text, dict(packing.stopped_by), m["area_fraction"], m["gap"]["median"])
+                ctl.finish(text, dict(packing.stopped_by), m["area_fraction"], m["gap"]["median"])
         except Exception as exc:  # noqa: BLE001  (told to the page; the session goes on)
-            if gen == self._gen:
+            with self._result_lock:
+                if gen != self._gen:
+                    return
                 self.error = str(exc) if isinstance(exc, RepulsionPakError) else f"{type(exc).__name__}: {exc}"
                 ctl.phase = "failed"
                 ctl.publish("json", {"type": "error", "message": self.error})
