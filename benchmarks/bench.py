@@ -54,7 +54,8 @@ def _square_scene(count: int):
 
     from repulsionpak import examples
     from repulsionpak.io import load_elements
-    from repulsionpak.pack import prepare, typical_size
+    from repulsionpak.pack import prepare
+    from repulsionpak.sim.phase import typical_size
     from repulsionpak.params import Params
     from repulsionpak.sim.model import SimFrame, build_model
     from repulsionpak.sim.runner import Simulator

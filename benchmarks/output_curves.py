@@ -31,7 +31,8 @@ from curve_scenes import write_scene  # noqa: E402
 from repulsionpak import examples, load_container, load_elements, pack  # noqa: E402
 from repulsionpak.geometry.mesh import apply_binding  # noqa: E402
 from repulsionpak.params import Params, PlacementParams  # noqa: E402
-from repulsionpak.render import element_vertices, placed_art, render_copy  # noqa: E402
+from repulsionpak.render import render_copy  # noqa: E402
+from repulsionpak.sim.art import element_vertices, placed_art  # noqa: E402
 from repulsionpak.render.deform import tps_weights  # noqa: E402
 from repulsionpak.render.quality import (curve_share, deviation, exact_outlines,  # noqa: E402
                                          kink_stats)

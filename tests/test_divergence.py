@@ -14,7 +14,8 @@ from typer.testing import CliRunner
 from repulsionpak import examples
 from repulsionpak.cli import app
 from repulsionpak.errors import DivergedError
-from repulsionpak.pack import prepare, typical_size
+from repulsionpak.pack import prepare
+from repulsionpak.sim.phase import typical_size
 from repulsionpak.params import params_from_dict
 from repulsionpak.sim.model import SimFrame, build_model
 from repulsionpak.sim.runner import Simulator

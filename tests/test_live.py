@@ -180,7 +180,7 @@ def test_controller_moves_pins_removes_and_adds_between_iterations():
     # the page's estimates from the last frame against the exact measures of the art the
     # renderer makes of the same state (before the final verification adjusts it)
     from repulsionpak.measure import evaluate
-    from repulsionpak.render import placed_art
+    from repulsionpak.sim.art import placed_art
     from repulsionpak.sim.model import SimFrame
 
     est = ctl.estimates()

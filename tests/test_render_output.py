@@ -134,7 +134,7 @@ def test_disc_copies_are_smooth(packing):
     import svgelements as se
 
     from repulsionpak.io.svg_source import segments_to_curves
-    from repulsionpak.render import element_vertices
+    from repulsionpak.sim.art import element_vertices
     from repulsionpak.render.quality import exact_outlines
 
     p = packing["packing"]

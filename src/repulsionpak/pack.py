@@ -19,34 +19,15 @@ from .packing import Packing
 from .params import Params
 from .placement import Placement, assign_elements, estimate_count, final_scale, place
 from .preprocess import Outline, Template, build_template, outline_of
-from .render import is_convex, placed_art, rest_art
+from .render import is_convex
 from .room import room_of
+from .sim.art import placed_art, rest_art
 from .sim.model import Model, SimFrame, State, build_model
+from .sim.phase import bend_limits, neighbour_cell
 from .sim.runner import Simulator, Snapshot
 from .sizing import UNEVEN_SHARE, is_even, narrow_share, plan_sizes
 from .types import Container, Element, PlacedArt
 from .verify import straighten, verify_and_repair
-
-
-def bend_limits(templates, template_index, sim) -> np.ndarray:
-    """Per-element deformation limit of the mesh (``sim/shape.py``) that keeps the art's
-    distortion below ``sim.bend_limit`` (``bend_limit_convex`` for convex elements).
-
-    The art's distortion (symmetric difference over area) is about the mean normal
-    displacement of its outline over its mean half-width h = area / perimeter (thin strokes
-    show a bend more than a disc); the mesh limit is an RMS displacement relative to the
-    mesh's RMS radius R, so it is the art limit × h / R (× 0.8 for the difference between
-    an RMS and a mean)."""
-    out = {}
-    for ti in set(int(t) for t in template_index):
-        t = templates[ti]
-        d = sim.bend_limit_convex if is_convex(t) else sim.bend_limit
-        o = t.outline
-        h = t.scale * o.area / max(o.perimeter, 1e-300)
-        v = t.verts - t.verts.mean(axis=0)
-        r = float(np.sqrt((v ** 2).sum(axis=1).mean()))
-        out[ti] = 0.8 * d * h / r if r > 0 else 0.0
-    return np.array([out[int(ti)] for ti in template_index])
 
 
 #: the automatic pocket fill's cap on its copies is 10 per primary, and at least this
@@ -62,23 +43,6 @@ def skin_excess(params: Params, gap: float) -> float:
     the verification's growth closes it (:func:`repulsionpak.verify.verify_and_repair`)."""
     pp = params.preprocess
     return max(0.0, pp.skin_offset - 0.5) * gap + pp.skin_tolerance * gap
-
-
-def typical_size(templates: Sequence[Template], assignment: np.ndarray) -> float:
-    """Typical final element diameter (container units): 2·sqrt(mean skin area / π)."""
-    return float(2 * np.sqrt(np.mean([templates[i].skin_area for i in assignment]) / np.pi))
-
-
-def neighbour_cell(templates: Sequence[Template], assignment: np.ndarray, gap: float,
-                   params: Params) -> float:
-    """The neighbour grid's cell width (container units) for a phase moving the elements
-    ``assignment``: ``sim.cell_size`` × their typical size, and at least three mesh
-    spacings. A vertex is repelled by every skin in the 3×3 cells around it, so the
-    cell is the reach of the repulsion: scaled to the elements that move, small
-    secondaries feel their own neighbourhood (and a query scans a few times fewer
-    skin chunks) rather than a primary-sized one."""
-    return max(params.sim.cell_size * typical_size(templates, assignment),
-               3.0 * params.preprocess.mesh_spacing * gap)
 
 
 def primary_model(region, templates: Sequence[Template], placement: Placement, gap: float,

@@ -19,6 +19,7 @@ from .params import SecondaryParams
 from .placement import Placement
 from .preprocess import build_template, outline_of
 from .sim.model import build_model
+from .sim.phase import bend_limits, neighbour_cell
 from .sim.runner import Simulator, Snapshot
 from .types import Element
 
@@ -329,7 +330,6 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     all_templates = list(packing.templates) + templates
     region_sim = shapely.affinity.scale(packing.container.region, 1 / packing.frame.unit,
                                         1 / packing.frame.unit, origin=(0, 0))
-    from .pack import bend_limits, neighbour_cell  # noqa: PLC0415  (pack imports this module lazily too)
 
     model, state = build_model(all_templates, placement, packing.frame, region_sim,
                                cell_size=neighbour_cell(all_templates, placement.template_index,

@@ -387,7 +387,7 @@ class LiveController:
         self.publish("json", {"type": "error", "message": message})
 
     def _current_svg(self) -> str:
-        from ..render import placed_art
+        from ..sim.art import placed_art
         from ..render.svg import packing_svg_string
 
         sim = self.sim

@@ -1,4 +1,4 @@
-"""Map every element's art through its deformed mesh and fit smooth curves to it.
+"""Map a copy's art through its deformed mesh and fit smooth curves to it.
 
 The art's exact source curves are sampled densely in the rest mesh, mapped through the
 deformation map (:mod:`.deform`: thin-plate-spline interpolation of the mesh vertices by
@@ -6,18 +6,20 @@ default) and fitted with lines, quadratic and cubic Béziers within a tolerance
 (:mod:`.fit`). The fitted curves, rounded as written, are what the SVG and PDF hold; each
 placed path's ``subpaths`` are a fine flattening of them, so every metric and check sees
 exactly what is written.
+
+Everything here works on one copy: a template (:class:`repulsionpak.preprocess.Template`,
+read for its ``verts``, ``tris``, ``n_skin``, ``scale``, ``outline`` and ``element``) and
+the copy's mesh vertices; the simulation's side, which copies and where their vertices are,
+is :mod:`repulsionpak.sim.art`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
 
 import numpy as np
 
 from ..params import RenderParams
-from ..preprocess import Template
-from ..sim.model import Model, SimFrame, State
 from ..types import ArtPath, PlacedArt, ShapeSource
 from .curves import decimals_for, flatten_subpath, round_curves
 from .deform import map_plan
@@ -55,11 +57,6 @@ def deformation(rest: np.ndarray, cur: np.ndarray) -> float:
     return rms / size if size > 0 else 0.0
 
 
-def element_vertices(model: Model, state: State, e: int) -> np.ndarray:
-    s, t = model.elem_vstart[e], model.elem_vstart[e + 1]
-    return state.x[s:t]
-
-
 def affine_fit(rest: np.ndarray, cur: np.ndarray) -> np.ndarray:
     """Least-squares affine map (3, 3) from ``rest`` (n, 2) to ``cur`` (n, 2)."""
     a = np.column_stack([rest, np.ones(len(rest))])
@@ -80,7 +77,7 @@ def _inv3(m: np.ndarray) -> np.ndarray:
     return c / (m[0, 0] * c[0, 0] + m[0, 1] * c[1, 0] + m[0, 2] * c[2, 0])
 
 
-def _rest_matrix(t: Template) -> np.ndarray:
+def _rest_matrix(t) -> np.ndarray:
     """File units of the element -> the template's rest coordinates."""
     s, c = t.scale, t.outline.center
     return np.array([[s, 0.0, -s * c[0]], [0.0, s, -s * c[1]], [0.0, 0.0, 1.0]])
@@ -113,7 +110,7 @@ def refined(art: ArtPath, tol: float | None) -> ArtPath:
                    source=dataclasses.replace(src, curves=tuple(curves[i] for i in keep)))
 
 
-def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
+def render_copy(t, verts: np.ndarray, gap: float | None = None,
                 params: RenderParams = RenderParams()) -> tuple[list[ArtPath], float]:
     """The written art of one copy of template ``t`` whose mesh vertices are ``verts``
     (container units); returns (paths, tolerance used)."""
@@ -148,24 +145,36 @@ def render_copy(t: Template, verts: np.ndarray, gap: float | None = None,
     return paths, tol
 
 
-def placed_art(templates: Sequence[Template], model: Model, state: State, frame: SimFrame,
-               elements: Sequence[int] | None = None,
-               params: RenderParams | None = None) -> list[PlacedArt]:
-    """The deformed art of elements (all by default) in container units, in model order,
-    as smooth curves (see the module docstring)."""
-    params = params or RenderParams()
-    gap = float(model.gap) * frame.unit
-    out = []
-    for e in range(model.n_elements) if elements is None else elements:
-        t = templates[model.template_index[e]]
-        verts = element_vertices(model, state, e) * frame.unit
-        paths, tol = render_copy(t, verts, gap, params)
-        scale, _ = similarity_fit(t.verts, verts)
-        out.append(PlacedArt(t.element.source, model.kind[e], tuple(paths),
-                             stroke_scale=t.scale * scale, deformation=deformation(t.verts, verts),
-                             paint_servers=dict(t.element.paint_servers),
-                             frame=similarity_matrix(t.verts, verts), tolerance=tol))
-    return out
+def placed_copy(t, verts: np.ndarray, kind: str, gap: float | None = None,
+                params: RenderParams = RenderParams()) -> PlacedArt:
+    """The deformed art of one copy of template ``t`` whose mesh vertices are ``verts``
+    (container units), as smooth curves (see the module docstring).
+
+    Parameters
+    ----------
+    t : Template
+        The copy's template.
+    verts : (n, 2) array
+        The copy's mesh vertices in container units.
+    kind : str
+        ``primary`` or ``secondary``, carried into the result.
+    gap : float, optional
+        The packing's gap: the curve tolerance is at most ``params.max_gap_share`` of it.
+    params : RenderParams
+        Curve fitting and the deformation map.
+
+    Returns
+    -------
+    PlacedArt
+        The written paths, with the copy's stroke scale, deformation, similarity frame and
+        curve tolerance.
+    """
+    paths, tol = render_copy(t, verts, gap, params)
+    scale, _ = similarity_fit(t.verts, verts)
+    return PlacedArt(t.element.source, kind, tuple(paths),
+                     stroke_scale=t.scale * scale, deformation=deformation(t.verts, verts),
+                     paint_servers=dict(t.element.paint_servers),
+                     frame=similarity_matrix(t.verts, verts), tolerance=tol)
 
 
 def similarity_matrix(rest: np.ndarray, cur: np.ndarray) -> np.ndarray:
@@ -180,28 +189,30 @@ def similarity_matrix(rest: np.ndarray, cur: np.ndarray) -> np.ndarray:
     return m
 
 
-def rest_art(templates: Sequence[Template], model: Model, elements: Sequence[int] | None = None
-             ) -> list[PlacedArt]:
-    """Each element's art undeformed, in its template's frame (centred, at the template's
-    scale), with its curves: the shape it should keep. ``frame`` is the identity."""
-    out = []
-    for e in range(model.n_elements) if elements is None else elements:
-        t = templates[model.template_index[e]]
-        c, k = t.outline.center, t.scale
-        paths = tuple(a.transformed(lambda p: (np.asarray(p) - c) * k) for a in t.element.paths)
-        out.append(PlacedArt(t.element.source, model.kind[e], paths, stroke_scale=t.scale, deformation=0.0,
-                             paint_servers=dict(t.element.paint_servers), frame=np.eye(3)))
-    return out
+def rest_copy(t, kind: str) -> PlacedArt:
+    """Template ``t``'s art undeformed, in its template's frame (centred, at the template's
+    scale), with its curves: the shape a copy should keep. ``frame`` is the identity.
+
+    Parameters
+    ----------
+    t : Template
+        The copy's template.
+    kind : str
+        ``primary`` or ``secondary``, carried into the result.
+
+    Returns
+    -------
+    PlacedArt
+        The art at rest, deformation 0.
+    """
+    c, k = t.outline.center, t.scale
+    paths = tuple(a.transformed(lambda p: (np.asarray(p) - c) * k) for a in t.element.paths)
+    return PlacedArt(t.element.source, kind, paths, stroke_scale=t.scale, deformation=0.0,
+                     paint_servers=dict(t.element.paint_servers), frame=np.eye(3))
 
 
-def is_convex(template: Template, solidity: float = 0.9) -> bool:
+def is_convex(template, solidity: float = 0.9) -> bool:
     """True when the template's art covers at least ``solidity`` of its convex hull."""
     g = template.outline.geometry
     hull = g.convex_hull.area
     return hull > 0 and g.area >= solidity * hull
-
-
-def skin_polygons(model: Model, state: State, frame: SimFrame) -> list[np.ndarray]:
-    """Each element's skin polygon (container units), for debug layers and checks."""
-    return [state.x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]] * frame.unit
-            for e in range(model.n_elements)]

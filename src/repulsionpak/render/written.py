@@ -14,7 +14,7 @@ __all__ = ["written_geometry"]
 def written_geometry(placed: Sequence[PlacedArt]) -> list[shapely.Geometry]:
     """Per placed element, the area its written art covers (fills ∪ stroked outlines).
 
-    Placed art rendered by :func:`~repulsionpak.render.placed_art` carries, as its
+    Placed art rendered by :func:`~repulsionpak.render.placed_copy` carries, as its
     ``subpaths``, the written Bézier curves (rounded as written) flattened to a tenth of
     the curve tolerance, so this is the written drawing up to that flattening; art without
     curves is taken as its polylines, which is also what is written for it.

@@ -176,7 +176,7 @@ class StudioController(LiveController):
         self._publish_frame(force=True)
 
     def _current_placed(self) -> list:
-        from ..render import placed_art
+        from ..sim.art import placed_art
         from ..sim.model import SimFrame
 
         sim = self.sim
