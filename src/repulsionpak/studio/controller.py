@@ -20,6 +20,12 @@ from ..sim.model import container_field, reflex_corners
 from ..types import Container
 
 
+#: frames sent per second at most: above the live view's 30, so that a frame is sent after
+#: nearly every iteration of a large scene, whose iterations come unevenly (a full neighbour
+#: query every few); a slow page skips frames (the server keeps only the newest)
+MAX_FPS = 60.0
+
+
 class StudioController(LiveController):
     """A :class:`LiveController` for a session of runs.
 
@@ -44,7 +50,7 @@ class StudioController(LiveController):
         """Prepare for a new run of ``container`` with ``params`` (its gap resolved)."""
         layout_id, publish, old = self.layout_id, self.publish, self.commands
         super().__init__(container, params.gap, params.render, external_stop=lambda: self.cancelled,
-                         container_paint=params.output.container_paint)
+                         container_paint=params.output.container_paint, max_fps=MAX_FPS)
         self.publish = publish
         while not old.empty():  # requests the last run did not answer
             cmd = old.get_nowait()
