@@ -131,13 +131,13 @@ def test_viewbox_scale_and_group_transforms(tmp_path, capsys):
 def test_same_seed_same_packing_and_rerun_on_the_layer(tmp_path, capsys):
     """The same seed gives the same layer; running again with the Packing layer selected
     makes it again in place; with New seed, another packing with the seed recorded."""
-    args = ["--id=oval", "--id=square", "--id=star", "--count=4", "--seed=7", "--pocket_fill=false"]
+    args = ["--id=oval", "--id=square", "--id=star", "--gap=2", "--count=4", "--seed=7", "--pocket_fill=false"]
     s1, doc1, _ = run_effect(args, SCALED, capsys)
     s2, doc2, _ = run_effect(args, SCALED, capsys)
     assert s1 == s2 == 0
     lay1, lay2 = (packing_layers(etree.fromstring(d))[0] for d in (doc1, doc2))
     assert layer_geometry(lay1) == layer_geometry(lay2) and layer_geometry(lay1)
-    assert lay1.get("data-rp-gap") == "auto" and float(lay1.get("data-rp-gap-used")) > 0
+    assert lay1.get("data-rp-gap") == "2" and lay1.get("data-rp-seed") == "7"
     first = tmp_path / "first.svg"
     first.write_bytes(doc1)
     s3, doc3, err = run_effect([f"--id={lay1.get('id')}", "--seed=99"], first, capsys)  # dialog seed ignored
@@ -157,6 +157,25 @@ def test_same_seed_same_packing_and_rerun_on_the_layer(tmp_path, capsys):
     (lay4,) = packing_layers(etree.fromstring(doc4))
     assert lay4.get("data-rp-seed") != "7" and layer_geometry(lay4) != layer_geometry(lay1)
     assert originals(doc4) == originals(doc1)
+
+
+def test_text_and_a_secondary_layer(tmp_path, capsys):
+    """Text is an element (its outlines packed); the objects of the layer named in the dialog
+    are the pocket elements."""
+    status, doc, err = run_effect(["--id=oval", "--id=word", "--id=star", "--gap=2", "--count=4", "--seed=2",
+                                   "--pocket_fill=false"], SCALED, capsys)
+    assert status == 0 and err == ""
+    m, layer = read_back(doc, "oval", 8.0, tmp_path)
+    assert m["n_primary"] == 4 and m["overlap_area"] <= 1e-6 * 352 * 272 and m["n_outside"] == 0
+    assert "word" in {g.get("data-source") for g in layer.iter() if g.get("data-source")}
+    status, doc, err = run_effect(["--id=heart", "--id=flower", "--gap=3", "--count=4", "--seed=1",
+                                   "--secondary_layer=Layer 2"], HEART, capsys)
+    assert status == 0 and err == ""
+    m, layer = read_back(doc, "heart", 3.0, tmp_path)
+    kinds = {(g.get("class"), g.get("data-source")) for g in layer.iter() if g.get("data-source")}
+    assert kinds == {("element primary", "flower"), ("element secondary", "leafclone")}, kinds
+    assert m["overlap_area"] <= 1e-6 * 170 * 135 and m["n_outside"] == 0
+    assert layer.get("data-rp-secondary-layer") == "Layer 2"
 
 
 def test_same_packing_as_the_command_line(tmp_path, capsys):
@@ -185,14 +204,17 @@ def test_same_packing_as_the_command_line(tmp_path, capsys):
 
 
 def test_controls_reach_the_library(capsys):
-    """Rigid copies do not deform; free ones do."""
-    base = ["--id=oval", "--id=square", "--id=star", "--gap=2", "--count=4", "--seed=5", "--pocket_fill=false"]
+    """Rigid copies do not deform; free ones do; without a gap, the library's default."""
+    base = ["--id=oval", "--id=square", "--id=star", "--count=4", "--seed=5", "--pocket_fill=false"]
     deformation = {}
     for rigid in ("true", "false"):
         status, doc, err = run_effect([*base, f"--rigid={rigid}", "--rotation=fixed"], SCALED, capsys)
         assert status == 0 and err == ""
         (layer,) = packing_layers(etree.fromstring(doc))
         assert layer.get("data-rp-rigid") == rigid and layer.get("data-rp-rotation") == "fixed"
+        # no gap given: the library's default gap (1% of the container's larger side, 352 user units)
+        assert layer.get("data-rp-gap") == "auto"
+        assert float(layer.get("data-rp-gap-used")) * 4 == pytest.approx(3.52, rel=1e-3)
         deformation[rigid] = max(float(g.get("data-deformation")) for g in layer.iter() if g.get("data-deformation"))
     assert deformation["true"] < 1e-3 < deformation["false"], deformation
 
