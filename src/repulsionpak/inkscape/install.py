@@ -38,7 +38,10 @@ def main():
     env = dict(os.environ)
     env["PYTHONPATH"] = IMPORT_PATH  # not Inkscape's: its inkex is for its own Python
     env.pop("PYTHONHOME", None)
-    return subprocess.call([PYTHON, "-m", "repulsionpak.inkscape", *sys.argv[1:]], env=env)
+    argv = [PYTHON, "-m", "repulsionpak.inkscape", *sys.argv[1:]]
+    if os.name == "posix":  # this process becomes the effect: Inkscape's Cancel ends it
+        os.execve(PYTHON, argv, env)
+    return subprocess.call(argv, env=env)
 
 
 if __name__ == "__main__":
