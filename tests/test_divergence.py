@@ -46,7 +46,7 @@ def test_nan_is_recovered_with_a_smaller_time_step():
         calls["n"] += 1
         a = original()
         if calls["n"] == 250:  # one bad step after the state at 200 was saved
-            sim.state.x[sim.active_all[0]] = np.nan
+            sim.state.x[sim.state.active_all[0]] = np.nan
             return float("nan")
         return a
 
@@ -64,7 +64,7 @@ def test_exploding_positions_are_detected():
     def exploding_step():
         a = original()
         if sim.state.iteration == 390:
-            sim.state.x[sim.active_all[:3]] += 1e9
+            sim.state.x[sim.state.active_all[:3]] += 1e9
         return a
 
     sim.step = exploding_step
@@ -79,7 +79,7 @@ def test_persistent_divergence_raises_a_clear_error():
 
     def always_nan():
         original()
-        sim.state.x[sim.active_all[0]] = np.inf
+        sim.state.x[sim.state.active_all[0]] = np.inf
         return float("nan")
 
     sim.step = always_nan

@@ -29,8 +29,8 @@ from repulsionpak.sim.forces import (
 )
 from repulsionpak.sim.grid import Grid
 from repulsionpak.sim.integrate import euler_step, grow, skin_areas
-from repulsionpak.sim.model import SimFrame, _csr, build_model, container_field, element_ranges
-from repulsionpak.sim.runner import MAX_NEIGHBOURS, Simulator
+from repulsionpak.sim.model import MAX_NEIGHBOURS, SimFrame, _csr, build_model, container_field, element_ranges
+from repulsionpak.sim.runner import Simulator
 from repulsionpak.sim.selfintersect import relax_self_intersections
 from repulsionpak.types import ArtPath, Element, Style
 
@@ -472,23 +472,23 @@ def test_contact_query_on_built_model_matches_shapely(template):
     sim = Simulator(model, state, SimParams())
     x = state.x
     g = sim.grid
-    g.rebuild(x, sim.chunk_a, sim.chunk_b, sim.chunk_elem, model.tris, model.tri_elem)
-    run_contact_query(x, sim.active_skin, model.vert_elem, g, sim.inside, sim.nb_count,
-                      sim.nb_elem, sim.nb_d2, sim.nb_q, sim.nb_seg,
-                      chunks=(sim.chunk_first, sim.chunk_count, sim.seg_a, sim.seg_b,
-                              sim.seg_next, sim.seg_prev))
+    g.rebuild(x, model.skin.chunk_a, model.skin.chunk_b, model.skin.chunk_elem, model.tris, model.tri_elem)
+    run_contact_query(x, sim.state.active_skin, model.vert_elem, g, sim.state.inside, sim.state.nb_count,
+                      sim.state.nb_elem, sim.state.nb_d2, sim.state.nb_q, sim.state.nb_seg,
+                      chunks=(model.skin.chunk_first, model.skin.chunk_count, model.skin.seg_a, model.skin.seg_b,
+                              model.skin.seg_next, model.skin.seg_prev))
     skins = [Polygon(x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]]) for e in range(2)]
     skin_idx = np.flatnonzero(model.is_skin)
     truth = np.array([skins[1 - model.vert_elem[i]].contains(Point(x[i])) for i in skin_idx])
     assert truth.any() and not truth.all()
-    np.testing.assert_array_equal(sim.inside[skin_idx], truth)
-    assert (sim.nb_count[skin_idx[~truth]] == 1).all()
-    for i in skin_idx[sim.nb_count[skin_idx] > 0]:
+    np.testing.assert_array_equal(sim.state.inside[skin_idx], truth)
+    assert (sim.state.nb_count[skin_idx[~truth]] == 1).all()
+    for i in skin_idx[sim.state.nb_count[skin_idx] > 0]:
         other = 1 - model.vert_elem[i]
         ring = skins[other].exterior
-        assert sim.nb_count[i] == 1 and sim.nb_elem[i, 0] == other
+        assert sim.state.nb_count[i] == 1 and sim.state.nb_elem[i, 0] == other
         expected = np.asarray(shapely.shortest_line(Point(x[i]), ring).coords[1])
-        np.testing.assert_allclose(sim.nb_q[i, 0], expected, atol=1e-9)
+        np.testing.assert_allclose(sim.state.nb_q[i, 0], expected, atol=1e-9)
 
 
 # --------------------------------------------------------------------------------------
@@ -724,23 +724,23 @@ def test_contact_update_tracks_the_full_query(template):
     model, state = two_square_model(template, (40, 40), (50, 47), angle1=0.4)
     sim = Simulator(model, state, SimParams())
     x = state.x
-    chunks = (sim.chunk_first, sim.chunk_count, sim.seg_a, sim.seg_b, sim.seg_next, sim.seg_prev)
+    chunks = (model.skin.chunk_first, model.skin.chunk_count, model.skin.seg_a, model.skin.seg_b, model.skin.seg_next, model.skin.seg_prev)
 
     def full(xx):
         g = sim.grid
-        g.rebuild(xx, sim.chunk_a, sim.chunk_b, sim.chunk_elem, model.tris, model.tri_elem)
+        g.rebuild(xx, model.skin.chunk_a, model.skin.chunk_b, model.skin.chunk_elem, model.tris, model.tri_elem)
         out = (np.zeros(len(xx), np.bool_), np.zeros(len(xx), np.int64), np.zeros((len(xx), 24), np.int32),
                np.zeros((len(xx), 24)), np.zeros((len(xx), 24, 2)), np.zeros((len(xx), 24), np.int64))
-        run_contact_query(xx, sim.active_skin, model.vert_elem, g, *out, chunks=chunks)
+        run_contact_query(xx, sim.state.active_skin, model.vert_elem, g, *out, chunks=chunks)
         return out
 
     inside, cnt, elem, d2, q, seg = full(x)
     rng = np.random.default_rng(0)
     x2 = x + rng.normal(scale=0.05, size=x.shape)
-    contact_update(x2, sim.active_skin, model.vert_elem, sim.seg_a, sim.seg_b, sim.seg_next, sim.seg_prev,
-                   model.tris, model.vtri_ptr, model.vtri, sim.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
+    contact_update(x2, sim.state.active_skin, model.vert_elem, model.skin.seg_a, model.skin.seg_b, model.skin.seg_next, model.skin.seg_prev,
+                   model.tris, model.vtri_ptr, model.vtri, model.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
     inside_f, cnt_f, elem_f, d2_f, q_f, _ = full(x2)
-    skin = sim.active_skin
+    skin = sim.state.active_skin
     np.testing.assert_array_equal(inside[skin], inside_f[skin])
     has = cnt[skin] > 0
     np.testing.assert_allclose(d2[skin[has], 0], d2_f[skin[has], 0], rtol=1e-9, atol=1e-9)
@@ -771,15 +771,15 @@ def test_a_vertex_deep_in_a_mesh_is_pulled_out_the_side_it_came_in_by(template):
     deep = lead[(x[lead, 0] > left + 0.6 * width) & (np.abs(x[lead, 1] - 50) < 0.15 * width)]
     assert len(deep) > 0
     for i in deep:
-        assert sim.inside[i]
-        j = int(np.argmin(sim.nb_d2[i, :sim.nb_count[i]]))
-        assert sim.nb_q[i, j, 0] == pytest.approx(left, abs=0.05 * width)  # the way back
+        assert sim.state.inside[i]
+        j = int(np.argmin(sim.state.nb_d2[i, :sim.state.nb_count[i]]))
+        assert sim.state.nb_q[i, j, 0] == pytest.approx(left, abs=0.05 * width)  # the way back
     fresh = Simulator(model, state, SimParams())
     fresh.update_contacts(True)
     for i in deep:
-        assert fresh.inside[i]
-        j = int(np.argmin(fresh.nb_d2[i, :fresh.nb_count[i]]))
-        assert fresh.nb_q[i, j, 0] == pytest.approx(right, abs=0.05 * width)  # the nearest side
+        assert fresh.state.inside[i]
+        j = int(np.argmin(fresh.state.nb_d2[i, :fresh.state.nb_count[i]]))
+        assert fresh.state.nb_q[i, j, 0] == pytest.approx(right, abs=0.05 * width)  # the nearest side
 
 
 def test_a_resumed_simulation_keeps_the_entry_sides(template):
@@ -903,7 +903,7 @@ def _all_corners_force(sim, x):
                 for tri in t.order[t.start[c]:t.start[c + 1]]:
                     if not m.frozen[m.tri_elem[tri]]:
                         evaluated.add(k)
-                    if not sim.moving[m.tri_elem[tri]]:
+                    if not sim.state.moving[m.tri_elem[tri]]:
                         continue
                     (ax, ay), (bx, by), (qx, qy) = x[m.tris[tri]]
                     d1 = (cx - bx) * (ay - by) - (ax - bx) * (cy - by)
@@ -941,18 +941,18 @@ def test_corner_gather_looks_only_at_corners_near_moving_meshes_and_keeps_the_fo
     sim.grid.rebuild_triangles(x, model.tris, model.tri_elem)
     sim._gather_corner_triangles(by_cells)
     F_ref, evaluated = _all_corners_force(sim, x)
-    active = sim.corner_active[:sim.n_corner_active]
+    active = sim.state.corner_active[:sim.state.n_corner_active]
     assert active.tolist() == sorted(evaluated)  # the corners near element 0's triangles
     assert 0 < len(active) < 40
     F = np.zeros_like(x)
-    corner_force(x, model.corners, sim.corner_active, sim.n_corner_active, sim.corner_ptr, sim.corner_tris,
-                 model.tris, model.tri_elem, sim.moving, sim.params.k_corner, F)
+    corner_force(x, model.corners, sim.state.corner_active, sim.state.n_corner_active, sim.state.corner_ptr, sim.state.corner_tris,
+                 model.tris, model.tri_elem, sim.state.moving, sim.params.k_corner, F)
     assert np.abs(F_ref).max() > 0.0  # corners inside element 0's triangles push it
     assert np.array_equal(F, F_ref)
     sim.set_moving(0, False)  # pinned between two gathers: no force, as before
     F[:] = 0.0
-    corner_force(x, model.corners, sim.corner_active, sim.n_corner_active, sim.corner_ptr, sim.corner_tris,
-                 model.tris, model.tri_elem, sim.moving, sim.params.k_corner, F)
+    corner_force(x, model.corners, sim.state.corner_active, sim.state.n_corner_active, sim.state.corner_ptr, sim.state.corner_tris,
+                 model.tris, model.tri_elem, sim.state.moving, sim.params.k_corner, F)
     assert not F.any()
 
 

@@ -327,8 +327,8 @@ def _mesh_lag(headroom: float, at: int = 400) -> list[float]:
         if s.phase == "primary" and s.iteration == at and not got:
             m, sim = s.model, s.sim
             placed = np.zeros(m.n_elements)
-            skin_areas(m.x_rest, m.elem_vstart, m.elem_nskin, sim.moving, placed)
-            got.extend(sim.areas / (placed * sim.growth ** 2))  # sim.areas: this step's skins
+            skin_areas(m.x_rest, m.elem_vstart, m.elem_nskin, sim.state.moving, placed)
+            got.extend(sim.state.areas / (placed * sim.state.growth ** 2))  # sim.state.areas: this step's skins
 
     pack(CONTAINER, library()[2:], p, on_snapshot=snap)
     return got

@@ -75,8 +75,8 @@ def test_specialisations_cover_the_simulation_kernels():
     serial = {k.serial for k in kernels.KERNELS}
     assert sum(d in serial for d, _ in calls) >= 8
     # recording ran the plain Python functions: the real kernels are back in place
-    from repulsionpak.sim import forces, runner
-    assert runner.contact_query is forces.contact_query
+    from repulsionpak.sim import contacts, forces, runner
+    assert contacts.contact_query is forces.contact_query
     assert type(runner.grow).__name__ == "CPUDispatcher"
 
 

@@ -1,9 +1,11 @@
-"""Checkpoint files: the evolving simulation state saved during a run, to resume it.
+"""Checkpoint files: the simulation's :class:`~repulsionpak.sim.model.State` saved during a run, to resume it.
 
-A checkpoint holds, per phase ("primary", "secondary"), what
-:meth:`repulsionpak.sim.runner.Simulator.snapshot_state` returns, plus a fingerprint of
-the inputs and parameters; everything static is rebuilt from the same inputs and seed
-(preprocessing and placement are deterministic), so the files stay small.
+A checkpoint holds, per phase ("primary", "secondary"), the phase's state as
+:meth:`repulsionpak.sim.model.State.saved` gives it (through
+:meth:`repulsionpak.sim.runner.Simulator.snapshot_state`, which adds the phase's label),
+plus a fingerprint of the inputs and parameters; the :class:`~repulsionpak.sim.model.Model`
+is rebuilt from the same inputs and seed (preprocessing and placement are deterministic),
+so the files stay small.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ def fingerprint(files: list[Path], params: dict) -> str:
 
 
 def save_checkpoint(path: str | Path, states: dict, fp: str) -> None:
-    """Write ``states`` ({phase: snapshot_state dict}) atomically to ``path``."""
+    """Write ``states`` ({phase: State.saved() dict, with the phase's label}) atomically to ``path``."""
     arrays, meta = {}, {"format": FORMAT, "fingerprint": fp, "phases": {}}
     for phase, st in states.items():
         if st is None:

@@ -8,7 +8,8 @@ force constants are tuned for (sec. 5).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from typing import NamedTuple
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 import shapely
@@ -124,6 +125,11 @@ class Model:
     pinned: np.ndarray | None = None  # (M,) bool: pinned copies (also frozen)
     stiff_edges: bool = False  # spring constants scaled by ``stiffness``
     controls: list | None = None  # (M,) ElementControls of each element
+    # derived by build_model: the skin rings (SkinTopology) and each element's springs and
+    # triangles, ``spring_ptr[e]:spring_ptr[e+1]`` and ``tri_ptr[e]:tri_ptr[e+1]`` (element_ranges)
+    skin: "SkinTopology | None" = None
+    spring_ptr: np.ndarray | None = None  # (M+1,) int64
+    tri_ptr: np.ndarray | None = None  # (M+1,) int64
 
     @property
     def n_vertices(self) -> int:
@@ -134,19 +140,152 @@ class Model:
         return len(self.elem_nskin)
 
 
+#: the most neighbouring meshes a skin vertex keeps contact with (the closest win)
+MAX_NEIGHBOURS = 24
+
+
 @dataclass(eq=False)
 class State:
-    """Time-varying arrays."""
+    """Every array that changes while a simulation runs (N vertices, M elements, K =
+    :data:`MAX_NEIGHBOURS`); the :class:`Model` holds what does not.
 
-    x: np.ndarray  # (N, 2) positions
-    v: np.ndarray  # (N, 2) velocities
-    n_grow: np.ndarray  # (M,) int64 growth counters n_M (sec. 6)
+    A checkpoint is this state (:meth:`saved`, :meth:`load`). ``x``, ``v`` and ``n_grow``
+    come from :func:`build_model`; the run arrays are (re)allocated by :meth:`begin`, which
+    the :class:`~repulsionpak.sim.runner.Simulator` calls when it takes the state.
+
+    Notes
+    -----
+    *Kinematics and growth*: ``x`` (N, 2) positions, ``v`` (N, 2) velocities, ``n_grow``
+    (M,) int64 growth counters n_M (sec. 6) and ``growth`` (M,) the rest-length factor
+    they give, 1 + n_M·k_growth·Δt. *Pins*: ``moving`` (M,) the elements that move and
+    grow (not frozen, not pinned by the live view), ``active_all``/``active_skin`` their
+    vertices and skin vertices. *Contacts* (:mod:`repulsionpak.sim.contacts`), per skin
+    vertex: ``inside`` (N,) it lies in another mesh; ``nb_count`` (N,), ``nb_elem``,
+    ``nb_d2``, ``nb_seg`` (N, K) and ``nb_q`` (N, K, 2): its neighbouring meshes, the
+    squared distance, skin segment and closest point on each; the container's reflex
+    corners near a moving mesh (``corner_active[:n_corner_active]``) and their candidate
+    triangles (``corner_tris[corner_ptr[j]:corner_ptr[j+1]]``). *Per step*: ``outside``
+    (N,) a vertex too far outside the container, ``blocking`` (N,) the contacts that stop
+    growth, ``areas`` (M,) skin areas. *Counters*: ``iteration``, ``area_history`` (the
+    moving meshes' area fraction per iteration, for the stopping rule), ``dt`` (halved by
+    a divergence recovery), ``settle_left`` (iterations left in the settle phase, None
+    before it), ``stopped_by``, ``allow_growth``.
+    """
+
+    x: np.ndarray
+    v: np.ndarray
+    n_grow: np.ndarray
     iteration: int = 0
     area_history: list[float] = field(default_factory=list)
+    growth: np.ndarray | None = None
+    moving: np.ndarray | None = None
+    active_all: np.ndarray | None = None
+    active_skin: np.ndarray | None = None
+    inside: np.ndarray | None = None
+    nb_count: np.ndarray | None = None
+    nb_elem: np.ndarray | None = None
+    nb_d2: np.ndarray | None = None
+    nb_q: np.ndarray | None = None
+    nb_seg: np.ndarray | None = None
+    corner_active: np.ndarray | None = None
+    n_corner_active: int = 0
+    corner_ptr: np.ndarray | None = None
+    corner_tris: np.ndarray | None = None
+    outside: np.ndarray | None = None
+    blocking: np.ndarray | None = None
+    areas: np.ndarray | None = None
+    dt: float = 0.0
+    settle_left: int | None = None
+    stopped_by: str = "max_iterations"
+    allow_growth: bool = True
+
+    def begin(self, model: "Model", dt: float) -> None:
+        """Allocate the run arrays for ``model`` (contacts empty, nothing growing yet:
+        :meth:`refresh_growth`) and reset the run's counters: every element not frozen
+        moves, the time step is ``dt``, growth allowed, no settle phase."""
+        N, M, K = model.n_vertices, model.n_elements, MAX_NEIGHBOURS
+        self.growth = np.ones(M)
+        self.set_moving(model, ~model.frozen)
+        self.inside = np.zeros(N, np.bool_)
+        self.nb_count = np.zeros(N, np.int64)
+        self.nb_elem = np.zeros((N, K), np.int32)
+        self.nb_d2 = np.zeros((N, K))
+        self.nb_q = np.zeros((N, K, 2))
+        self.nb_seg = np.zeros((N, K), np.int64)
+        self.corner_active = np.zeros(len(model.corners), np.int64)
+        self.n_corner_active = 0
+        self.corner_ptr = np.zeros(len(model.corners) + 1, np.int64)
+        self.corner_tris = np.zeros(1024, np.int64)  # grown on demand
+        self.outside = np.zeros(N, np.bool_)
+        self.blocking = np.zeros(N, np.bool_)
+        self.areas = np.zeros(M)
+        self.dt = float(dt)
+        self.settle_left = None
+        self.stopped_by = "max_iterations"
+        self.allow_growth = True
+
+    def set_moving(self, model: "Model", moving: np.ndarray) -> None:
+        """The elements that move (``moving``, (M,) bool; a frozen one never does) and
+        their vertices."""
+        self.moving = np.asarray(moving, np.bool_) & ~model.frozen
+        vmask = self.moving[model.vert_elem]
+        self.active_all = np.flatnonzero(vmask).astype(np.int64)
+        self.active_skin = np.flatnonzero(vmask & model.is_skin).astype(np.int64)
+
+    def refresh_growth(self, k_growth_dt: float) -> None:
+        """The growth factors from the counters (after loading a state): the expression
+        of :func:`~repulsionpak.sim.integrate.grow`, so a restored run is bit-identical."""
+        self.growth[:] = 1.0 + self.n_grow * k_growth_dt
 
     def copy(self) -> "State":
-        return State(self.x.copy(), self.v.copy(), self.n_grow.copy(), self.iteration,
-                     list(self.area_history))
+        """A deep copy (arrays copied, not shared)."""
+        out = State(self.x.copy(), self.v.copy(), self.n_grow.copy(), self.iteration,
+                    list(self.area_history))
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name not in ("x", "v", "n_grow", "iteration", "area_history"):
+                setattr(out, f.name, value.copy() if isinstance(value, np.ndarray) else value)
+        return out
+
+    def saved(self) -> dict:
+        """This state as a checkpoint (plain arrays and numbers, :mod:`repulsionpak.checkpoint`).
+
+        Notes
+        -----
+        Checkpoints are taken where the next step starts with a full contact query, which
+        recomputes the contacts of every vertex but one inside a mesh: that one keeps the
+        skin segment it entered by. So only those vertices' contacts are saved, and the
+        growth factors follow from the counters; the per-step arrays are recomputed.
+        """
+        ins = np.flatnonzero(self.inside)
+        return {"x": self.x.copy(), "v": self.v.copy(), "n_grow": self.n_grow.copy(),
+                "area_history": np.asarray(self.area_history, dtype=float),
+                "inside_idx": ins, "inside_nb_count": self.nb_count[ins],
+                "inside_nb_elem": self.nb_elem[ins], "inside_nb_seg": self.nb_seg[ins],
+                "iteration": self.iteration, "dt": self.dt, "settle_left": self.settle_left,
+                "stopped_by": self.stopped_by}
+
+    def load(self, saved: dict, k_growth_dt: float) -> None:
+        """Continue from :meth:`saved` output (a state of the same model)."""
+        if saved["x"].shape != self.x.shape or saved["n_grow"].shape != self.n_grow.shape:
+            raise ValueError("the saved state does not match this model")
+        self.x[:] = saved["x"]
+        self.v[:] = saved["v"]
+        self.n_grow[:] = saved["n_grow"]
+        self.area_history[:] = [float(a) for a in saved["area_history"]]
+        self.iteration = int(saved["iteration"])
+        self.dt = float(saved["dt"])
+        self.settle_left = None if saved["settle_left"] is None else int(saved["settle_left"])
+        self.stopped_by = str(saved["stopped_by"])
+        self.inside[:] = False
+        if "inside_idx" in saved:  # (older checkpoints lack it: their resumed run differs a little)
+            ins = np.asarray(saved["inside_idx"], np.int64)
+            self.inside[ins] = True
+            self.nb_count[ins] = saved["inside_nb_count"]
+            self.nb_elem[ins] = saved["inside_nb_elem"]
+            self.nb_seg[ins] = saved["inside_nb_seg"]
+        self.refresh_growth(k_growth_dt)
+        self.allow_growth = self.settle_left is None
 
 
 def reflex_corners(region, max_angle_deg: float = 160.0) -> np.ndarray:
@@ -188,6 +327,50 @@ def element_ranges(owner: np.ndarray, n_elements: int) -> np.ndarray:
     if len(owner) and np.any(np.diff(owner) < 0):
         raise ValueError("items are not grouped by element")
     return np.searchsorted(owner, np.arange(n_elements + 1)).astype(np.int64)
+
+
+#: skin segments per chunk in the full contact query (:class:`SkinTopology`)
+CHUNK = 4
+
+
+class SkinTopology(NamedTuple):
+    """Skin segments and chunks of all meshes, as flat arrays: segment ``k`` runs from
+    skin vertex ``seg_a[k]`` to ``seg_b[k]`` of element ``seg_elem[k]``, its ring
+    neighbours are ``seg_next``/``seg_prev``; a chunk is the chord over ``chunk_count``
+    consecutive segments from ``chunk_first`` (``chunk_a`` to ``chunk_b``), what the full
+    contact query bins into cells."""
+
+    seg_a: np.ndarray
+    seg_b: np.ndarray
+    seg_elem: np.ndarray
+    seg_next: np.ndarray
+    seg_prev: np.ndarray
+    chunk_a: np.ndarray
+    chunk_b: np.ndarray
+    chunk_elem: np.ndarray
+    chunk_first: np.ndarray
+    chunk_count: np.ndarray
+
+
+def skin_topology(m: Model) -> SkinTopology:
+    """The skin segments and chunks of every element (also frozen ones: they repel).
+    Segment k of a mesh runs from its skin vertex k to k+1; the segments of one mesh are
+    consecutive."""
+    seg, chunk = [], []
+    base = 0
+    for e in range(m.n_elements):
+        s, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
+        k = np.arange(n)
+        seg.append(np.column_stack([s + k, s + (k + 1) % n, np.full(n, e), base + (k + 1) % n,
+                                    base + (k - 1) % n]))
+        j = np.arange(0, n, CHUNK)
+        cnt = np.minimum(CHUNK, n - j)
+        chunk.append(np.column_stack([s + j, s + (j + cnt) % n, np.full(len(j), e), base + j, cnt]))
+        base += n
+    seg, chunk = np.concatenate(seg).astype(np.int64), np.concatenate(chunk).astype(np.int64)
+    return SkinTopology(seg[:, 0].copy(), seg[:, 1].copy(), seg[:, 2].astype(np.int32), seg[:, 3].copy(),
+                        seg[:, 4].copy(), chunk[:, 0].copy(), chunk[:, 1].copy(), chunk[:, 2].astype(np.int32),
+                        chunk[:, 3].copy(), chunk[:, 4].copy())
 
 
 def _csr(n: int, rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -323,6 +506,9 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     if base is not None:
         model.inset_extra = base[0].inset_extra
         model.bend_limit[:m0] = base[0].bend_limit
+    model.skin = skin_topology(model)
+    model.spring_ptr = element_ranges(model.spring_elem, M)
+    model.tri_ptr = element_ranges(model.tri_elem, M)
     n_grow = np.zeros(M, np.int64)
     if base is not None:
         n_grow[:m0] = base[1].n_grow

@@ -1,0 +1,161 @@
+"""The simulation's State (every array a run changes), its checkpoints, and the force terms
+summed by Simulator.step."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numba
+import numpy as np
+import pytest
+from shapely.geometry import Polygon
+
+from repulsionpak.checkpoint import load_checkpoint, save_checkpoint
+from repulsionpak.params import SimParams
+from repulsionpak.placement import Placement
+from repulsionpak.preprocess import build_template, outline_of
+from repulsionpak.sim.model import SimFrame, State, build_model
+from repulsionpak.sim.runner import Simulator
+from repulsionpak.sim.terms import Boundary, Corners, Edges, Inversion, Overlap, Repulsion, ShapeMatching, terms_of
+from repulsionpak.types import ArtPath, Element, Style
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_numba_thread():
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    yield
+    numba.set_num_threads(old)
+
+
+def _square() -> Element:
+    ring = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)
+    return Element("sq", "sq.svg", (ArtPath((ring,), (True,), Style(fill="#000")),))
+
+
+@pytest.fixture(scope="module")
+def template():
+    return build_template(outline_of(_square()), scale=1.0, gap=2.0)
+
+
+def _sim(template, params: SimParams | None = None) -> Simulator:
+    """Three squares, two overlapping, in an L-shaped container (reflex corner: the corner
+    term runs too)."""
+    region = Polygon([(0, 0), (100, 0), (100, 50), (50, 50), (50, 100), (0, 100)])
+    placement = Placement(np.array([0, 0, 0]), np.array([[20.0, 20.0], [25.0, 22.0], [25.0, 70.0]]),
+                          np.array([0.0, 0.3, 0.0]), 1.0)
+    model, state = build_model([template], placement, SimFrame(1.0), region, cell_size=15.0, gap=3.0)
+    sim = Simulator(model, state, params or SimParams())
+    sim.refresh_growth()
+    return sim
+
+
+def _arrays(obj) -> dict:
+    return {k: v.copy() for k, v in vars(obj).items() if isinstance(v, np.ndarray)}
+
+
+def test_a_step_changes_no_array_outside_the_state(template):
+    """Everything a step changes is in the State: the simulator's own arrays are constant
+    (static derived data) except the force accumulator."""
+    sim = _sim(template)
+    before = _arrays(sim)
+    state_before = _arrays(sim.state)
+    for _ in range(2 * sim.params.requery_every):
+        sim.step()
+    after = _arrays(sim)
+    changed = {k for k in before if not np.array_equal(before[k], after[k])}
+    # scratch: the forces, the corner query's marks, the relaxation's sweep order (a warm
+    # start for its sort; the order is by (x, vertex id), never by the previous one)
+    assert changed <= {"F", "_corner_mark", "relax_order"}, changed
+    assert "F" in changed
+    moved = {k for k in state_before if not np.array_equal(state_before[k], getattr(sim.state, k))}
+    assert {"x", "v", "n_grow", "growth", "inside", "nb_count", "nb_q", "areas"} <= moved, moved
+    assert sim.state.iteration == 2 * sim.params.requery_every
+
+
+def test_every_term_adds_into_the_forces(template):
+    """``term(model, state, forces)`` adds: applied to non-zero forces it changes them by
+    exactly what it gives on zeros."""
+    sim = _sim(template, dataclasses.replace(SimParams(), k_shape=2.0))
+    for _ in range(sim.params.requery_every):
+        sim.step()
+    sim.update_contacts(full=True)
+    m, st = sim.model, sim.state
+    assert [type(t) for t in sim.terms] == [Repulsion, Edges, ShapeMatching, Boundary, Overlap, Inversion,
+                                            Corners]
+    rng = np.random.default_rng(1)
+    for term in sim.terms:
+        alone = np.zeros_like(st.x)
+        term(m, st, alone)
+        base = rng.normal(size=st.x.shape)
+        summed = base.copy()
+        term(m, st, summed)
+        np.testing.assert_allclose(summed - base, alone, atol=1e-9)
+    # the repulsion, springs, boundary and overlap act on this overlapping scene
+    assert all(np.abs(_alone(t, m, st)).max() > 0 for t in sim.terms[:2] + sim.terms[4:5])
+
+
+def _alone(term, m, st):
+    out = np.zeros_like(st.x)
+    term(m, st, out)
+    return out
+
+
+def test_terms_follow_the_parameters():
+    default = terms_of(SimParams())
+    assert [type(t) for t in default][:2] == [Repulsion, Edges]
+    assert ShapeMatching not in map(type, default)  # k_shape = 0: the paper's four forces
+    no_fold = terms_of(dataclasses.replace(SimParams(), min_triangle_area=0.0))
+    assert Inversion not in map(type, no_fold)
+    p = SimParams()
+    assert default[0] == Repulsion(p.k_repulsion, p.soft)
+    assert Boundary(p.k_boundary, p.outside_block, p.boundary_inset) in default
+
+
+def test_a_state_saved_to_a_checkpoint_file_resumes_bit_identically(template, tmp_path):
+    """The checkpoint is the State: a run restored from the file (a fresh model and
+    state) continues exactly as the uninterrupted one, vertices inside a mesh included."""
+    sim = _sim(template)
+    every = sim.params.requery_every
+    for _ in range(every):
+        sim.step()
+    assert sim.state.inside.any()  # the entry sides are part of what is saved
+    save_checkpoint(tmp_path / "c.npz", {"primary": sim.snapshot_state()}, "fp")
+    for _ in range(2 * every):
+        sim.step()
+    again = _sim(template)
+    again.restore(load_checkpoint(tmp_path / "c.npz", "fp")["primary"])
+    assert again.state.iteration == every
+    for _ in range(2 * every):
+        again.step()
+    np.testing.assert_array_equal(again.state.x, sim.state.x)
+    np.testing.assert_array_equal(again.state.n_grow, sim.state.n_grow)
+    np.testing.assert_array_equal(again.state.growth, sim.state.growth)
+
+
+def test_state_copy_shares_no_array(template):
+    sim = _sim(template)
+    sim.step()
+    c = sim.state.copy()
+    assert isinstance(c, State)
+    for k, v in vars(sim.state).items():
+        if isinstance(v, np.ndarray):
+            assert getattr(c, k) is not v and np.array_equal(getattr(c, k), v), k
+    c.x[0, 0] += 1.0
+    assert c.x[0, 0] != sim.state.x[0, 0]
+
+
+def test_pinning_moves_the_active_vertices(template):
+    sim = _sim(template)
+    m, st = sim.model, sim.state
+    n_all = len(st.active_all)
+    sim.set_moving(1, False)
+    own = np.arange(m.elem_vstart[1], m.elem_vstart[2])
+    assert not st.moving[1] and len(st.active_all) == n_all - len(own)
+    assert not np.isin(own, st.active_all).any() and not np.isin(own, st.active_skin).any()
+    x1 = st.x[own].copy()
+    for _ in range(5):
+        sim.step()
+    np.testing.assert_array_equal(st.x[own], x1)  # a pinned element does not move
+    sim.set_moving(1, True)
+    assert len(st.active_all) == n_all
