@@ -191,17 +191,19 @@ def test_session_inputs_are_read_by_the_hardened_reader(session):
 
 def test_export_equals_what_pack_writes_and_the_project_reopens(session, tmp_path):
     session.use_examples("circle", ["apple", "fish"])
+    session.add_elements([("star.svg", (EX / "secondary" / "star.svg").read_bytes())], secondary=True)
     for k, v in (("count", "8"), ("gap", "12"), ("seed", "1")):
         session.set_setting(k, v)
     session.start()
     _finish(session)
     svg = session.export("svg")
+    assert 'class="element secondary" data-source="star.svg"' in svg.decode()
     # the project: the files, the settings and the command that makes the same bytes
     proj = tmp_path / "proj"
     zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
     cmd = session.command()
     assert cmd == ("repulsionpak pack circle.svg elements/apple.svg elements/fish.svg -o packing.svg "
-                   "--gap 12 --seed 1 --count 8")
+                   "--secondary secondary/star.svg --gap 12 --seed 1 --count 8")
     from typer.testing import CliRunner
 
     from repulsionpak.cli import app
@@ -220,6 +222,7 @@ def test_export_equals_what_pack_writes_and_the_project_reopens(session, tmp_pat
     try:
         st = other.open_project(session.project_zip())
         assert st["container"] == "circle.svg" and st["elements"] == ["apple.svg", "fish.svg"]
+        assert st["secondary"] == ["star.svg"]
         assert st["settings"] == session.doc.settings_dict and other.command() == cmd
     finally:
         other.close()
@@ -294,6 +297,20 @@ def test_pins_drags_and_removals_of_a_running_simulation_are_undone(session):
     session.cancel(wait=60)
 
 
+def test_opening_another_container_ends_the_run(session):
+    session.use_examples("circle", ["apple"])
+    for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
+        session.set_setting(k, v)
+    session.start(paused=True)
+    ctl = session.controller
+    _wait(lambda: ctl.sim is not None and ctl.paused)
+    layout = ctl.layout_id
+    st = session.use_examples("heart")
+    assert not st["running"] and ctl.sim is None and ctl.layout_id > layout
+    assert ctl.scene()["rings"] and st["container"] == "heart.svg"
+    assert ctl.view_box[2] > 400  # the heart's canvas
+
+
 def test_restart_with_a_new_seed_ends_a_paused_run_at_once(session):
     session.use_examples("circle", ["apple", "fish"])
     for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
@@ -354,7 +371,7 @@ def test_server_answers_only_on_loopback_with_the_token(server):
     for path in ("/", "/state", "/examples", "/packing.svg", "/export.svg", "/export.png", "/project.zip"):
         assert _run(_status("GET", base + path))[0] == 403, path
         assert _run(_status("GET", f"{base}{path}?token=wrong"))[0] == 403, path
-    for path in ("/edit", "/run", "/open-container", "/open-elements", "/open-project"):
+    for path in ("/edit", "/run", "/open-container", "/open-elements", "/open-secondary", "/open-project"):
         assert _run(_status("POST", base + path, json={"op": "undo"}))[0] == 403, path
     assert _run(_status("GET", f"{base}/state?token={t}"))[0] == 200
     # DNS rebinding: a foreign Host is refused even with the token

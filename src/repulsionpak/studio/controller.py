@@ -76,6 +76,15 @@ class StudioController(LiveController):
         container the primaries were packed in)."""
         return self.stage == "meshing and placing" and self.final_svg is None and not self.cancelled
 
+    def clear(self) -> None:
+        """Forget the last run's elements (the pages draw none): a new container file."""
+        self.sim, self.final_svg, self.final_status, self.last_frame = None, None, None, None
+        self.layout, self.removed, self.pinned = None, set(), set()
+        self.phase = "idle"
+        self.layout_id += 1
+        self.publish("json", dict(self.layout_message(), id=self.layout_id))
+        self._status()
+
     def show(self, container: Container | None) -> None:
         """Between runs: show ``container`` (None: the blank canvas) on the pages."""
         self.container = container

@@ -35,6 +35,7 @@ class Document:
     container: InputFile | None = None
     strokes: tuple[Stroke, ...] = ()
     elements: tuple[InputFile, ...] = ()
+    secondary: tuple[InputFile, ...] = ()  # the pockets' elements (``--secondary``)
     settings: tuple[tuple[str, object], ...] = tuple(DEFAULTS.items())
 
     @property

@@ -8,6 +8,7 @@ origin is refused with 403):
 - ``GET /examples``             the shipped example containers and elements
 - ``POST /open-container``      multipart, one file: the container
 - ``POST /open-elements``       multipart, files: element files added
+- ``POST /open-secondary``      multipart, files: secondary element files added
 - ``POST /open-project``        multipart, one zip: a saved project
 - ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``pin``, ``remove``, ``moved``,
   ``undo``, ``redo``, ``examples``, ``remove-element``
@@ -52,6 +53,7 @@ class StudioServer(LiveServer):
         app.router.add_get("/examples", self._examples)
         app.router.add_post("/open-container", self._open_container)
         app.router.add_post("/open-elements", self._open_elements)
+        app.router.add_post("/open-secondary", self._open_secondary)
         app.router.add_post("/open-project", self._open_project)
         app.router.add_post("/edit", self._edit)
         app.router.add_post("/run", self._run)
@@ -142,6 +144,11 @@ class StudioServer(LiveServer):
         files = await self._files(request)
         return web.json_response(await self._call(self.session.add_elements, files))
 
+    async def _open_secondary(self, request: web.Request) -> web.Response:
+        self._check_post(request)
+        files = await self._files(request)
+        return web.json_response(await self._call(self.session.add_elements, files, True))
+
     async def _open_project(self, request: web.Request) -> web.Response:
         self._check_post(request)
         files = await self._files(request, limit=MAX_PROJECT_BYTES)
@@ -171,7 +178,7 @@ class StudioServer(LiveServer):
             "undo": s.undo,
             "redo": s.redo,
             "examples": lambda: s.use_examples(msg.get("container"), msg.get("elements")),
-            "remove-element": lambda: s.remove_element(_index(msg)),
+            "remove-element": lambda: s.remove_element(_index(msg), bool(msg.get("secondary", False))),
         }
         if op not in calls:
             raise web.HTTPBadRequest(text=json.dumps({"error": f"unknown edit {op!r}"}),

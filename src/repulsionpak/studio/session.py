@@ -142,14 +142,17 @@ class Session:
             self._edit(f"open {name}", dataclasses.replace(self.doc, container=InputFile(name, path), strokes=()))
             return self.state()
 
-    def add_elements(self, files: list[tuple[str, bytes]]) -> dict:
-        """Add element files (name, contents); each is read as ``repulsionpak pack`` reads it."""
+    def add_elements(self, files: list[tuple[str, bytes]], secondary: bool = False) -> dict:
+        """Add element files (name, contents), or secondary ones (the pockets' elements,
+        ``--secondary``); each is read as ``repulsionpak pack`` reads it."""
         from .. import load_elements
 
+        field = "secondary" if secondary else "elements"
         with self.lock:
-            have = {e.name for e in self.doc.elements}
+            current = getattr(self.doc, field)
+            have = {e.name for e in current}
             if len(have) + len(files) > MAX_ELEMENTS:
-                raise ParameterError(f"the studio takes at most {MAX_ELEMENTS} element files")
+                raise ParameterError(f"the studio takes at most {MAX_ELEMENTS} {field} files")
             added = []
             for name, data in files:
                 name = safe_name(name)
@@ -167,16 +170,18 @@ class Session:
                 added.append(InputFile(name, path))
             if added:
                 label = f"add {added[0].name}" + (f" and {len(added) - 1} more" if len(added) > 1 else "")
-                self._edit(label, dataclasses.replace(self.doc, elements=self.doc.elements + tuple(added)))
+                self._edit(label, dataclasses.replace(self.doc, **{field: current + tuple(added)}))
             return self.state()
 
-    def remove_element(self, index: int) -> dict:
+    def remove_element(self, index: int, secondary: bool = False) -> dict:
+        """Take element file ``index`` (of the secondary ones: ``secondary``) out."""
+        field = "secondary" if secondary else "elements"
         with self.lock:
-            els = list(self.doc.elements)
+            els = list(getattr(self.doc, field))
             if not 0 <= index < len(els):
-                raise ParameterError(f"no element file {index}")
+                raise ParameterError(f"no {field} file {index}")
             gone = els.pop(index)
-            self._edit(f"remove {gone.name}", dataclasses.replace(self.doc, elements=tuple(els)))
+            self._edit(f"remove {gone.name}", dataclasses.replace(self.doc, **{field: tuple(els)}))
             return self.state()
 
     def use_examples(self, container: str | None = None, elements: list[str] | None = None) -> dict:
@@ -211,6 +216,9 @@ class Session:
         if (before.container, before.strokes) == (after.container, after.strokes):
             return
         if after.container != before.container:
+            if self.running:  # another file: another drawing, not an edit of this run's room
+                self.cancel()
+                self.controller.clear()
             self._set_canvas(after)
         cont = self.container_of(after)
         if self.running and self.controller.takes_region and cont is not None:
@@ -354,7 +362,8 @@ class Session:
                 raise ParameterError("there are no elements: open element files or take the examples")
             from ..inputs import load_inputs
 
-            inputs = load_inputs(cfile.path, [e.path for e in doc.elements], params, controls=controls)
+            inputs = load_inputs(cfile.path, [e.path for e in doc.elements], params,
+                                 secondary=[e.path for e in doc.secondary], controls=controls)
             self.cancel()
             self.controller.reset(inputs.container, inputs.params, paused=paused)
             with self._result_lock:
@@ -465,7 +474,8 @@ class Session:
         cfile = self.container_file(doc) if (doc.container or doc.strokes) else None
         if cfile is None or not doc.elements:
             return None
-        return command_line(doc.settings_dict, cfile.name, [f"elements/{e.name}" for e in doc.elements])
+        return command_line(doc.settings_dict, cfile.name, [f"elements/{e.name}" for e in doc.elements],
+                            secondary=[f"secondary/{e.name}" for e in doc.secondary])
 
     def project_zip(self) -> bytes:
         """The project: the container file, the element files under ``elements/`` and
@@ -480,10 +490,11 @@ class Session:
                 if cfile is not None:
                     zf.write(cfile.path, cfile.name)
                     lines.append(f"container = {json.dumps(cfile.name)}")
-                names = [f"elements/{e.name}" for e in doc.elements]
-                for e, n in zip(doc.elements, names):
-                    zf.write(e.path, n)
-                lines.append(f"elements = [{', '.join(json.dumps(n) for n in names)}]")
+                for field in ("elements", "secondary"):
+                    names = [f"{field}/{e.name}" for e in getattr(doc, field)]
+                    for e, n in zip(getattr(doc, field), names):
+                        zf.write(e.path, n)
+                    lines.append(f"{field} = [{', '.join(json.dumps(n) for n in names)}]")
                 cmd = self.command(doc)
                 if cmd:
                     lines.append(f"command = {json.dumps(cmd)}")
@@ -528,22 +539,23 @@ class Session:
                     path = self._store(name, read(studio["container"]))
                     self._read_container(path, name)
                     doc = dataclasses.replace(doc, container=InputFile(name, path))
-                elements = studio.get("elements", [])
-                if not isinstance(elements, list) or len(elements) > MAX_ELEMENTS:
-                    raise ParameterError(f"{PROJECT_MANIFEST}: 'elements' must be a list of at most "
-                                         f"{MAX_ELEMENTS} file names")
                 from .. import load_elements
 
-                files = []
-                for n in elements:
-                    name = safe_name(str(n))
-                    path = self._store(name, read(str(n)))
-                    try:
-                        load_elements([path])
-                    except RepulsionPakError as exc:
-                        raise _named(exc, path, str(n)) from None
-                    files.append(InputFile(name, path))
-                doc = dataclasses.replace(doc, elements=tuple(files))
+                for field in ("elements", "secondary"):
+                    names = studio.get(field, [])
+                    if not isinstance(names, list) or len(names) > MAX_ELEMENTS:
+                        raise ParameterError(f"{PROJECT_MANIFEST}: '{field}' must be a list of at most "
+                                             f"{MAX_ELEMENTS} file names")
+                    files = []
+                    for n in names:
+                        name = safe_name(str(n))
+                        path = self._store(name, read(str(n)))
+                        try:
+                            load_elements([path])
+                        except RepulsionPakError as exc:
+                            raise _named(exc, path, str(n)) from None
+                        files.append(InputFile(name, path))
+                    doc = dataclasses.replace(doc, **{field: tuple(files)})
                 self._edit("open project", doc)
                 return self.state()
 
@@ -560,6 +572,7 @@ class Session:
             "region_area": float(region.area),
             "view_box": list(self.controller.view_box),
             "elements": [e.name for e in doc.elements],
+            "secondary": [e.name for e in doc.secondary],
             "settings": doc.settings_dict,
             "command": self.command(doc),
             "history": self.history.state(),

@@ -135,10 +135,13 @@ def _num(v: float) -> str:
     return f"{v:g}" if float(v) == float(f"{v:g}") else repr(float(v))
 
 
-def command_line(settings: dict, container: str, elements: Sequence[str], output: str = "packing.svg") -> str:
+def command_line(settings: dict, container: str, elements: Sequence[str], output: str = "packing.svg",
+                 secondary: Sequence[str] = ()) -> str:
     """The ``repulsionpak pack`` command with these settings (paths as given, quoted for a shell)."""
     s = dict(DEFAULTS, **settings)
     args = ["repulsionpak", "pack", container, *elements, "-o", output]
+    for f in secondary:
+        args += ["--secondary", f]
     if s["gap"] is not None:
         args += ["--gap", _num(s["gap"])]
     if s["seed"] is not None:

@@ -45,16 +45,19 @@
     window.repulsionpakStudio.state = s;
     q("#container-name").textContent = s.container ? s.container + (s.painted ? " + painted" : "")
       : (s.painted ? "painted" : "none: paint one with the brush");
-    const ul = q("#element-list");
-    ul.innerHTML = "";
-    s.elements.forEach((name, i) => {
-      const li = document.createElement("li");
-      li.textContent = name;
-      const b = document.createElement("button");
-      b.textContent = "×"; b.title = "remove " + name;
-      b.addEventListener("click", () => edit({ op: "remove-element", index: i }));
-      li.appendChild(b); ul.appendChild(li);
-    });
+    for (const [field, sel] of [["elements", "#element-list"], ["secondary", "#secondary-list"]]) {
+      const ul = q(sel);
+      ul.innerHTML = "";
+      s[field].forEach((name, i) => {
+        const li = document.createElement("li");
+        li.textContent = name;
+        const b = document.createElement("button");
+        b.textContent = "×"; b.title = "remove " + name;
+        b.addEventListener("click", () => edit({ op: "remove-element", index: i, secondary: field === "secondary" }));
+        li.appendChild(b); ul.appendChild(li);
+      });
+    }
+    q("#secondary-hint").classList.toggle("hidden", s.secondary.length > 0);
     const st = s.settings;
     for (const k of SETTINGS) {
       const el = q("#" + k);
@@ -90,6 +93,10 @@
   });
   q("#open-elements").addEventListener("change", (ev) => {
     if (ev.target.files.length) upload("/open-elements", ev.target.files);
+    ev.target.value = "";
+  });
+  q("#open-secondary").addEventListener("change", (ev) => {
+    if (ev.target.files.length) upload("/open-secondary", ev.target.files);
     ev.target.value = "";
   });
   q("#open-project").addEventListener("change", (ev) => {
