@@ -269,7 +269,7 @@ class LiveController:
         st = self.sim.state
         self._last_iteration = st.iteration
         pts = st.x[self._skin_idx] * self.unit
-        a = float(self.sim.areas.sum() / self.sim.model.container_area)  # all meshes
+        a = float(self.sim.state.areas.sum() / self.sim.model.container_area)  # all meshes
         data = encode_frame(self.layout_id, st.iteration, a, pts)
         self.last_frame, self.last_points = data, pts
         m = self.sim.model  # (add-copy replaces these arrays, it never mutates them)
@@ -372,11 +372,13 @@ class LiveController:
         for f in dataclasses.fields(Model):
             setattr(m, f.name, getattr(new_m, f.name))
         st.x, st.v, st.n_grow = new_st.x, new_st.v, new_st.n_grow
-        keep = {k: getattr(sim, k) for k in ("dt", "settle_left", "stopped_by", "allow_growth", "_recoveries")}
-        moving = sim.moving.copy()
-        sim.__init__(m, st, sim.params, sim.phase)
+        keep = {k: getattr(st, k) for k in ("settle_left", "stopped_by", "allow_growth")}
+        dt, recoveries = sim.dt, sim._recoveries  # noqa: SLF001
+        moving = st.moving.copy()
+        sim.__init__(m, st, sim.params, sim.phase)  # (new run arrays for the new size)
         for k, v in keep.items():
-            setattr(sim, k, v)
+            setattr(st, k, v)
+        sim.dt, sim._recoveries = dt, recoveries  # noqa: SLF001
         for e in np.flatnonzero(~moving[:m0]):
             sim.set_moving(int(e), False)
         sim.refresh_growth()
