@@ -56,7 +56,7 @@ def test_readme_is_short_and_keeps_the_two_commands():
 @pytest.fixture(scope="module")
 def help_texts() -> dict[str, str]:
     env = dict(os.environ, COLUMNS="250", TERM="dumb", NO_COLOR="1")
-    cmds = {c.split()[1] for c in shell_commands(README)}
+    cmds = {c.split()[1] for page in (README, DOCS / "cli.md") for c in shell_commands(page)}
     assert {"pack", "evaluate", "batch"} <= cmds
     out = {}
     for cmd in sorted(cmds):
@@ -70,15 +70,17 @@ def help_texts() -> dict[str, str]:
     return out
 
 
-def test_readme_options_exist(help_texts):
+@pytest.mark.parametrize("page", [README, DOCS / "cli.md"], ids=lambda p: p.name)
+def test_command_options_exist(help_texts, page):
+    """Every option the page's `repulsionpak ...` command lines use is one of that command's."""
     used = 0
-    for line in shell_commands(README):
+    for line in shell_commands(page):
         cmd = line.split()[1]
         for opt in re.findall(r"(?<![\w-])--[a-z][a-z-]*", line):
             assert re.search(rf"(?<![\w-]){re.escape(opt)}(?![\w-])", help_texts[cmd]), \
-                f"README: `repulsionpak {cmd}` has no option {opt}"
+                f"{page.name}: `repulsionpak {cmd}` has no option {opt}"
             used += 1
-    assert used >= 15  # the check saw the README's examples
+    assert used >= 15  # the check saw the page's examples
 
 
 def test_readme_python_imports_exist():
@@ -97,6 +99,16 @@ def test_readme_python_imports_exist():
                    and isinstance(n.func.value, ast.Name) and n.func.value.id == "packing"}
         for name in methods:
             assert callable(getattr(repulsionpak.Packing, name, None)), f"Packing has no method {name}"
+
+
+def test_readme_inline_options_exist(help_texts):
+    """Options named in the README's prose are options of one of its commands."""
+    prose = FENCE.sub("", README.read_text())
+    every = "\n".join(help_texts.values())
+    opts = set(re.findall(r"`[^`]*?(?<![\w-])(--[a-z][a-z-]*)", prose))
+    assert len(opts) >= 5
+    for opt in opts:
+        assert re.search(rf"(?<![\w-]){re.escape(opt)}(?![\w-])", every), f"README names {opt}, no command has it"
 
 
 @pytest.fixture
