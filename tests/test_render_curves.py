@@ -14,7 +14,7 @@ from repulsionpak.io.svg_source import arc_to_cubics
 from repulsionpak.params import RenderParams
 from repulsionpak.preprocess import build_template, outline_of
 from repulsionpak.render import render_copy
-from repulsionpak.render.curves import bezier, bezier_deriv, decimals_for, flatten_subpath, path_data
+from repulsionpak.geometry.curves import bezier, bezier_deriv, decimals_for, flatten_subpath, path_data
 from repulsionpak.render.deform import map_plan, tps_weights
 from repulsionpak.render.fit import fit_subpath
 from repulsionpak.render.quality import (curve_share, dense_polyline, deviation, exact_outlines,

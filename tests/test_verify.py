@@ -210,7 +210,7 @@ def test_a_straightened_copy_is_flattened_as_its_written_curves(tmp_path):
                        frame=frame, tolerance=1e-3)
 
     def off_curves(art):  # how far the checked outline (vertices, chord midpoints) is from the exact curves
-        from repulsionpak.render.curves import flatten_subpath
+        from repulsionpak.geometry.curves import flatten_subpath
 
         exact = shapely.LinearRing(flatten_subpath(art.paths[0].source.curves[0], 1e-6))
         p = art.paths[0].subpaths[0]

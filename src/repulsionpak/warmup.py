@@ -37,7 +37,8 @@ __all__ = ["WORKLOAD", "simulation_specialisations", "write_signatures"]
 
 
 def _render_dispatchers() -> list:
-    from .render import curves, deform, fit
+    from .geometry import curves
+    from .render import deform, fit
 
     return [deform._solve, fit._fit_chain, curves._flatten]
 
@@ -144,7 +145,7 @@ def _warm_fit() -> None:
 
 
 def _warm_flatten() -> None:
-    from .render.curves import flatten_subpath
+    from .geometry.curves import flatten_subpath
     from .types import CurveSubpath
 
     sub = CurveSubpath(np.array([1, 3], np.int8),

@@ -20,6 +20,7 @@ import numpy as np
 import shapely
 
 from ..errors import InputError
+from ..geometry.curves import flatten_subpath
 from ..geometry.outline import (
     THIN_LINE_RELATIVE_THICKNESS,
     THIN_RELATIVE_THICKNESS,
@@ -123,8 +124,6 @@ def thin_dense_lines(arts: list[ArtPath]) -> list[ArtPath]:
     out = []
     for art in arts:
         if art.source is not None and art.source.curves:
-            from ..render.curves import flatten_subpath
-
             curves = tuple(_thin_runs(c.order, c.ctrl, c.closed, tol) for c in art.source.curves)
             subs = tuple(flatten_subpath(c, tol) for c in curves)  # lines: their end points
             out.append(dataclasses.replace(art, subpaths=subs,

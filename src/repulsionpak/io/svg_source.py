@@ -19,6 +19,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..geometry.curves import path_data
 from ..types import CurveSubpath, ShapeSource
 
 __all__ = ["arc_to_cubics", "curves_bbox", "paint_servers", "segments_to_curves", "shape_source"]
@@ -217,8 +218,6 @@ def shape_source(path, sh) -> ShapeSource | None:
     if all(own.get(k) is not None for k in GEOMETRY_ATTRS[tag] if k not in ("rx", "ry")):
         attrs += [(k, str(own[k])) for k in GEOMETRY_ATTRS[tag] if own.get(k) is not None]
     else:  # geometry we cannot restate (e.g. a shape svgelements made): its path data
-        from ..render.curves import path_data
-
         tag = "path"
         attrs.append(("d", path_data(local, decimals=6)))
     for k in PRESENTATION:

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..params import RenderParams
 from ..types import ArtPath, PlacedArt, ShapeSource
-from .curves import decimals_for, flatten_subpath, round_curves
+from ..geometry.curves import decimals_for, flatten_subpath, round_curves
 from .deform import map_plan
 from .fit import fit_subpath
 

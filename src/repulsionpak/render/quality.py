@@ -12,7 +12,7 @@ import shapely
 
 from ..params import RenderParams
 from ..types import ArtPath
-from .curves import bezier, flatten_subpath
+from ..geometry.curves import bezier, flatten_subpath
 from .deform import art_curves, linear_weights, tps_weights
 
 __all__ = ["curve_share", "dense_polyline", "deviation", "exact_outlines", "kink_stats", "turning_angles"]

@@ -44,10 +44,10 @@ import numpy as np
 import shapely
 
 from ..errors import OutputError
+from ..geometry.curves import decimals_for, path_data
 from ..io.files import atomic_write_bytes
 from ..types import ArtPath, Container, PlacedArt, Style
 from .container_paint import check_paint, outline_colour, outline_width
-from .curves import decimals_for, path_data
 from .frame import packing_frame
 from .numbers import format_number
 from .paint import CopyPaint, matrix_attr

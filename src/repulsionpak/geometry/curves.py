@@ -3,6 +3,11 @@
 A chain of segments is a :class:`~repulsionpak.types.CurveSubpath`: ``order`` (n,) with
 1 = line, 2 = quadratic, 3 = cubic and ``ctrl`` (n, 4, 2) control points (unused rows
 repeat the end point).
+
+Notes
+-----
+The reader (``io``: an element's source curves, thinning traced art) and the writers
+(``render``) both work on these curves, so they are geometry, below both.
 """
 
 from __future__ import annotations
