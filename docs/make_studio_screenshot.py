@@ -29,7 +29,7 @@ def main() -> None:
     try:
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=exe, args=["--no-sandbox"])
-            page = browser.new_page(viewport={"width": 1280, "height": 800}, device_scale_factor=1)
+            page = browser.new_page(viewport={"width": 1280, "height": 1000}, device_scale_factor=1)
             page.goto(server.url)
             page.wait_for_function("window.repulsionpakStudio.state !== null")
             page.select_option("#example-container", "heart")
