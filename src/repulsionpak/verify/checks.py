@@ -248,7 +248,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
                 # the heart's snake: the snake shrank to 0.67 of its size)
                 ci = cost(i, pi, u / nu, total)
                 cj = cost(j, pj, -u / nu, total)
-                if ci == cj:  # both hopeless (no point moves the contact away): as before
+                if ci == cj:  # both hopeless (no point moves the contact away): the smaller shrinks
                     ci, cj = gi.area, gj.area
                 k, pk = (i, pi) if ci <= cj else (j, pj)
             else:
@@ -349,7 +349,7 @@ def _shrink_centre(g, centroid: np.ndarray, contacts: list | None, prefer: float
                    max_points: int = SHRINK_POINTS) -> tuple[np.ndarray, float | None]:
     """The point an element (current geometry ``g``) should shrink about to clear its
     ``contacts`` (see :func:`_check`), and the relative shrink predicted there; ``None``
-    for the latter: its centroid, as before. Shrinking about the centroid moves a contact
+    for the latter: its centroid (shrink by ``rel``). Shrinking about the centroid moves a contact
     away only if the centroid lies beyond it, seen from what it is too close to: not so
     for a curled or bent element whose centroid lies in its hollow or off its body (the
     centroid then pulls the body towards its neighbour), and it gains little for a thin
