@@ -27,7 +27,7 @@ from repulsionpak.errors import ParameterError  # noqa: E402
 from repulsionpak.studio import Session, StudioServer  # noqa: E402
 from repulsionpak.studio.document import Document, History  # noqa: E402
 from repulsionpak.studio.region import Stroke, painted_region, region_svg  # noqa: E402
-from repulsionpak.studio.session import MAX_FILE_BYTES  # noqa: E402
+from repulsionpak.studio.uploads import MAX_FILE_BYTES  # noqa: E402
 from repulsionpak.studio.settings import DEFAULTS, coerce, command_line, run_settings  # noqa: E402
 
 EX = Path(repulsionpak.__file__).parent / "examples"

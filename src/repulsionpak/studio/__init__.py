@@ -5,7 +5,9 @@ choose the elements and the settings, run and steer the packing, export it.
 - :mod:`.settings`: the settings, their defaults, checks and the equivalent command line
 - :mod:`.document`: what the designer edits and the undo/redo stack
 - :mod:`.controller`: the live view's controller across runs, changing a running container
-- :mod:`.session`: inputs, edits, the run thread, exports and projects
+- :mod:`.uploads`: what the studio accepts from the browser (names, sizes, messages)
+- :mod:`.project`: a project as a zip archive (the files, the settings, the command)
+- :mod:`.session`: inputs, edits, the run thread, exports
 - :mod:`.server`: the live view's server with the studio's routes
 - ``static/``: the page (on top of the live view's script)
 

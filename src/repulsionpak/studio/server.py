@@ -30,7 +30,8 @@ from aiohttp import web
 
 from ..errors import RepulsionPakError
 from ..live.server import HOST, LiveServer, STATIC as LIVE_STATIC
-from .session import MAX_FILE_BYTES, MAX_PROJECT_BYTES, Session, UploadTooLarge
+from .session import Session
+from .uploads import MAX_FILE_BYTES, MAX_PROJECT_BYTES, UploadTooLarge
 
 STATIC = {"studio.js": "text/javascript", "studio.css": "text/css"}
 EXPORTS = {"svg": ("image/svg+xml", "packing.svg"), "pdf": ("application/pdf", "packing.pdf"),

@@ -13,71 +13,27 @@ inputs, options and seed (:meth:`Session.command` says which command that is).
 from __future__ import annotations
 
 import dataclasses
-import io
-import json
 import re
 import secrets
 import shutil
 import tempfile
 import threading
-import tomllib
-import zipfile
 from pathlib import Path
 
 import shapely
 
-from ..errors import InputError, ParameterError, RepulsionPakError
+from ..errors import ParameterError, RepulsionPakError
 from .controller import StudioController
 from .document import Document, History, InputFile
+from .project import read_project, write_project
 from .region import Stroke, painted_region, region_svg, rings_of
-from .settings import DEFAULTS, coerce, command_line, run_settings
+from .settings import coerce, command_line, run_settings
+from .uploads import MAX_ELEMENTS, check_size, named_error, safe_name
 
-#: largest input file accepted (bytes)
-MAX_FILE_BYTES = 5 * 2**20
-#: largest project archive accepted, and its unpacked contents (bytes)
-MAX_PROJECT_BYTES = 50 * 2**20
-#: most element files in a session
-MAX_ELEMENTS = 200
 #: the canvas of a session without a container file (container units)
 BLANK_CANVAS = (0.0, 0.0, 1000.0, 1000.0)
 #: the name of a painted container, in a project and on the command line
 PAINTED_NAME = "container.svg"
-INPUT_SUFFIXES = (".svg", ".path")
-PROJECT_MANIFEST = "project.toml"
-
-
-class UploadTooLarge(ParameterError):
-    """An uploaded file or project is larger than the studio accepts."""
-
-
-def safe_name(name: str, suffixes=INPUT_SUFFIXES) -> str:
-    """A file name of the user's safe to create in the session folder: the last path
-    component, other characters than letters, digits, ``.``, ``-``, ``_`` replaced by
-    ``_``; raises :class:`ParameterError` for a suffix other than ``suffixes``."""
-    base = re.split(r"[\\/]", str(name))[-1]
-    base = re.sub(r"[^A-Za-z0-9._-]", "_", base).lstrip(".") or "file"
-    if not base.lower().endswith(tuple(suffixes)):
-        raise ParameterError(f"{name}: not an input file the studio reads (expected {' or '.join(suffixes)})")
-    return base[:120]
-
-
-def _named(exc: RepulsionPakError, path: Path, name: str) -> RepulsionPakError:
-    """``exc`` with the session's private path of a file replaced by the file's name."""
-    def swap(text):
-        return None if text is None else str(text).replace(str(path), name)
-
-    if isinstance(exc, InputError):
-        return InputError(swap(exc.path), swap(exc.problem))
-    try:
-        return type(exc)(swap(str(exc)))
-    except TypeError:  # an error class of other arguments: as it is
-        return exc
-
-
-def check_size(name: str, size: int, limit: int = MAX_FILE_BYTES) -> None:
-    if size > limit:
-        raise UploadTooLarge(f"{name}: the file is {size / 2**20:.1f} MB; the studio accepts files of "
-                             f"up to {limit / 2**20:.0f} MB")
 
 
 class Session:
@@ -125,7 +81,7 @@ class Session:
             try:
                 self._containers[path] = load_container(path)
             except RepulsionPakError as exc:
-                raise _named(exc, path, name) from None
+                raise named_error(exc, path, name) from None
         return self._containers[path]
 
     def open_container(self, name: str, data: bytes) -> dict:
@@ -165,7 +121,7 @@ class Session:
                     load_elements([path])
                 except RepulsionPakError as exc:
                     shutil.rmtree(path.parent, ignore_errors=True)
-                    raise _named(exc, path, name) from None
+                    raise named_error(exc, path, name) from None
                 have.add(name)
                 added.append(InputFile(name, path))
             if added:
@@ -478,86 +434,36 @@ class Session:
                             secondary=[f"secondary/{e.name}" for e in doc.secondary])
 
     def project_zip(self) -> bytes:
-        """The project: the container file, the element files under ``elements/`` and
-        ``project.toml`` (the files, every setting and the command)."""
+        """The project (see :func:`repulsionpak.studio.project.write_project`)."""
         with self.lock:
             doc = self.doc
-            cfile = self.container_file(doc)
-            buf = io.BytesIO()
-            with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
-                lines = ["# a repulsionpak studio project: `repulsionpak studio` opens it (Open project)",
-                         "[studio]", "format = 1"]
-                if cfile is not None:
-                    zf.write(cfile.path, cfile.name)
-                    lines.append(f"container = {json.dumps(cfile.name)}")
-                for field in ("elements", "secondary"):
-                    names = [f"{field}/{e.name}" for e in getattr(doc, field)]
-                    for e, n in zip(getattr(doc, field), names):
-                        zf.write(e.path, n)
-                    lines.append(f"{field} = [{', '.join(json.dumps(n) for n in names)}]")
-                cmd = self.command(doc)
-                if cmd:
-                    lines.append(f"command = {json.dumps(cmd)}")
-                lines += ["", "[settings]  # missing: chosen by the run (auto gap and count, random seed)"]
-                for k, v in doc.settings_dict.items():
-                    if v is not None:
-                        lines.append(f"{k} = {json.dumps(v)}")
-                zf.writestr(PROJECT_MANIFEST, "\n".join(lines) + "\n")
-            return buf.getvalue()
+            return write_project(doc, self.container_file(doc), self.command(doc))
 
     def open_project(self, data: bytes) -> dict:
-        """Open a project saved by :meth:`project_zip` (one undoable edit)."""
-        check_size("project", len(data), MAX_PROJECT_BYTES)
-        try:
-            zf = zipfile.ZipFile(io.BytesIO(data))
-        except zipfile.BadZipFile:
-            raise ParameterError("the project is not a zip archive (save one with Save project)") from None
-        with zf:
-            infos = {i.filename: i for i in zf.infolist()}
-            if sum(i.file_size for i in infos.values()) > MAX_PROJECT_BYTES:
-                raise UploadTooLarge(f"the project unpacks to more than {MAX_PROJECT_BYTES / 2**20:.0f} MB")
+        """Open a project saved by :meth:`project_zip` (one undoable edit); every file is
+        read as an opened one is, every setting checked."""
+        project = read_project(data)
+        with self.lock:
+            doc = Document(settings=tuple(project.settings.items()))
+            if project.container is not None:
+                name, content = project.container
+                path = self._store(safe_name(name), content)
+                self._read_container(path, name)
+                doc = dataclasses.replace(doc, container=InputFile(path.name, path))
+            from .. import load_elements
 
-            def read(name: str) -> bytes:
-                if name not in infos:
-                    raise ParameterError(f"the project names {name!r} but does not hold it")
-                check_size(name, infos[name].file_size)
-                return zf.read(infos[name])
-
-            try:
-                manifest = tomllib.loads(read(PROJECT_MANIFEST).decode("utf-8"))
-            except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-                raise ParameterError(f"{PROJECT_MANIFEST}: not a valid TOML file ({exc})") from None
-            studio = manifest.get("studio", {})
-            settings = dict(DEFAULTS)
-            for k, v in manifest.get("settings", {}).items():
-                settings[k] = coerce(k, v)
-            run_settings(settings)
-            with self.lock:
-                doc = Document(settings=tuple(settings.items()))
-                if studio.get("container"):
-                    name = safe_name(studio["container"])
-                    path = self._store(name, read(studio["container"]))
-                    self._read_container(path, name)
-                    doc = dataclasses.replace(doc, container=InputFile(name, path))
-                from .. import load_elements
-
-                for field in ("elements", "secondary"):
-                    names = studio.get(field, [])
-                    if not isinstance(names, list) or len(names) > MAX_ELEMENTS:
-                        raise ParameterError(f"{PROJECT_MANIFEST}: '{field}' must be a list of at most "
-                                             f"{MAX_ELEMENTS} file names")
-                    files = []
-                    for n in names:
-                        name = safe_name(str(n))
-                        path = self._store(name, read(str(n)))
-                        try:
-                            load_elements([path])
-                        except RepulsionPakError as exc:
-                            raise _named(exc, path, str(n)) from None
-                        files.append(InputFile(name, path))
-                    doc = dataclasses.replace(doc, **{field: tuple(files)})
-                self._edit("open project", doc)
-                return self.state()
+            for field in ("elements", "secondary"):
+                files = []
+                for name, content in getattr(project, field):
+                    path = self._store(safe_name(name), content)
+                    try:
+                        load_elements([path])
+                    except RepulsionPakError as exc:
+                        raise named_error(exc, path, name) from None
+                    files.append(InputFile(path.name, path))
+                doc = dataclasses.replace(doc, **{field: tuple(files)})
+            self._edit("open project", doc)
+            return self.state()
 
     # -- what the page shows ---------------------------------------------------------------------------
     def state(self) -> dict:
@@ -584,4 +490,4 @@ class Session:
         }
 
 
-__all__ = ["MAX_FILE_BYTES", "Session", "UploadTooLarge", "safe_name"]
+__all__ = ["BLANK_CANVAS", "PAINTED_NAME", "Session"]
