@@ -4,6 +4,8 @@ Inkscape runs an extension's script with its own Python, with its own ``inkex`` 
 ``PYTHONPATH``; repulsionpak and its compiled dependencies live in another environment.
 The installed entry point therefore carries the interpreter and the import path this
 command ran with, and hands the effect over to them: Inkscape's Python only starts it.
+Inkscape's path is handed over aside (``REPULSIONPAK_INKSCAPE_PATH``): the effect uses the
+environment's ``inkex`` when it has one (``repulsionpak[inkscape]``) and Inkscape's otherwise.
 """
 
 from __future__ import annotations
@@ -36,7 +38,10 @@ def main():
                          "gone; run `repulsionpak inkscape-install` again from its new environment\\n")
         return 1
     env = dict(os.environ)
-    env["PYTHONPATH"] = IMPORT_PATH  # not Inkscape's: its inkex is for its own Python
+    # not Inkscape's path (its folders would shadow this environment's packages); kept aside
+    # so that its inkex serves where this environment has none (python -m repulsionpak.inkscape)
+    env["REPULSIONPAK_INKSCAPE_PATH"] = env.get("PYTHONPATH", "")
+    env["PYTHONPATH"] = IMPORT_PATH
     env.pop("PYTHONHOME", None)
     argv = [PYTHON, "-m", "repulsionpak.inkscape", *sys.argv[1:]]
     if os.name == "posix":  # this process becomes the effect: Inkscape's Cancel ends it
