@@ -683,28 +683,61 @@ def measure(files: SceneFiles, packing_svg: str | Path, grid: int | None = None)
 
 def run_scene(scene: Scene, workdir: str | Path, grid: int | None = None, png: bool = False, *,
               config: Path | None = None, estimate_count: bool = False) -> dict:
-    """Write ``scene`` under ``workdir``, pack it with ``repulsionpak pack``'s own code
-    path (:func:`repulsionpak.cli.run_pack`), and :func:`measure` the output SVG.
-    ``config``: a TOML parameter file for the packing (``--config``); ``estimate_count``:
-    leave the number of primaries to the default estimate instead of the scene's count.
+    """Write ``scene`` under ``workdir``, pack it through the library
+    (:func:`repulsionpak.pack` on the files, :meth:`repulsionpak.Packing.save`), and
+    :func:`measure` the output SVG.
 
-    Returns ``{"scene", "files", "svg", "png", "report", "metrics", "seconds"}``
-    (``report``: what ``--report`` would hold, without the distortion, which
-    :func:`measure` computes); ``seconds`` is the wall time of the packing (reading
-    inputs to writing the SVG and PNG).
+    Parameters
+    ----------
+    scene : Scene
+        The packing problem.
+    workdir : path
+        Where the scene's files and the packing go (``<workdir>/<scene.name>/``).
+    grid : int, optional
+        SCP raster size (default: :func:`scp_grid`).
+    png : bool
+        Also save the packing as ``packing.png``.
+    config : path, optional
+        A TOML parameter file for the packing (as ``--config``); the scene's gap, seed and
+        count go on top.
+    estimate_count : bool
+        Leave the number of primaries to the default estimate instead of the scene's count.
+
+    Returns
+    -------
+    dict
+        ``{"scene", "files", "svg", "png", "report", "metrics", "seconds"}``: ``report`` is
+        :meth:`repulsionpak.Packing.report` (what ``--report`` holds, its ``seconds`` with
+        ``render`` and ``total`` as the command counts them); ``seconds`` is the wall time
+        of the packing, reading the inputs to writing the SVG and PNG.
+
+    Notes
+    -----
+    The library gives the bytes ``repulsionpak pack`` gives for the same files, seed and
+    parameters, so these measurements are those of the command.
     """
     import time
 
-    from repulsionpak.cli import run_pack
+    from repulsionpak import pack
+    from repulsionpak.params import Params, load_config
 
     files = scene.write(workdir)
     base = files.container.parent
     out = base / "packing.svg"
     png_path = base / "packing.png" if png else None
     t0 = time.perf_counter()
-    rep = run_pack(files.container, list(files.elements), out, gap=files.gap, seed=scene.seed,
-                   count=None if estimate_count else scene.count, config=config, png=png_path,
-                   progress=False)
+    params = (load_config(config) if config else Params()).with_(gap=files.gap, seed=scene.seed)
+    if not estimate_count:
+        params = params.with_(placement__count=scene.count)
+    packing = pack(files.container, list(files.elements), params)
+    t_out = time.perf_counter()
+    packing.save(out)
+    if png_path is not None:
+        packing.save(png_path)
+    times = dict(packing.seconds)
+    times["render"] = times.get("render", 0.0) + (time.perf_counter() - t_out)
+    times["total"] = time.perf_counter() - t0
+    rep = packing.report(seconds=times)
     seconds = time.perf_counter() - t0
     return {"scene": scene, "files": files, "svg": out, "png": png_path, "report": rep,
             "metrics": measure(files, out, grid), "seconds": seconds}
