@@ -23,7 +23,8 @@ ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
 DOCS = ROOT / "docs"
 #: pages that are reference only (no dated measurements): checked for diary language and anchors
-REFERENCE = [README, DOCS / "cli.md", DOCS / "inputs.md", DOCS / "output.md", DOCS / "parameters.md"]
+REFERENCE = [README, DOCS / "cli.md", DOCS / "inputs.md", DOCS / "output.md", DOCS / "parameters.md",
+             DOCS / "development.md"]
 
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```", re.S | re.M)
 
