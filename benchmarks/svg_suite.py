@@ -196,7 +196,7 @@ def _raster(W: int, H: int, draw) -> np.ndarray:
 def _draw_element(ax, element, apply, scale) -> None:
     from matplotlib.patches import PathPatch
     from matplotlib.path import Path as MPath
-    from repulsionpak.geometry.outline import _stroke_geometry
+    from repulsionpak.art_area import _stroke_geometry
     from repulsionpak.io.regions import rings_to_region
     import shapely
 

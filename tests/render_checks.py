@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import shapely
 
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 
 CIRCLE = Path(__file__).resolve().parents[1] / "src" / "repulsionpak" / "examples" / "containers" / "circle.svg"
 

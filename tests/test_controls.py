@@ -15,7 +15,7 @@ from repulsionpak.cli import app
 from repulsionpak.controls import cli_controls, weighted_assignment
 from repulsionpak.types import ElementControls, Pin
 from repulsionpak.errors import InputError, ParameterError
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.io import load_container, load_elements, read_packing_svg
 from repulsionpak.io.manifest import load_element_args, load_manifest
 from repulsionpak.measure import distortion, source_geometries

@@ -19,7 +19,7 @@ from shapely.geometry import Point, Polygon, box
 import repulsionpak
 import repulsionpak.measure as ev
 from repulsionpak.errors import ParameterError
-from repulsionpak.geometry.outline import _polygonal
+from repulsionpak.art_area import _polygonal
 from repulsionpak.measure import coverage
 from repulsionpak.types import ArtPath, Container, PlacedArt, Style
 

@@ -5,7 +5,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from repulsionpak.geometry import outline
+from repulsionpak import art_area as outline
 from repulsionpak.types import ArtPath, Style
 
 

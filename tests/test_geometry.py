@@ -20,8 +20,8 @@ from repulsionpak.geometry.mesh import (
     mesh_springs,
     triangulate_polygon,
 )
+from repulsionpak.art_area import art_area
 from repulsionpak.geometry.outline import (
-    art_area,
     connect_parts,
     resample_adaptive,
     resample_closed,

@@ -13,7 +13,7 @@ import scenes
 from repulsionpak.types import ElementControls
 from repulsionpak.errors import ConfigError, ParameterError
 from repulsionpak.measure import art_geometry, scp
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.holes import HoleLibrary, fill_holes, fill_pockets
 from repulsionpak.io import load_container, load_element, read_packing_svg
 from repulsionpak.pack import pack

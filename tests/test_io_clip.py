@@ -19,7 +19,7 @@ import pytest
 import shapely
 
 from repulsionpak.errors import InputError
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.io import load_container, load_element, read_packing_svg
 from repulsionpak.render.svg import write_packing_svg
 from repulsionpak.io.svg_clip import clip_art

@@ -14,7 +14,7 @@ import pytest
 import shapely
 
 from render_checks import differs_only_along_edges, our_mask, pack_copies, resvg_mask
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.io import load_element
 
 ARROW = """<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">

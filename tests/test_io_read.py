@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from repulsionpak.errors import InputError, ParameterError
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.io import (
     load_container,
     load_element,
@@ -904,7 +904,7 @@ def test_design_tool_exports_read_as_drawn(tmp_path, text, fills, bounds, area):
         warnings.simplefilter("error")
         el = load_element(_write(tmp_path, "x.svg", text))
     assert [a.style.fill for a in el.paths] == fills
-    from repulsionpak.geometry.outline import art_area
+    from repulsionpak.art_area import art_area
 
     geom = art_area(el.paths)
     np.testing.assert_allclose(geom.bounds, bounds, atol=1e-6)

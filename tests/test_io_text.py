@@ -11,7 +11,7 @@ import pytest
 import shapely
 
 from render_checks import differs_only_along_edges, our_mask, pack_copies, resvg_mask
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.io import load_element, load_elements
 
 # fonts matplotlib ships (DejaVu Sans and Serif, STIX), so the test does not depend on the

@@ -10,7 +10,7 @@ import shapely
 
 import scenes
 from repulsionpak.errors import ParameterError
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.io import load_container, load_element
 
 

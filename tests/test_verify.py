@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import shapely
 
-from repulsionpak.geometry.outline import art_area
+from repulsionpak.art_area import art_area
 from repulsionpak.types import ArtPath, PlacedArt, Style
 from repulsionpak.verify import verify_and_repair
 from repulsionpak.verify.checks import _pair_distances

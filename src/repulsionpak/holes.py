@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 
 from .types import ElementControls
-from .geometry.outline import art_area
+from .art_area import art_area
 from .geometry.robust import overlay
 from .geometry.robust import union_all as robust_union_all
 from .params import RenderParams

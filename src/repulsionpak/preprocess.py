@@ -14,7 +14,8 @@ import shapely
 
 from .errors import InputError
 from .geometry.mesh import bind_points, mesh_springs, triangulate_polygon
-from .geometry.outline import art_area, art_area_problem, resample_adaptive, ring_coords, skin_polygon
+from .art_area import art_area
+from .geometry.outline import art_area_problem, resample_adaptive, ring_coords, skin_polygon
 from .params import PreprocessParams
 from .types import Element
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import shapely
 
+from .art_area import art_area
 from .errors import ParameterError
 
 
@@ -248,12 +249,10 @@ class PlacedArt:
 
     @functools.cached_property
     def art(self) -> shapely.Geometry:
-        """The area its art covers (:func:`repulsionpak.geometry.outline.art_area` of
+        """The area its art covers (:func:`repulsionpak.art_area.art_area` of
         ``paths`` with ``stroke_scale``), computed once: the hole fill, the verification
         and the metrics all measure it (a copy is never changed in place; a changed copy
         is a new object)."""
-        from .geometry.outline import art_area  # noqa: PLC0415  (outline imports this module)
-
         return art_area(self.paths, self.stroke_scale)
 
 

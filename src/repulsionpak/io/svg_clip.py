@@ -45,7 +45,7 @@ import numpy as np
 import shapely
 
 from ..errors import InputError
-from ..geometry.outline import art_area
+from ..art_area import art_area
 from .svg_xml import TEXT_GROUP
 from .svg_xml import local_name as _local
 from ..types import ArtPath, ShapeSource, Style

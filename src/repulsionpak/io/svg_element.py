@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 import shapely
 
+from ..art_area import art_area
 from ..errors import InputError
 from ..geometry.curves import flatten_subpath
 from ..geometry.outline import (
     THIN_LINE_RELATIVE_THICKNESS,
     THIN_RELATIVE_THICKNESS,
-    art_area,
     art_area_problem,
     relative_thickness,
 )

@@ -37,7 +37,7 @@ import shapely
 
 from ..errors import ParameterError
 from ..geometry.edt import distance_transform
-from ..geometry.outline import _polygonal
+from ..art_area import _polygonal
 from ..geometry.robust import overlay
 from .coverage import _as_geoms, _union
 from .raster import _burn, _Grid

@@ -21,7 +21,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from ..errors import ParameterError
-from ..geometry.outline import _polygonal
+from ..art_area import _polygonal
 from ..geometry.robust import overlay
 from ..geometry.robust import union_all as robust_union_all
 from ..types import PlacedArt
@@ -31,7 +31,7 @@ __all__ = ["art_geometry", "area_fraction", "overlap_area", "outside", "outside_
 
 def art_geometry(placed: PlacedArt) -> shapely.Geometry:
     """The area covered by the art of one placed element (see
-    :func:`repulsionpak.geometry.outline.art_area`; strokes scaled by ``stroke_scale``)."""
+    :func:`repulsionpak.art_area.art_area`; strokes scaled by ``stroke_scale``)."""
     return placed.art
 
 

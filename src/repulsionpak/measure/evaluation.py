@@ -17,7 +17,7 @@ import numpy as np
 
 from ..blas import with_one_blas_thread
 from ..errors import ParameterError
-from ..geometry.outline import _polygonal
+from ..art_area import _polygonal
 from ..types import Container, PlacedArt
 from .contact import q_at, scp
 from .coverage import area_fraction, art_geometry, edge_distances, outside, outside_area, overlap_area

@@ -15,7 +15,7 @@ import numpy as np
 import shapely
 
 from ..errors import ParameterError
-from ..geometry.outline import _polygonal
+from ..art_area import _polygonal
 
 __all__ = ["rasterize"]
 

@@ -24,7 +24,7 @@ import numpy as np
 import shapely
 
 from ..errors import ParameterError
-from ..geometry.outline import _polygonal, art_area
+from ..art_area import _polygonal, art_area
 from ..geometry.overlap import OverlapGrid, intersection_areas, nelder_mead_sym, rings_of
 from ..geometry.robust import overlay
 

@@ -26,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 import shapely
 
-from ..geometry.outline import _polygonal
+from ..art_area import _polygonal
 from ..render.placed import refined, similarity_matrix
 from ..types import PlacedArt
 from .checks import Verification, _check, _near_pairs, _nearest, _shrink_centre, distortion
