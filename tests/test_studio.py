@@ -228,6 +228,44 @@ def test_export_equals_what_pack_writes_and_the_project_reopens(session, tmp_pat
         other.close()
 
 
+def test_weights_go_through_an_element_manifest(session, tmp_path):
+    """A weight other than 1 makes the run (and the command line) read the elements through
+    a manifest: weight 0 leaves an element out of the free copies."""
+    session.use_examples("circle", ["apple", "fish"])
+    with pytest.raises(ParameterError, match="weight must be >= 0"):
+        session.set_weight(1, "-1")
+    session.set_weight(1, "0")
+    for k, v in (("count", "6"), ("gap", "12"), ("seed", "2"), ("pocket_fill", False)):
+        session.set_setting(k, v)
+    assert session.command() == ("repulsionpak pack circle.svg elements.toml -o packing.svg --gap 12 --seed 2 "
+                                 "--count 6 --no-pocket-fill")
+    session.start()
+    _finish(session)
+    svg = session.export("svg")
+    text = svg.decode()
+    assert text.count('data-source="apple.svg"') == 6 and 'data-source="fish.svg"' not in text
+    proj = tmp_path / "proj"
+    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    assert 'file = "elements/fish.svg"\nweight = 0' in (proj / "elements.toml").read_text()
+    from typer.testing import CliRunner
+
+    from repulsionpak.cli import app
+
+    cwd = os.getcwd()
+    try:
+        os.chdir(proj)
+        res = CliRunner().invoke(app, session.command().split()[1:] + ["-q"])
+    finally:
+        os.chdir(cwd)
+    assert res.exit_code == 0, res.output
+    assert (proj / "packing.svg").read_bytes() == svg
+    other = Session()
+    try:
+        assert other.open_project(session.project_zip())["weights"] == [1.0, 0.0]
+    finally:
+        other.close()
+
+
 def test_painting_while_running_changes_the_simulations_container(session):
     """A stroke beside the circle reaches the running simulation: its container field,
     area and the run's Container change, and elements flow into the new room."""
@@ -573,6 +611,12 @@ def test_page_drop_files_and_undo(server):
             assert st["region_area"] == pytest.approx(
                 repulsionpak.load_container(EX / "containers" / "circle.svg").area, rel=1e-6)
             assert st["command"] == "repulsionpak pack circle.svg elements/apple.svg -o packing.svg"
+            page.fill("#element-list input.weight", "2.5")
+            page.dispatch_event("#element-list input.weight", "change")
+            page.wait_for_function("window.repulsionpakStudio.state.weights[0] === 2.5")
+            assert "elements.toml" in page.text_content("#command")
+            page.click("#undo")
+            page.wait_for_function("window.repulsionpakStudio.state.weights[0] === 1")
             page.click("#undo")
             page.wait_for_function("window.repulsionpakStudio.state.elements.length === 0")
             page.click("#undo")

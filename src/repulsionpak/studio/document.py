@@ -21,11 +21,13 @@ MAX_HISTORY = 500
 
 @dataclass(frozen=True)
 class InputFile:
-    """An input file of the studio: ``name`` as the project and the command line call it
-    (``elements/apple.svg``), ``path`` where it lies (the session's private folder)."""
+    """An input file of the studio: ``name`` as the project and the command line call it,
+    ``path`` where it lies (the session's private folder); ``weight``: an element's relative
+    frequency among the free copies (the element manifest's ``weight``)."""
 
     name: str
     path: Path
+    weight: float = 1.0
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,8 @@ import zipfile
 from dataclasses import dataclass, field
 
 from ..errors import ParameterError
-from .settings import DEFAULTS, coerce, run_settings
+from ..types import ElementControls
+from .settings import DEFAULTS, coerce, element_manifest, run_settings
 from .uploads import MAX_ELEMENTS, MAX_PROJECT_BYTES, UploadTooLarge, check_size
 
 #: the manifest's name in the archive
@@ -27,15 +28,17 @@ FIELDS = ("elements", "secondary")
 class ProjectFiles:
     """What a project holds: checked ``settings`` (every key of
     :data:`repulsionpak.studio.settings.DEFAULTS`), and (name in the archive, bytes) of
-    the container (None: none saved) and of each element and secondary element."""
+    the container (None: none saved) and of each element and secondary element, and each
+    element's weight."""
 
     settings: dict
     container: tuple[str, bytes] | None = None
     elements: list[tuple[str, bytes]] = field(default_factory=list)
     secondary: list[tuple[str, bytes]] = field(default_factory=list)
+    weights: list[float] = field(default_factory=list)  # of the elements
 
 
-def write_project(doc, container, command: str | None) -> bytes:
+def write_project(doc, container, command: str | None, manifest: str | None = None) -> bytes:
     """The zip of ``doc`` (a :class:`~.document.Document`).
 
     Parameters
@@ -45,6 +48,9 @@ def write_project(doc, container, command: str | None) -> bytes:
         The container file a run reads (the painted region's, when painted).
     command : str or None
         The ``repulsionpak pack`` command, recorded in the manifest.
+    manifest : str or None
+        The name of an element manifest to write beside them (the elements' weights, for
+        the command line); None: none.
 
     Returns
     -------
@@ -66,6 +72,9 @@ def write_project(doc, container, command: str | None) -> bytes:
             for e, n in zip(files, names):
                 zf.write(e.path, n)
             lines.append(f"{name} = [{', '.join(json.dumps(n) for n in names)}]")
+        lines.append(f"weights = [{', '.join(json.dumps(e.weight) for e in doc.elements)}]")
+        if manifest:
+            zf.writestr(manifest, element_manifest([(f"elements/{e.name}", e.weight) for e in doc.elements]))
         if command:
             lines.append(f"command = {json.dumps(command)}")
         lines += ["", "[settings]  # missing: chosen by the run (auto gap and count, random seed)"]
@@ -121,7 +130,13 @@ def read_project(data: bytes) -> ProjectFiles:
                                      f"{MAX_ELEMENTS} file names")
             out[name] = [read(n) for n in names]
         container = read(studio["container"]) if studio.get("container") else None
-        return ProjectFiles(settings, container, out["elements"], out["secondary"])
+        weights = studio.get("weights", [1.0] * len(out["elements"]))
+        if (not isinstance(weights, list) or len(weights) != len(out["elements"])
+                or not all(isinstance(w, (int, float)) and not isinstance(w, bool) for w in weights)):
+            raise ParameterError(f"{PROJECT_MANIFEST}: 'weights' must be a number per element")
+        for w in weights:
+            ElementControls(weight=float(w))  # its check and message
+        return ProjectFiles(settings, container, out["elements"], out["secondary"], [float(w) for w in weights])
 
 
 __all__ = ["PROJECT_MANIFEST", "ProjectFiles", "read_project", "write_project"]

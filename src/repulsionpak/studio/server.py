@@ -10,8 +10,8 @@ origin is refused with 403):
 - ``POST /open-elements``       multipart, files: element files added
 - ``POST /open-secondary``      multipart, files: secondary element files added
 - ``POST /open-project``        multipart, one zip: a saved project
-- ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``pin``, ``remove``, ``moved``,
-  ``undo``, ``redo``, ``examples``, ``remove-element``
+- ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``weight``, ``pin``, ``remove``,
+  ``moved``, ``undo``, ``redo``, ``examples``, ``remove-element``
 - ``POST /run``                 JSON ``{"action": "start" | "restart"}``
 - ``GET /export.svg``, ``/export.pdf``, ``/export.png``, ``/project.zip``   downloads
 - ``GET /packing.svg``          the current packing (as ``/export.svg``)
@@ -175,6 +175,7 @@ class StudioServer(LiveServer):
             "setting": lambda: s.set_setting(str(msg.get("name")), msg.get("value")),
             "pin": lambda: s.pin(_index(msg), bool(msg.get("pinned", True))),
             "remove": lambda: s.remove(_index(msg)),
+            "weight": lambda: s.set_weight(_index(msg), msg.get("value")),
             "moved": lambda: s.moved(_index(msg), _number(msg, "dx"), _number(msg, "dy")),
             "undo": s.undo,
             "redo": s.redo,

@@ -27,13 +27,20 @@ from .controller import StudioController
 from .document import Document, History, InputFile
 from .project import read_project, write_project
 from .region import Stroke, painted_region, region_svg, rings_of
-from .settings import coerce, command_line, run_settings
+from .settings import coerce, command_line, element_manifest, run_settings
 from .uploads import MAX_ELEMENTS, check_size, named_error, safe_name
 
 #: the canvas of a session without a container file (container units)
 BLANK_CANVAS = (0.0, 0.0, 1000.0, 1000.0)
 #: the name of a painted container, in a project and on the command line
 PAINTED_NAME = "container.svg"
+#: the element manifest of weighted elements, in a project and on the command line
+ELEMENTS_MANIFEST = "elements.toml"
+
+
+def weighted(doc: Document) -> bool:
+    """Whether ``doc``'s elements need a manifest (a weight other than 1)."""
+    return any(e.weight != 1.0 for e in doc.elements)
 
 
 class Session:
@@ -318,7 +325,7 @@ class Session:
                 raise ParameterError("there are no elements: open element files or take the examples")
             from ..inputs import load_inputs
 
-            inputs = load_inputs(cfile.path, [e.path for e in doc.elements], params,
+            inputs = load_inputs(cfile.path, self._element_args(doc), params,
                                  secondary=[e.path for e in doc.secondary], controls=controls)
             self.cancel()
             self.controller.reset(inputs.container, inputs.params, paused=paused)
@@ -423,6 +430,18 @@ class Session:
         placed = fut.result(timeout=120)
         return png_bytes(ctl.container, placed, 1200, container_paint=ctl.container_paint, gap=ctl.gap)
 
+    def _element_args(self, doc: Document) -> list[Path]:
+        """The element arguments of a run: the files, or (some weight is not 1) an element
+        manifest naming them with their weights, as the project's ``elements.toml``."""
+        if not weighted(doc):
+            return [e.path for e in doc.elements]
+        self._n_files += 1
+        d = self.dir / "manifests" / f"{self._n_files:05d}"
+        d.mkdir(parents=True)
+        path = d / ELEMENTS_MANIFEST
+        path.write_text(element_manifest([(e.path, e.weight) for e in doc.elements]), encoding="utf-8")
+        return [path]
+
     def command(self, doc: Document | None = None) -> str | None:
         """The ``repulsionpak pack`` command that makes ``doc``'s packing, with the files
         named as a saved project holds them (None: no container or no elements)."""
@@ -430,14 +449,35 @@ class Session:
         cfile = self.container_file(doc) if (doc.container or doc.strokes) else None
         if cfile is None or not doc.elements:
             return None
-        return command_line(doc.settings_dict, cfile.name, [f"elements/{e.name}" for e in doc.elements],
+        elements = [ELEMENTS_MANIFEST] if weighted(doc) else [f"elements/{e.name}" for e in doc.elements]
+        return command_line(doc.settings_dict, cfile.name, elements,
                             secondary=[f"secondary/{e.name}" for e in doc.secondary])
+
+    def set_weight(self, index: int, value: object) -> dict:
+        """Element ``index``'s weight (relative frequency of its free copies; 0: none),
+        checked as an element manifest's ``weight`` is."""
+        from ..types import ElementControls
+
+        with self.lock:
+            els = list(self.doc.elements)
+            if not 0 <= index < len(els):
+                raise ParameterError(f"no element file {index}")
+            try:
+                w = float(value)
+            except (TypeError, ValueError):
+                raise ParameterError(f"weight must be a number, got {value!r}") from None
+            ElementControls(weight=w)  # its check and message
+            if w != els[index].weight:
+                els[index] = dataclasses.replace(els[index], weight=w)
+                self._edit(f"weight of {els[index].name} = {w:g}", dataclasses.replace(self.doc, elements=tuple(els)))
+            return self.state()
 
     def project_zip(self) -> bytes:
         """The project (see :func:`repulsionpak.studio.project.write_project`)."""
         with self.lock:
             doc = self.doc
-            return write_project(doc, self.container_file(doc), self.command(doc))
+            return write_project(doc, self.container_file(doc), self.command(doc),
+                                 ELEMENTS_MANIFEST if weighted(doc) else None)
 
     def open_project(self, data: bytes) -> dict:
         """Open a project saved by :meth:`project_zip` (one undoable edit); every file is
@@ -454,13 +494,14 @@ class Session:
 
             for field in ("elements", "secondary"):
                 files = []
-                for name, content in getattr(project, field):
+                weights = project.weights if field == "elements" else [1.0] * len(project.secondary)
+                for (name, content), weight in zip(getattr(project, field), weights):
                     path = self._store(safe_name(name), content)
                     try:
                         load_elements([path])
                     except RepulsionPakError as exc:
                         raise named_error(exc, path, name) from None
-                    files.append(InputFile(path.name, path))
+                    files.append(InputFile(path.name, path, weight))
                 doc = dataclasses.replace(doc, **{field: tuple(files)})
             self._edit("open project", doc)
             return self.state()
@@ -478,6 +519,7 @@ class Session:
             "region_area": float(region.area),
             "view_box": list(self.controller.view_box),
             "elements": [e.name for e in doc.elements],
+            "weights": [e.weight for e in doc.elements],
             "secondary": [e.name for e in doc.secondary],
             "settings": doc.settings_dict,
             "command": self.command(doc),
@@ -490,4 +532,4 @@ class Session:
         }
 
 
-__all__ = ["BLANK_CANVAS", "PAINTED_NAME", "Session"]
+__all__ = ["BLANK_CANVAS", "ELEMENTS_MANIFEST", "PAINTED_NAME", "Session", "weighted"]

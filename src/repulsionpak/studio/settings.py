@@ -11,6 +11,7 @@ into the equivalent command.
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import shlex
 from collections.abc import Sequence
@@ -131,6 +132,17 @@ def _control_options(s: dict) -> tuple[str | None, bool, float | None]:
     return rotation, bool(s["rigid"]), stiffness
 
 
+def element_manifest(files: Sequence[tuple[str, float]]) -> str:
+    """An element manifest (``.toml``, see docs/controls.md) naming ``files`` (paths as
+    the manifest should give them) with their weights."""
+    lines = ["# the studio's elements and their weights (repulsionpak pack reads it as an element argument)"]
+    for name, weight in files:
+        lines += ["", "[[element]]", f"file = {json.dumps(str(name))}"]
+        if weight != 1.0:
+            lines.append(f"weight = {_num(weight)}")
+    return "\n".join(lines) + "\n"
+
+
 def _num(v: float) -> str:
     return f"{v:g}" if float(v) == float(f"{v:g}") else repr(float(v))
 
@@ -160,4 +172,4 @@ def command_line(settings: dict, container: str, elements: Sequence[str], output
     return shlex.join(args)
 
 
-__all__ = ["DEFAULTS", "SPEC", "coerce", "command_line", "run_settings"]
+__all__ = ["DEFAULTS", "SPEC", "coerce", "command_line", "element_manifest", "run_settings"]

@@ -50,7 +50,15 @@
       ul.innerHTML = "";
       s[field].forEach((name, i) => {
         const li = document.createElement("li");
-        li.textContent = name;
+        const label = document.createElement("span");
+        label.textContent = name; li.appendChild(label);
+        if (field === "elements") {  // the element's weight (relative frequency of its copies)
+          const w = document.createElement("input");
+          w.type = "number"; w.min = "0"; w.step = "any"; w.className = "weight"; w.title = "weight of " + name;
+          w.value = String(s.weights[i]);
+          w.addEventListener("change", () => edit({ op: "weight", index: i, value: w.value }));
+          li.appendChild(w);
+        }
         const b = document.createElement("button");
         b.textContent = "×"; b.title = "remove " + name;
         b.addEventListener("click", () => edit({ op: "remove-element", index: i, secondary: field === "secondary" }));
