@@ -10,8 +10,8 @@ import shapely
 
 from repulsionpak.params import SecondaryParams
 from repulsionpak.preprocess import outline_of
-from repulsionpak.secondary import (SIZE_STEP, _fit_to_pockets, fit_scale, fit_scales, outline_samples, pocket_axes,
-                                    pocket_seeds)
+from repulsionpak.geometry.pockets import fit_scale, fit_scales, outline_samples
+from repulsionpak.secondary import SIZE_STEP, _fit_to_pockets, pocket_axes, pocket_seeds
 from repulsionpak.types import ArtPath, Element
 
 

@@ -29,7 +29,7 @@ import shapely
 from .params import PlacementParams
 from .preprocess import Outline
 from .room import Room
-from .secondary import Pockets, fit_scales, outline_samples
+from .geometry.pockets import Pockets, fit_scales, outline_samples
 
 #: a container whose share of area narrower than the element size is below this is even
 UNEVEN_SHARE = 0.1
@@ -173,7 +173,7 @@ CLOSE_FIT = 0.8
 def fit_in_room(room: Room, point: np.ndarray, samples: np.ndarray, angles: np.ndarray,
                 offset: float, depth: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """(A,) the largest scale (file → container units) at which the outline ``samples``
-    (:func:`repulsionpak.secondary.outline_samples`), turned by each of ``angles`` and
+    (:func:`repulsionpak.geometry.pockets.outline_samples`), turned by each of ``angles`` and
     centred on ``point``, keeps ``offset`` from the container's edge — or, given ``depth``
     = (grid, origin) (a grid of ``room``'s pixels whose pixel (0, 0) has its corner at
     ``origin``, 0 off it), from wherever that falls to 0 — at every sample; the scales

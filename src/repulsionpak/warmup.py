@@ -155,9 +155,9 @@ def _warm_flatten() -> None:
 
 
 def _warm_misfit() -> None:
-    """The pocket fill's fitting kernel (:func:`repulsionpak.secondary.fit_scales`), between
+    """The pocket fill's fitting kernel (:func:`repulsionpak.geometry.pockets.fit_scales`), between
     the two simulations."""
-    from .secondary import Pockets, fit_scales
+    from .geometry.pockets import Pockets, fit_scales
 
     none = np.zeros(0, np.int64)
     pockets = Pockets(np.ones((4, 4)), 0.0, 0.0, 1.0, np.zeros(0), none, none)
