@@ -27,9 +27,10 @@ import time
 from pathlib import Path
 
 import scenes
-from repulsionpak.cli import run_pack
+from repulsionpak import pack
 from repulsionpak.measure import evaluate_file
 from repulsionpak.io import load_elements
+from repulsionpak.params import Params
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
@@ -83,7 +84,10 @@ def main(argv=None) -> int:
             print(f"| {name} | {gap:.4g} | {m / gap:.3f} | {old['area_fraction']:.3f} | "
                   f"{old['overlap_area']:.3g} | — | — | — |", flush=True)
             continue
-        run_pack(cont, elems, wd / "new.svg", gap=m, seed=seed, count=count, progress=False)
+        params = Params().with_(gap=m, seed=seed)
+        if count is not None:
+            params = params.with_(placement__count=count)
+        pack(cont, elems, params).save(wd / "new.svg")  # the bytes `repulsionpak pack` writes
         new = measure(wd / "new.svg", m)
         (wd / "result.json").write_text(json.dumps({"scene": name, "gap": gap, "old": old, "new": new},
                                                    indent=1, default=str))
