@@ -113,12 +113,12 @@ def study(output: Path, container: Path | None = None, elements: Sequence[Path] 
           quiet: bool = False) -> dict:
     """Run the study on files and write its plot (and ``json_out``); returns the
     :func:`deformation_study` result. Defaults: the shipped heart and element library at
-    the example gap; a container of your own gets :func:`repulsionpak.pack.default_gap`."""
+    the example gap; a container of your own gets :func:`repulsionpak.inputs.default_gap`."""
     from repulsionpak import examples
     from repulsionpak.measure import scp_bands_png
     from repulsionpak.io import load_container, load_elements
     from repulsionpak.io.files import atomic_write_bytes
-    from repulsionpak.pack import default_gap
+    from repulsionpak.inputs import default_gap
 
     if runs < 1:
         raise ParameterError(f"--runs must be >= 1, got {runs}")
