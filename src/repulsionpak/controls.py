@@ -21,12 +21,13 @@ from .errors import ParameterError
 from .types import ROTATIONS, ElementControls, Pin
 
 def parse_rotation(text: str) -> tuple[str, float | None]:
-    """CLI ``--rotation``: ``free``, ``fixed``, ``fixed:DEG`` or ``limited:DEG`` ->
-    (rotation, angle for fixed / max_rotation for limited, or None)."""
+    """CLI ``--rotation``: ``free``, ``fixed``, ``fixed:DEG``, ``limited:DEG``, ``upright`` or
+    ``upright:DEG`` -> (rotation, angle for fixed / max_rotation for limited and upright,
+    or None)."""
     name, _, arg = text.partition(":")
     name = name.strip().lower()
     if name not in ROTATIONS:
-        raise ParameterError(f"--rotation must be free, fixed[:ANGLE] or limited:DEG, got {text!r}")
+        raise ParameterError(f"--rotation must be free, fixed[:ANGLE], limited:DEG or upright[:DEG], got {text!r}")
     if not arg:
         return name, None
     if name == "free":
@@ -109,11 +110,12 @@ def pin_transform(outline, pin: Pin) -> tuple[np.ndarray, float]:
     return np.array([pin.x, pin.y]) - np.array([c * off[0] - s * off[1], s * off[0] + c * off[1]]), a
 
 
-def prepare_controlled(container, elements, params, rng, gap):
+def prepare_controlled(container, elements, params, rng, gap, flow=None):
     """:func:`repulsionpak.pack.prepare` with designer controls: weighted assignment,
-    start angles within the rotation limits, and pinned copies (frozen, appended after
-    the free ones; the free ones are placed around them). Returns (templates, placement,
-    pinned mask (M,), controls (M,))."""
+    start angles within the rotation limits (along ``flow``, a
+    :class:`repulsionpak.flow.FlowField`, where given), and pinned copies (frozen, appended
+    after the free ones; the free ones are placed around them). Returns (templates,
+    placement, pinned mask (M,), controls (M,))."""
     import shapely  # noqa: PLC0415
 
     from .inputs import margin_of
@@ -168,8 +170,13 @@ def prepare_controlled(container, elements, params, rng, gap):
     scale = final_scale(outlines, assignment, free.area, params.preprocess.skin_offset * gap,
                         params.placement.target_fraction)
     templates = [build_template(o, scale, gap, params.preprocess) for o in outlines]
+    orient = None
+    if flow is not None:
+        from .flow.hook import Orienter  # noqa: PLC0415
+
+        orient = Orienter(flow, elements, assignment, ctrls)
     placement = place(templates, assignment, free, params.placement, rng,
-                      angle_fn=lambda a: initial_angles(ctrls, assignment, a, rng))
+                      angle_fn=lambda a: initial_angles(ctrls, assignment, a, rng), orient=orient)
     n = len(assignment)
     if pins:
         placement = Placement(

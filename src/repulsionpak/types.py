@@ -259,7 +259,12 @@ class PlacedArt:
 # --------------------------------------------------------------------------- designer controls
 
 
-ROTATIONS = ("free", "fixed", "limited")
+ROTATIONS = ("free", "fixed", "limited", "upright")
+FLOWS = ("align", "ignore")
+#: degrees an upright copy's mesh is held inside its ± max_rotation: the rotation of the
+#: best similar copy of the deformed art can differ from the mesh's by a degree or two,
+#: and the promise is on the art
+UPRIGHT_MARGIN = 2.5
 
 
 @dataclass(frozen=True)
@@ -278,7 +283,11 @@ class ElementControls:
     """How the copies of one element may move and deform.
 
     rotation: "free" | "fixed" (every copy at ``angle``) | "limited" (within
-    ± ``max_rotation`` of ``angle``), degrees clockwise. rigid: the art never deforms
+    ± ``max_rotation`` of ``angle``) | "upright" (the drawing's up side kept within
+    ± ``max_rotation`` of ``angle``; with a flow field, up points to the left of the
+    flow), degrees clockwise. axis: the element's axis in degrees in its source's
+    frame (None: its principal axis); flow: "align" (follow a flow field) | "ignore";
+    flow_bend: bend along the flow's streamline. rigid: the art never deforms
     (translation, rotation and growth only). stiffness: multiplier of the spring and
     shape-keeping constants (ignored when rigid). weight: relative frequency of free
     copies (0: none). pins: fixed copies that never move.
@@ -291,6 +300,9 @@ class ElementControls:
     stiffness: float = 1.0
     weight: float = 1.0
     pins: tuple[Pin, ...] = ()
+    axis: float | None = None
+    flow: str = "align"
+    flow_bend: bool = False
 
     def __post_init__(self):
         object.__setattr__(self, "pins", tuple(self.pins))
@@ -300,6 +312,13 @@ class ElementControls:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ParameterError(f"{name} must be a finite number, got {v!r}")
+        if self.flow not in FLOWS:
+            raise ParameterError(f"flow must be one of {', '.join(FLOWS)}, got {self.flow!r}")
+        if self.axis is not None and (isinstance(self.axis, bool) or not isinstance(self.axis, (int, float))
+                                      or not math.isfinite(self.axis)):
+            raise ParameterError(f"axis must be a finite number of degrees, got {self.axis!r}")
+        if not isinstance(self.flow_bend, bool):
+            raise ParameterError(f"flow_bend must be true or false, got {self.flow_bend!r}")
         if not 0 <= self.max_rotation <= 180:
             raise ParameterError(f"max_rotation must be between 0 and 180 degrees, got {self.max_rotation:g}")
         if not self.stiffness > 0:
@@ -324,6 +343,10 @@ class ElementControls:
         if self.rotation == "fixed":
             a = math.radians(self.angle)
             return a, a
+        if self.rotation == "upright" and self.max_rotation < 180:
+            a, d = math.radians(self.angle), math.radians(self.max_rotation)
+            d -= min(math.radians(UPRIGHT_MARGIN), 0.25 * d)
+            return a - d, a + d
         if self.rotation == "limited" and self.max_rotation < 180:
             a, d = math.radians(self.angle), math.radians(self.max_rotation)
             return a - d, a + d

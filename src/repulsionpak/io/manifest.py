@@ -2,7 +2,7 @@
 (or folders) and their designer controls (see ``docs/controls.md``)::
 
     [defaults]              # optional; every key may also appear per element
-    rotation = "free"       # "free" | "fixed" | "limited"
+    rotation = "free"       # "free" | "fixed" | "limited" | "upright"
     angle = 0               # degrees clockwise; fixed orientation / centre when limited
     max_rotation = 20       # degrees either side of angle, when limited
     rigid = false
@@ -28,10 +28,11 @@ from ..errors import InputError, ParameterError
 from ..types import Element, ElementControls, Pin
 from .load import load_elements
 
-KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight")
+KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight", "axis", "flow", "flow_bend")
 PIN_KEYS = ("x", "y", "angle", "scale")
 _TYPES = {"rotation": (str,), "angle": (int, float), "max_rotation": (int, float), "rigid": (bool,),
-          "stiffness": (int, float), "weight": (int, float)}
+          "stiffness": (int, float), "weight": (int, float), "axis": (int, float), "flow": (str,),
+          "flow_bend": (bool,)}
 
 
 def is_manifest(path) -> bool:
