@@ -280,7 +280,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              margin: float | None = None, pocket_fill: bool = True, fill_holes: bool = False,
              pdf: Path | None = None,
              movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
-             controls=None, live: dict | None = None, container_paint: str | None = None) -> dict:
+             controls=None, live: dict | None = None, container_paint: str | None = None,
+             flow: Path | None = None) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it;
     ``movie`` (.gif or .mp4) the simulation as an animation, a frame every ``movie_every``
@@ -288,7 +289,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     frames' longer side. ``live`` (``{"port": N, "open_browser": bool, "paused": bool}``)
     serves the run in the browser and writes the outputs only at Ctrl-C (see
     :mod:`repulsionpak.live`). ``container_paint`` (``outline``, ``as-drawn``, ``none``;
-    None: the config's, else ``outline``) is how every output draws the container."""
+    None: the config's, else ``outline``) is how every output draws the container. ``flow``:
+    a guide SVG the elements follow (docs/flow.md)."""
     from .pack import pack
 
     t_start = time.perf_counter()
@@ -332,7 +334,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
 
         from .io.manifest import with_manifest_files
 
-        files = [container, *_expand(with_manifest_files([*elements, *(secondary or [])]))]
+        files = [container, *_expand(with_manifest_files([*elements, *(secondary or [])])),
+                 *([] if flow is None else [flow])]
         # the controls (--rotation, --rigid, --stiffness, the manifests' settings) shape the run too
         # (how the outputs draw the container is no part of the simulation's state)
         run_params = {k: v for k, v in params.to_dict().items() if k != "output"}
@@ -378,7 +381,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
                            should_stop=stop if viewer is None else viewer.should_stop,
                            on_checkpoint=on_checkpoint, checkpoint_every=checkpoint_every,
                            resume=resumed, on_stage=lambda name: (prog.stage(name), stop.at_stage(name)),
-                           sources=run_in.sources, **snap_kw)
+                           sources=run_in.sources, **snap_kw, **({} if flow is None else {"flow": flow}))
     except BaseException as exc:
         if viewer is not None:
             viewer.close()
@@ -524,7 +527,7 @@ CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary element
 MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on the growing iterations of each phase; the settling ones (sim.settle_iterations, default 300) follow.")]
 QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
 MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
-RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE] or limited:DEG (see docs/controls.md).")]
+RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE], limited:DEG or upright[:DEG] (see docs/controls.md).")]
 RigidOpt = Annotated[bool, typer.Option("--rigid", help="Elements never deform (rigid bodies).")]
 StiffnessOpt = Annotated[Optional[float], typer.Option(help="Multiplier of the spring constants of the elements.")]
 NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements).")]
@@ -580,6 +583,9 @@ def pack(
     rotation: RotationOpt = None,
     rigid: RigidOpt = False,
     stiffness: StiffnessOpt = None,
+    flow: Annotated[Optional[Path], typer.Option(
+        "--flow", help="An SVG of guide strokes (in the container's units): the elements turn to follow "
+        "the field interpolated from them (see docs/flow.md).")] = None,
     live: Annotated[bool, typer.Option("--live", help="Watch and steer the run in the browser; Ctrl-C writes the outputs.")] = False,
     port: Annotated[int, typer.Option(help="Port of the --live server (127.0.0.1 only).")] = 8765,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="With --live: only print the URL.")] = False,
@@ -603,7 +609,7 @@ def pack(
                        movie=movie, movie_every=movie_every, movie_size=movie_size,
                        controls=cli_controls(rotation, rigid, stiffness),
                        live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None,
-                       container_paint=container_paint)
+                       container_paint=container_paint, flow=flow)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             if "movie" in rep:

@@ -183,7 +183,8 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
          should_stop: Callable[[], bool] | None = None,
          on_checkpoint: Callable[[dict], None] | None = None, checkpoint_every: int = 500,
          resume: dict | None = None, snapshot_every: int = 25,
-         on_stage: Callable[[str], None] | None = None, sources: dict | None = None) -> Packing:
+         on_stage: Callable[[str], None] | None = None, sources: dict | None = None,
+         flow=None) -> Packing:
     """Fill ``container`` with deformed copies of ``elements`` (and ``secondary`` ones).
 
     Parameters
@@ -201,6 +202,9 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
     sources : dict, optional
         The inputs' names for the report (default: the paths given, or the files the
         container and elements were read from).
+    flow : path or FlowField, optional
+        A guide SVG (``--flow``) or a :class:`repulsionpak.flow.FlowField`: elements turn
+        to follow its field (their controls' ``flow``, ``axis``; docs/flow.md).
 
     Returns
     -------
@@ -247,15 +251,24 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
     t0 = time.perf_counter()
     stage("meshing and placing")  # (seconds on large scenes, before any snapshot)
     ctrl = None
-    if any_controls(elements):  # designer controls (controls.py); none: the paper's way
+    if flow is not None:  # a flow field (flow/): the elements follow it
+        from .flow.hook import check_elements, run_field  # noqa: PLC0415
+
+        check_elements(elements)
+        flow = run_field(flow, container)
+    if flow is not None or any_controls(elements):  # designer controls (controls.py); none: the paper's way
         gap = checked_gap(container, elements, params)
-        templates, placement, pinned, ctrl = prepare_controlled(container, elements, params, rng, gap)
+        templates, placement, pinned, ctrl = prepare_controlled(container, elements, params, rng, gap, flow=flow)
     else:
         templates, placement, gap = prepare(container, elements, params, rng)
     model, state, frame = primary_model(container.region, templates, placement, gap, params,
                                         frozen=None if ctrl is None else pinned)
     if ctrl is not None:
         setup_model(model, ctrl, placement.angle, pinned)
+    if flow is not None:
+        from .flow.hook import attach  # noqa: PLC0415
+
+        attach(model, flow, placement, ctrl, elements, pinned, frame.unit)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     sim.templates = templates
@@ -270,7 +283,7 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
                       seconds={"preprocess": t1 - t0, "primary": t2 - t1, "secondary": 0.0},
                       stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction,
                       asked=asked, elements=tuple(elements), secondary=given_secondary,
-                      sources=inputs.sources if sources is None else sources)
+                      sources=inputs.sources if sources is None else sources, flow=flow)
     user_cap = params.secondary.max_count  # a bound on every secondary copy, the fills' too
     auto = not secondary and params.secondary.auto  # pockets get copies of the primaries
     if auto:

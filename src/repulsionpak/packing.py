@@ -101,6 +101,7 @@ class Packing:
     elements: tuple[Element, ...] = ()
     secondary: tuple[Element, ...] = ()
     sources: dict = field(default_factory=dict)
+    flow: object | None = None  # the flow field the elements followed (repulsionpak.flow.FlowField)
     _cache: dict = field(default_factory=dict, repr=False)
 
     def __setattr__(self, name: str, value) -> None:
@@ -264,6 +265,9 @@ class Packing:
             meta = {"generator": "repulsionpak", "seed": seed, "partial": self.partial,
                     "stopped_by": self.stopped_by, "invariants": self.checks(metrics)}
             debug = {"skins": self.skins()} if debug_layers else None
+            if debug and self.flow is not None:  # the field's arrows, a gap-independent grid
+                r = self.container.region
+                debug["flow"] = self.flow.arrows(r, max(r.bounds[2] - r.bounds[0], r.bounds[3] - r.bounds[1]) / 30)
             self._cache[key] = packing_svg_string(
                 self.container, self.placed, self.gap, attrs=attrs, debug_layers=debug,
                 partial=self.partial, metadata=meta, path=path, container_paint=self.container_paint)

@@ -109,11 +109,14 @@ def placed_vertices(t: Template, position: np.ndarray, angle: float, shrink: flo
 
 
 def place(templates: Sequence[Template], assignment: np.ndarray, region, params: PlacementParams,
-          rng: np.random.Generator, angle_fn=None, positions: np.ndarray | None = None) -> Placement:
+          rng: np.random.Generator, angle_fn=None, positions: np.ndarray | None = None,
+          orient=None) -> Placement:
     """Blue-noise positions, random orientations, and a common shrink so the skins cover
     ``initial_fraction`` of the container without overlapping each other (sec. 4).
     ``angle_fn(angles)`` (designer controls) may replace the random orientations; given
-    ``positions`` ((count, 2), e.g. :func:`repulsionpak.sizing.spread`'s) replace the blue noise."""
+    ``positions`` ((count, 2), e.g. :func:`repulsionpak.sizing.spread`'s) replace the blue noise;
+    ``orient(positions, angles)`` (a flow field: :class:`repulsionpak.flow.hook.Orienter`)
+    turns the copies by where they are."""
     count = len(assignment)
     skin_total = sum(templates[i].skin_area for i in assignment)
     shrink = float(np.sqrt(params.initial_fraction * region.area / skin_total))
@@ -127,6 +130,8 @@ def place(templates: Sequence[Template], assignment: np.ndarray, region, params:
     angles = rng.uniform(0.0, 2 * np.pi, count) if params.rotate else np.zeros(count)
     if angle_fn is not None:
         angles = angle_fn(angles)
+    if orient is not None:
+        angles = orient(positions, angles)
     for _ in range(40):
         skins = [shapely.Polygon(placed_vertices(templates[i], positions[k], angles[k], shrink)[:templates[i].n_skin])
                  for k, i in enumerate(assignment)]

@@ -125,6 +125,7 @@ class Model:
     pinned: np.ndarray | None = None  # (M,) bool: pinned copies (also frozen)
     stiff_edges: bool = False  # spring constants scaled by ``stiffness``
     controls: list | None = None  # (M,) ElementControls of each element
+    flow: object | None = None  # repulsionpak.flow.steer.FlowSteer: rotation windows follow a flow field
     # derived by build_model: the skin rings (SkinTopology) and each element's springs and
     # triangles, ``spring_ptr[e]:spring_ptr[e+1]`` and ``tri_ptr[e]:tri_ptr[e+1]`` (element_ranges)
     skin: "SkinTopology | None" = None

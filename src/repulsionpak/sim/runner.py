@@ -179,6 +179,8 @@ class Simulator:
         if m.bend_limit.any():
             limit_deformation(st.x, m.x_rest, m.elem_vstart, st.moving, m.bend_limit, st.inside)
         if m.rot_on is not None:  # designer controls: rotation limits, rigid bodies
+            if m.flow is not None:  # the windows of copies that follow a flow field move with them
+                m.flow.update(st.x, m)
             apply_controls(st.x, st.v, m.x_rest, m.elem_vstart, st.moving, m.rot_on, m.rot_lo,
                            m.rot_hi, m.rigid)
 

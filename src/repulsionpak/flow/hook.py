@@ -1,0 +1,85 @@
+"""The flow in a packing run: the field over the container, aligned start angles, and the
+steering attached to the simulation model (the few lines :func:`repulsionpak.pack.pack`
+calls)."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import ParameterError
+from .align import element_axis, flow_targets
+from .field import FlowField, field_from_guides
+from .guides import load_guides
+from .steer import FlowSteer
+
+#: degrees a free copy that aligns may turn away from the field (its rotation window)
+ALIGN_TOLERANCE = 4.0
+
+
+def run_field(flow, container) -> FlowField:
+    """``flow`` (a :class:`FlowField`, or the path of a guide SVG) as the field over
+    ``container``; refuses ``flow_bend``, which is not built."""
+    if isinstance(flow, FlowField):
+        return flow
+    if isinstance(flow, (str, os.PathLike)):
+        return field_from_guides(load_guides(flow), container.region.bounds)
+    raise ParameterError(f"flow must be a guide SVG's path or a FlowField, got {type(flow).__name__}")
+
+
+def check_elements(elements: Sequence) -> None:
+    for e in elements:
+        c = getattr(e, "controls", None)
+        if c is not None and c.flow_bend:
+            raise ParameterError(f"{e.source}: flow_bend is not supported yet (elements turn with the "
+                                 "flow but do not bend along it); leave it false")
+
+
+class Orienter:
+    """Aligned start angles for :func:`repulsionpak.placement.place`: ``orient(positions,
+    angles)`` turns every aligning copy onto its target at its position."""
+
+    def __init__(self, field: FlowField, elements: Sequence, assignment: np.ndarray, ctrls: Sequence):
+        self.field = field
+        self.ctrls = [ctrls[int(i)] for i in assignment]
+        axes = {}
+        for i in set(map(int, assignment)):
+            axes[i] = math.radians(element_axis(elements[i])[0])
+        self.axes = np.array([axes[int(i)] for i in assignment])
+
+    def __call__(self, positions: np.ndarray, angles: np.ndarray) -> np.ndarray:
+        on, centre, _ = flow_targets(self.field, positions, self.ctrls, self.axes, 0.0)
+        out = np.array(angles, float, copy=True)
+        out[on] = centre[on]
+        return out
+
+
+def attach(model, field: FlowField, placement, ctrls: Sequence, elements: Sequence, pinned, unit: float) -> None:
+    """Steer the model's free aligning copies (``ctrls`` per copy, ``pinned`` copies left
+    alone) by ``field``; the model's rotation windows are set for the start."""
+    n = len(ctrls)
+    idx = np.asarray(placement.template_index)[:n]
+    free = ~np.asarray(pinned, bool)[:n] if pinned is not None else np.ones(n, bool)
+    axes = np.zeros(n)
+    cache: dict = {}
+    for k in range(n):
+        if free[k]:
+            i = int(idx[k])
+            if i not in cache:
+                cache[i] = math.radians(element_axis(elements[i])[0])
+            axes[k] = cache[i]
+    steer = FlowSteer.for_copies(field, np.asarray(placement.position, float)[:n], placement.angle[:n],
+                                 ctrls, axes, math.radians(ALIGN_TOLERANCE), unit)
+    keep = free[steer.index]
+    steer.index, steer.offset, steer.half, steer.rest = (steer.index[keep], steer.offset[keep],
+                                                         steer.half[keep], steer.rest[keep])
+    model.rot_on[steer.index] = True
+    model.rot_lo[steer.index], model.rot_hi[steer.index] = steer.windows(
+        np.asarray(placement.position, float)[steer.index])
+    model.flow = steer
+
+
+__all__ = ["ALIGN_TOLERANCE", "Orienter", "attach", "check_elements", "run_field"]
