@@ -65,7 +65,7 @@ def test_manifest_reads_defaults_elements_and_pins(lib):
 
 @pytest.mark.parametrize("text, words", [
     ('[[element]]\nfile = "disc.svg"\nrotaton = "fixed"\n', ["rotaton", "did you mean 'rotation'", "[[element]] 1"]),
-    ('[defaults]\nrotation = "upright"\n[[element]]\nfile = "disc.svg"\n', ["[defaults]", "rotation", "upright"]),
+    ('[defaults]\nrotation = "sideways"\n[[element]]\nfile = "disc.svg"\n', ["[defaults]", "rotation", "sideways"]),
     ('[[element]]\nfile = "disc.svg"\nstiffness = "hard"\n', ["stiffness must be a number"]),
     ('[[element]]\nfile = "disc.svg"\nstiffness = -1\n', ["stiffness must be > 0"]),
     ('[[element]]\nfile = "disc.svg"\nweight = -1\n', ["weight must be >= 0"]),
