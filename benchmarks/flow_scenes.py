@@ -6,7 +6,7 @@ guide drawn here (a spiral, waves, spokes, an S), writes the packing, evaluates 
 ``repulsionpak evaluate`` does, and measures the angle between each copy's axis and the
 field at its centroid (:func:`repulsionpak.flow.alignment_angles`).
 
-    python benchmarks/flow_scenes.py OUTDIR [--scene NAME ...] [--seed N] [--count N] [--png]
+    python benchmarks/flow_scenes.py OUTDIR [--scene NAME ...] [--seed N] [--count N] [--png] [--inputs-only]
 
 prints one JSON line per scene: the alignment of the primaries and of all copies (median,
 p90, max, degrees), the gap statistics relative to the gap, overlap and the invariants.
@@ -174,8 +174,12 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--count", type=int, default=None)
     ap.add_argument("--png", action="store_true")
+    ap.add_argument("--inputs-only", action="store_true", help="only write the scenes' SVG inputs")
     a = ap.parse_args()
     for name in a.scene or list(SCENES):
+        if a.inputs_only:
+            write_scene(name, a.outdir)
+            continue
         print(json.dumps(run_scene(name, a.outdir, a.seed, a.count, a.png)), flush=True)
 
 
