@@ -1,0 +1,5 @@
+"""``python -m repulsionpak.cli``: the ``repulsionpak`` command."""
+
+from . import main
+
+main()
