@@ -222,6 +222,10 @@ def setup_model(model, ctrls, angles, pinned=None, base=None) -> None:
     model.rot_on, model.rot_lo, model.rot_hi, model.rigid, model.pinned = on, lo, hi, rigid, pin
     model.stiff_edges = bool((model.stiffness != 1.0).any())
     model.controls = allc
+    if base is not None and getattr(base, "flow", None) is not None:  # the added copies follow the flow too
+        from .flow.hook import extend  # noqa: PLC0415
+
+        extend(model, base, list(ctrls), np.asarray(angles, float))
 
 
 def straighten_limits(model, limits: np.ndarray) -> np.ndarray:

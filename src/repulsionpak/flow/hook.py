@@ -82,4 +82,49 @@ def attach(model, field: FlowField, placement, ctrls: Sequence, elements: Sequen
     model.flow = steer
 
 
-__all__ = ["ALIGN_TOLERANCE", "Orienter", "attach", "check_elements", "run_field"]
+__all__ = ["ALIGN_TOLERANCE", "Orienter", "attach", "check_elements", "extend", "run_field"]
+
+
+def extend(model, base, ctrls: Sequence, angles: np.ndarray) -> None:
+    """Steer the copies ``model`` adds to ``base`` (the secondary phase's pocket copies,
+    ``ctrls`` and start ``angles`` (radians) per added copy) by ``base.flow`` too.
+
+    Notes
+    -----
+    The model knows no element files, so a copy's axis is its controls' ``axis`` or the
+    principal axis of its rest skin ring (placed at its start angle, that angle taken
+    off): the skin is the art offset by a fraction of the gap, so its long axis is the
+    art's for elongated elements. A copy whose start angle is off its target is turned
+    onto it by the first projection.
+    """
+    import shapely  # noqa: PLC0415
+
+    from .align import principal_axis  # noqa: PLC0415
+
+    old: FlowSteer = base.flow
+    m0 = base.n_elements
+    n = model.n_elements - m0
+    if n <= 0:
+        model.flow = old
+        return
+    vs, ns = model.elem_vstart, model.elem_nskin
+    cent = np.zeros((n, 2))
+    axes = np.zeros(n)
+    for k in range(n):
+        e = m0 + k
+        pts = model.x_rest[vs[e]:vs[e + 1]]
+        cent[k] = pts.mean(axis=0) * old.unit
+        c = ctrls[k]
+        if c.axis is not None:
+            axes[k] = math.radians(c.axis)
+        else:
+            ring = model.x_rest[vs[e]:vs[e] + ns[e]]
+            deg = principal_axis(shapely.Polygon(ring).buffer(0))[0]
+            a = math.radians(deg) - float(angles[k])  # back to the source's frame
+            axes[k] = math.atan2(math.sin(2 * a), math.cos(2 * a)) / 2  # a line: within ±90°
+    new = FlowSteer.for_copies(old.field, cent, angles, ctrls, axes, math.radians(ALIGN_TOLERANCE), old.unit)
+    idx = new.index + m0
+    model.rot_on[idx] = True
+    model.rot_lo[idx], model.rot_hi[idx] = new.windows(cent[new.index])
+    model.flow = FlowSteer(old.field, np.concatenate([old.index, idx]), np.concatenate([old.offset, new.offset]),
+                           np.concatenate([old.half, new.half]), np.concatenate([old.rest, new.rest]), old.unit)
