@@ -124,6 +124,8 @@ def test_copies_align_with_a_wave_flow(fish):
     packing = pack(c, elements, Params(seed=2, placement=PlacementParams(count=10)), flow=g)
     prim = alignment_angles([p for p in packing.placed if p.kind == "primary"], elements, field)
     assert prim.median <= 8.0 and prim.p90 <= 20.0, prim.angles
+    every = alignment_angles(packing.placed, elements, field)  # the pocket copies follow it too
+    assert len(every.angles) > len(prim.angles) and every.median <= 8.0 and every.p90 <= 20.0, every.angles
     m = packing.evaluate(distortion=False)
     assert m["overlap_area"] == 0.0
     assert 0.9 <= m["gap"]["median"] / packing.gap <= 1.1
