@@ -337,7 +337,8 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
         placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
         min_scale=v.min_scale, repair=v.repair, straightened=straightened,
         grow_to=v.grow_to * gap, max_scale=v.max_grow, should_stop=stop_repair,
-        grow_reach=skin_excess(params, gap), gather=v.gather * gap)
+        grow_reach=skin_excess(params, gap), gather=v.gather * gap,
+        max_turn=None if packing.model.rot_on is None else np.where(packing.model.rot_on, 0.0, np.inf))
     if stop_repair is not None and v.repair and stop_repair():
         packing.stopped_by["verify"] = "interrupted"  # a partial packing (exit 130), promises kept
     packing.seconds["verify"] = time.perf_counter() - t4

@@ -169,7 +169,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
 
 
 def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, target, threshold,
-            margin, tol, rounds=6, fixed=None):
+            margin, tol, rounds=6, fixed=None, max_turn=None):
     """Close the gaps wider than ``threshold``: each element whose nearest neighbour is
     farther than ``threshold`` moves towards it until the two are ``target`` apart,
     never closer than ``margin`` to the edge. Where elements cannot grow into the room
@@ -187,7 +187,9 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, t
     band slides along it only so), at half the step so the travel bound holds, and
     halved until the margin is kept. None crosses what is not the container (the segment
     between the two nearest points must lie in ``region``). Elements move one at a time,
-    the loneliest first; the rounds repeat while moves help."""
+    the loneliest first; the rounds repeat while moves help. ``max_turn[i]`` (radians)
+    bounds the total turn of element ``i``: 0 for an element whose rotation the designer
+    fixed or limited, which therefore only slides."""
     idx = [i for i in range(len(geoms)) if alive[i] and not (fixed is not None and fixed[i])]
     if not idx or threshold <= target:
         return
@@ -233,6 +235,8 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, t
                     for cb, sb, k in tries:
                         v = np.array([u[0] * cb - u[1] * sb, u[0] * sb + u[1] * cb])
                         turn = k * step / radius
+                        if max_turn is not None and abs(angle[i] + turn) > max_turn[i]:
+                            continue
                         g = moved_copy(i, step, v, turn)
                         if float(shapely.distance(boundary, g)) - margin > tol:
                             ok = True
@@ -256,7 +260,8 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                       min_scale: float = 0.5, rounds: int = 24, repair: bool = True,
                       straightened: list | None = None, grow_to: float = 0.0,
                       max_scale: float = 1.15, should_stop: Callable[[], bool] | None = None,
-                      grow_reach: float = 0.0, gather: float = 0.0) -> tuple[list[PlacedArt], Verification]:
+                      grow_reach: float = 0.0, gather: float = 0.0,
+                      max_turn: np.ndarray | None = None) -> tuple[list[PlacedArt], Verification]:
     """Check (and, with ``repair``, enforce) the promises on the art of ``placed``.
 
     Parameters
@@ -290,6 +295,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     gather : float
         > ``grow_to``: elements farther than this from their nearest neighbour then move
         towards it until they are ``grow_to`` apart (:func:`_gather`).
+    max_turn : (n,) array, optional
+        The most the gathering may turn each element (radians; default: any turn). The
+        simulation keeps a fixed or limited rotation; the repair must not undo it.
 
     Returns
     -------
@@ -422,7 +430,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach)
         if gather > grow_to:
             _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, grow_to + 2 * eps,
-                    gather + 2 * eps, w_margin, tol, fixed=fixed)
+                    gather + 2 * eps, w_margin, tol, fixed=fixed, max_turn=max_turn)
     # final verification, exact, on what is returned
     geoms = [transform(exact[i], i) for i in range(n)]
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
