@@ -18,8 +18,8 @@ def load_guides(path: str | Path) -> list[np.ndarray]:
     ----------
     path : path
         An SVG file in the container's user units (draw the guides on a copy of the
-        container's file). Every path, line, polyline and shape is a guide; fill and
-        stroke do not matter.
+        container's file). Every visible path, line, polyline and shape (one with a
+        stroke or a fill, as the element reader sees it) is a guide.
 
     Returns
     -------
@@ -46,6 +46,9 @@ def load_guides(path: str | Path) -> list[np.ndarray]:
         try:
             element = load_element(path)
         except InputError as exc:
+            if "no visible geometry" in exc.problem:
+                raise InputError(path, "the flow guides hold no visible path: draw at least one stroke "
+                                 "(a path with a stroke or a fill)") from None
             raise InputError(path, f"cannot read the flow guides: {exc.problem}") from None
     strokes: list[np.ndarray] = []
     for art in element.paths:
