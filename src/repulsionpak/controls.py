@@ -1,4 +1,4 @@
-"""Designer controls per element (issue 12): rotation limits, rigid and stiff elements,
+"""Designer controls per element: rotation limits, rigid and stiff elements,
 frequencies and pinned copies.
 
 An :class:`~repulsionpak.types.Element` may carry an :class:`ElementControls`

@@ -346,9 +346,9 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     at least ``min_radius`` gets a copy (:func:`_fit_copy`), then every piece of what is
     left of it (largest first; a copy can split a pocket), until no piece holds that
     circle. The fill ends by itself: every copy takes at least a circle of ``min_radius``
-    plus the gap out of its pocket. (Until November 26 a pocket took at most 8, then 64
-    copies: the negative space between ten '5' glyphs 40 gaps tall is one connected
-    pocket, and 64 copies left Q_s(gap/2)/Q_s(0) at 0.604.)
+    plus the gap out of its pocket. (No cap per pocket: the negative space between ten '5'
+    glyphs 40 gaps tall is one connected pocket, and a cap of 64 copies left
+    Q_s(gap/2)/Q_s(0) at 0.604.)
     These pockets are the room an element left when the verification had to drop it, or
     that the simulated pocket fill did not reach; every copy is a gap from all art and
     the margin from the edge by construction. Returns the new copies only, at most ``limit``.

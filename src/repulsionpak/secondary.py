@@ -40,9 +40,9 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
     claims them: a seed at distance d claims the disc of radius d_sep = ``params.d_sep``·gap
     (sec. 9) or, when more, 2d/1.34 − 0.15·gap (:data:`_SPACING`): a round pocket gets one
     seed that grows to fill it, and a band of half-width d a row of seeds about as far apart
-    as copies as wide as the band, a gap apart, stand (until November 27 the claim was the
-    disc of radius d: twice as many, smaller copies in wide bands, each with its own gap
-    ring; the suite's mean area 0.559 → 0.563 with the wider claim).
+    as copies as wide as the band, a gap apart, stand (a claim of radius d alone gives twice
+    as many, smaller copies in wide bands, each with its own gap ring: the suite's mean area
+    0.559 against 0.563).
     """
     polys = [shapely.make_valid(shapely.Polygon(s)) for s in skins]
     bounds = region.bounds

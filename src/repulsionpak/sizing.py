@@ -1,5 +1,5 @@
-"""How many primaries each region of the container gets, where, and how big (issue 41:
-size follows the space).
+"""How many primaries each region of the container gets, where, and how big: size follows
+the space.
 
 The paper leaves the count to the user and gives every primary one common scale.
 Without ``--count`` we pack container area / (``element_size`` · gap)² elements; in a

@@ -1,7 +1,7 @@
 """``<text>`` drawn as glyph outlines, so that lettering packs like any other art.
 
-Design tools write lettering as ``<text>`` unless told to convert it to outlines, and a
-text-only element used to be refused ("no visible geometry"). Before svgelements reads a
+Design tools write lettering as ``<text>`` unless told to convert it to outlines, and
+svgelements alone finds no visible geometry in a text-only element. Before svgelements reads a
 file, every ``<text>`` becomes a ``<g>`` with the text's own attributes (fill, stroke,
 class, style, transform, clip-path, id ...) holding one ``<path>`` of glyph outlines per
 run of characters; each ``<tspan>`` (and ``<a>``, ``<textPath>``) becomes a nested ``<g>``

@@ -358,7 +358,7 @@ class LiveController:
         new_m, new_st = build_model(sim.templates, pl, SimFrame(self.unit), region_sim,
                                     cell_size=m.cell_size, gap=m.gap, kinds=[m.kind[src]],
                                     base=(m, st))
-        if m.rot_on is not None:  # designer controls (issue 12): the copy gets its source's
+        if m.rot_on is not None:  # designer controls: the copy gets its source's
             from ..controls import setup_model
 
             setup_model(new_m, [m.controls[src]], np.zeros(1), base=m)
