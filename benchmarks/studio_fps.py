@@ -79,18 +79,37 @@ def main() -> None:
                 page = browser.new_page(viewport={"width": 1280, "height": 800})
                 page.goto(server.url)
                 page.wait_for_function("window.repulsionpak && window.repulsionpak.frames > 0", timeout=60_000)
+                cdp = page.context.new_cdp_session(page)
+                cdp.send("Performance.enable")
+                m0 = _metrics(cdp)
                 it0, f0, t1 = ctl.sim.state.iteration, page.evaluate("window.repulsionpak.frames"), time.monotonic()
+                r0 = page.evaluate("window.repulsionpak.received")
                 page.wait_for_timeout(args.seconds * 1000)
                 f1, dt = page.evaluate("window.repulsionpak.frames"), time.monotonic() - t1
+                r1 = page.evaluate("window.repulsionpak.received")
+                draw_ms = page.evaluate("window.repulsionpak.drawMs / window.repulsionpak.frames")
+                m1 = _metrics(cdp)
                 its = (ctl.sim.state.iteration - it0) / dt
                 n_groups = page.evaluate("document.querySelectorAll('#stage g.element').length")
-                print(f"page (Chromium): {(f1 - f0) / dt:.1f} frames/s drawn, {n_groups} g.element   "
+                print(f"page (Chromium): {(f1 - f0) / dt:.1f} frames/s drawn"
+                      + (f" of {(r1 - r0) / dt:.1f} received" if r1 is not None else "")
+                      + f", {n_groups} g.element   "
                       f"simulation: {its:.1f} iterations/s   (phase {ctl.phase})")
+                per = max(f1 - f0, 1)
+                print("page main thread per drawn frame: " + "  ".join(
+                    f"{k} {1000 * (m1[k] - m0[k]) / per:.1f} ms" for k in
+                    ("ScriptDuration", "RecalcStyleDuration", "LayoutDuration", "TaskDuration"))
+                    + (f"  (writing the paths {draw_ms:.1f} ms)" if draw_ms is not None else ""))
                 browser.close()
     finally:
         session.cancel(wait=30)
         server.stop()
         session.close()
+
+
+def _metrics(cdp) -> dict:
+    """Chromium's cumulative main-thread times (seconds) of the page."""
+    return {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
 
 
 def _count(fn):

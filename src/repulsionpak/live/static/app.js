@@ -10,8 +10,11 @@
   q("#download-svg").setAttribute("href", svgUrl);
 
   let ws = null, layout = null, starts = [], groups = [], status = {}, selected = -1;
-  let lastFrame = null, drag = null, frames = 0, adding = false;
-  window.repulsionpak = { get frames() { return frames; }, get layout() { return layout; },
+  let lastFrame = null, drag = null, frames = 0, received = 0, adding = false;
+  // frames: drawn into #stage; received: arrived over the WebSocket (some are never drawn
+  // when they come faster than the page paints); drawMs: time spent writing the paths
+  window.repulsionpak = { get frames() { return frames; }, get received() { return received; },
+                          get drawMs() { return drawMs; }, get layout() { return layout; },
                           get status() { return status; } };
 
   function send(cmd) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(cmd)); }
@@ -50,6 +53,7 @@
         p.setAttribute("fill", colour(m.template[i]));
         g.appendChild(p); elemLayer.appendChild(g); groups.push(g); starts.push(s); s += n;
       });
+      drawn = [];
       if (selected >= groups.length) selected = -1;
       if (lastFrame && lastFrame.layout === m.id) draw(lastFrame);
     }
@@ -87,26 +91,55 @@
     }
   }
 
+  // Drawing: a frame is kept on arrival and drawn at the next animation frame (only the
+  // newest; frames that arrive between two paints are never drawn). A path's "d" is written
+  // with two decimals through integer arithmetic and a table of the decimals (a quarter of
+  // the cost of toFixed), and only when it changed (pinned or frozen elements keep theirs).
+  const DEC = [];
+  for (let i = 0; i < 100; i++) DEC.push((i < 10 ? ".0" : ".") + i);
+  function num(x) {
+    let v = Math.round(x * 100);
+    if (!(Math.abs(v) < 2e9)) return x.toFixed(2);  // beyond 32-bit integers (and NaN)
+    if (v < 0) { v = -v; return "-" + ((v / 100) | 0) + DEC[v % 100]; }
+    return ((v / 100) | 0) + DEC[v % 100];
+  }
+  let drawn = [], drawnLayout = null, pending = null, scheduled = false, drawMs = 0;
   function draw(f) {
+    const t0 = performance.now();
     const pts = f.points;
     for (let i = 0; i < groups.length; i++) {
-      const s = starts[i], n = layout.counts[i];
+      const n = layout.counts[i];
       if (n < 2) continue;
-      let d = "M" + pts[2 * s].toFixed(2) + " " + pts[2 * s + 1].toFixed(2) + "L";
-      const parts = [];
-      for (let k = 1; k < n; k++) parts.push(pts[2 * (s + k)].toFixed(2) + " " + pts[2 * (s + k) + 1].toFixed(2));
-      groups[i].firstChild.setAttribute("d", d + parts.join(" ") + "Z");
+      let j = 2 * starts[i];
+      let d = "M" + num(pts[j]) + " " + num(pts[j + 1]) + "L";
+      for (let k = 1; k < n; k++) {
+        j += 2;
+        d += num(pts[j]) + " " + num(pts[j + 1]) + (k < n - 1 ? " " : "Z");
+      }
+      if (drawn[i] !== d) { groups[i].firstChild.setAttribute("d", d); drawn[i] = d; }
     }
+    frames++;
+    drawMs += performance.now() - t0;
+  }
+  function paint() {
+    scheduled = false;
+    const f = pending; pending = null;
+    if (!f || !layout || f.layout !== layout.id) return;
+    drawnLayout = layout.id;
+    draw(f);
+    if (!status.done) q("#iteration").textContent = String(f.iteration);
   }
 
   function onFrame(buf) {
     const dv = new DataView(buf);
     const f = { layout: dv.getUint32(4, true), iteration: dv.getUint32(8, true),
                 area: dv.getFloat32(12, true), points: new Float32Array(buf, 20, 2 * dv.getUint32(16, true)) };
-    lastFrame = f; frames++;
-    if (!layout || f.layout !== layout.id) return;
-    draw(f);
-    if (!status.done) q("#iteration").textContent = String(f.iteration);
+    lastFrame = f; received++;
+    pending = f;
+    // the first frame of a new layout is drawn at once: its new groups are never empty
+    // longer than between the two messages
+    if (layout && f.layout === layout.id && drawnLayout !== layout.id) { drawnLayout = layout.id; paint(); return; }
+    if (!scheduled) { scheduled = true; requestAnimationFrame(paint); }
   }
 
   function connect() {
