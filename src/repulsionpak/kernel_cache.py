@@ -85,6 +85,8 @@ def _export_all(dest: Path) -> int:
     from . import __path__ as package_path
 
     for m in pkgutil.walk_packages(package_path, "repulsionpak.", onerror=lambda name: None):
+        if m.name.rsplit(".", 1)[-1] == "__main__":
+            continue  # an entry script (``python -m repulsionpak.cli``): importing it runs it
         try:
             importlib.import_module(m.name)
         except Exception:  # noqa: BLE001  (a module needing an optional dependency: the live view)
