@@ -23,11 +23,23 @@ MAX_HISTORY = 500
 class InputFile:
     """An input file of the studio: ``name`` as the project and the command line call it,
     ``path`` where it lies (the session's private folder); ``weight``: an element's relative
-    frequency among the free copies (the element manifest's ``weight``)."""
+    frequency among the free copies (the element manifest's ``weight``); ``own``: the
+    element's own settings, (key, value) pairs of
+    :data:`~.settings.ELEMENT_KEYS` that override the run's (an element manifest's keys)."""
 
     name: str
     path: Path
     weight: float = 1.0
+    own: tuple[tuple[str, object], ...] = ()
+
+    @property
+    def own_dict(self) -> dict:
+        return dict(self.own)
+
+    @property
+    def in_manifest(self) -> bool:
+        """Whether the element needs a manifest entry (a weight other than 1, own settings)."""
+        return self.weight != 1.0 or bool(self.own)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 from ..errors import ParameterError
 from ..types import ElementControls
-from .settings import DEFAULTS, coerce, element_manifest, run_settings
+from .settings import DEFAULTS, coerce, coerce_element, element_manifest, run_settings
 from .uploads import MAX_ELEMENTS, MAX_PROJECT_BYTES, UploadTooLarge, check_size
 
 #: the manifest's name in the archive
@@ -36,6 +36,7 @@ class ProjectFiles:
     elements: list[tuple[str, bytes]] = field(default_factory=list)
     secondary: list[tuple[str, bytes]] = field(default_factory=list)
     weights: list[float] = field(default_factory=list)  # of the elements
+    own: list[dict] = field(default_factory=list)  # each element's own settings
 
 
 def write_project(doc, container, command: str | None, manifest: str | None = None) -> bytes:
@@ -73,8 +74,11 @@ def write_project(doc, container, command: str | None, manifest: str | None = No
                 zf.write(e.path, n)
             lines.append(f"{name} = [{', '.join(json.dumps(n) for n in names)}]")
         lines.append(f"weights = [{', '.join(json.dumps(e.weight) for e in doc.elements)}]")
+        lines.append("own = [" + ", ".join("{" + ", ".join(f"{k} = {json.dumps(v)}" for k, v in e.own) + "}"
+                                           for e in doc.elements) + "]")
         if manifest:
-            zf.writestr(manifest, element_manifest([(f"elements/{e.name}", e.weight) for e in doc.elements]))
+            zf.writestr(manifest, element_manifest([(f"elements/{e.name}", e.weight, e.own)
+                                                    for e in doc.elements]))
         if command:
             lines.append(f"command = {json.dumps(command)}")
         lines += ["", "[settings]  # missing: chosen by the run (auto gap and count, random seed)"]
@@ -136,7 +140,11 @@ def read_project(data: bytes) -> ProjectFiles:
             raise ParameterError(f"{PROJECT_MANIFEST}: 'weights' must be a number per element")
         for w in weights:
             ElementControls(weight=float(w))  # its check and message
-        return ProjectFiles(settings, container, out["elements"], out["secondary"], [float(w) for w in weights])
+        own = studio.get("own", [{}] * len(out["elements"]))
+        if not isinstance(own, list) or len(own) != len(out["elements"]) or not all(isinstance(o, dict) for o in own):
+            raise ParameterError(f"{PROJECT_MANIFEST}: 'own' must be a table of settings per element")
+        own = [{k: v for k, v in ((k, coerce_element(k, v)) for k, v in o.items()) if v is not None} for o in own]
+        return ProjectFiles(settings, container, out["elements"], out["secondary"], [float(w) for w in weights], own)
 
 
 __all__ = ["PROJECT_MANIFEST", "ProjectFiles", "read_project", "write_project"]

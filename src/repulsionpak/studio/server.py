@@ -10,8 +10,8 @@ origin is refused with 403):
 - ``POST /open-elements``       multipart, files: element files added
 - ``POST /open-secondary``      multipart, files: secondary element files added
 - ``POST /open-project``        multipart, one zip: a saved project
-- ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``weight``, ``pin``, ``remove``,
-  ``moved``, ``undo``, ``redo``, ``examples``, ``remove-element``
+- ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``weight``, ``element``
+  (an element's own ``key``: rotation, rigid, stiffness), ``pin``, ``remove``, ``moved``, ``undo``, ``redo``, ``examples``, ``remove-element``
 - ``POST /run``                 JSON ``{"action": "start" | "restart"}``
 - ``GET /export.svg``, ``/export.pdf``, ``/export.png``, ``/project.zip``   downloads
 - ``GET /packing.svg``          the current packing (as ``/export.svg``)
@@ -176,6 +176,7 @@ class StudioServer(LiveServer):
             "pin": lambda: s.pin(_index(msg), bool(msg.get("pinned", True))),
             "remove": lambda: s.remove(_index(msg)),
             "weight": lambda: s.set_weight(_index(msg), msg.get("value")),
+            "element": lambda: s.set_element(_index(msg), str(msg.get("key")), msg.get("value")),
             "moved": lambda: s.moved(_index(msg), _number(msg, "dx"), _number(msg, "dy")),
             "undo": s.undo,
             "redo": s.redo,

@@ -27,7 +27,7 @@ from .controller import StudioController
 from .document import Document, History, InputFile
 from .project import read_project, write_project
 from .region import Stroke, painted_region, region_svg, rings_of
-from .settings import coerce, command_line, element_manifest, run_settings
+from .settings import coerce, coerce_element, command_line, element_manifest, run_settings
 from .uploads import MAX_ELEMENTS, check_size, named_error, safe_name
 
 #: the canvas of a session without a container file (container units)
@@ -39,8 +39,9 @@ ELEMENTS_MANIFEST = "elements.toml"
 
 
 def weighted(doc: Document) -> bool:
-    """Whether ``doc``'s elements need a manifest (a weight other than 1)."""
-    return any(e.weight != 1.0 for e in doc.elements)
+    """Whether ``doc``'s elements need a manifest (a weight other than 1, or an element's
+    own settings)."""
+    return any(e.in_manifest for e in doc.elements)
 
 
 class Session:
@@ -439,7 +440,7 @@ class Session:
         d = self.dir / "manifests" / f"{self._n_files:05d}"
         d.mkdir(parents=True)
         path = d / ELEMENTS_MANIFEST
-        path.write_text(element_manifest([(e.path, e.weight) for e in doc.elements]), encoding="utf-8")
+        path.write_text(element_manifest([(e.path, e.weight, e.own) for e in doc.elements]), encoding="utf-8")
         return [path]
 
     def command(self, doc: Document | None = None) -> str | None:
@@ -472,6 +473,25 @@ class Session:
                 self._edit(f"weight of {els[index].name} = {w:g}", dataclasses.replace(self.doc, elements=tuple(els)))
             return self.state()
 
+    def set_element(self, index: int, key: str, value: object) -> dict:
+        """Element ``index``'s own setting ``key`` (``rotation`` as ``--rotation`` gives it,
+        ``rigid``, ``stiffness``; empty: the run's setting), checked as an element
+        manifest's keys are; the run reads it through the element manifest."""
+        with self.lock:
+            els = list(self.doc.elements)
+            if not 0 <= index < len(els):
+                raise ParameterError(f"no element file {index}")
+            v = coerce_element(key, value)
+            own = {k: x for k, x in els[index].own if k != key}
+            if v is not None:
+                own[key] = v
+            own_t = tuple(sorted(own.items()))
+            if own_t != els[index].own:
+                els[index] = dataclasses.replace(els[index], own=own_t)
+                label = f"{key} of {els[index].name} = " + ("the run's" if v is None else str(v))
+                self._edit(label, dataclasses.replace(self.doc, elements=tuple(els)))
+            return self.state()
+
     def project_zip(self) -> bytes:
         """The project (see :func:`repulsionpak.studio.project.write_project`)."""
         with self.lock:
@@ -495,13 +515,14 @@ class Session:
             for field in ("elements", "secondary"):
                 files = []
                 weights = project.weights if field == "elements" else [1.0] * len(project.secondary)
-                for (name, content), weight in zip(getattr(project, field), weights):
+                owns = project.own if field == "elements" else [{}] * len(project.secondary)
+                for (name, content), weight, own in zip(getattr(project, field), weights, owns):
                     path = self._store(safe_name(name), content)
                     try:
                         load_elements([path])
                     except RepulsionPakError as exc:
                         raise named_error(exc, path, name) from None
-                    files.append(InputFile(path.name, path, weight))
+                    files.append(InputFile(path.name, path, weight, tuple(sorted(own.items()))))
                 doc = dataclasses.replace(doc, **{field: tuple(files)})
             self._edit("open project", doc)
             return self.state()
@@ -520,6 +541,7 @@ class Session:
             "view_box": list(self.controller.view_box),
             "elements": [e.name for e in doc.elements],
             "weights": [e.weight for e in doc.elements],
+            "own": [e.own_dict for e in doc.elements],
             "secondary": [e.name for e in doc.secondary],
             "settings": doc.settings_dict,
             "command": self.command(doc),

@@ -29,7 +29,7 @@ DEFAULTS: dict[str, object] = {
     "gap": _P.gap,                      # None: 1% of the container's size (library policy)
     "count": _P.placement.count,        # None: from the container's area and the gap
     "seed": _P.seed,                    # None: drawn at random when a run starts
-    "rotation": _C.rotation,            # free | fixed[:ANGLE] | limited:DEG
+    "rotation": _C.rotation,            # free | fixed[:ANGLE] | limited:DEG | upright[:DEG]
     "rigid": _C.rigid,
     "stiffness": _C.stiffness,
     "pocket_fill": _P.secondary.auto,
@@ -40,7 +40,7 @@ SPEC: dict[str, dict] = {
     "gap": {"kind": "number", "min_exclusive": 0, "option": "--gap", "empty": "auto"},
     "count": {"kind": "integer", "min": 1, "max": MAX_COUNT, "option": "--count", "empty": "auto"},
     "seed": {"kind": "integer", "min": 0, "max": 2**64 - 1, "option": "--seed", "empty": "random"},
-    "rotation": {"kind": "rotation", "choices": ["free", "fixed", "limited"], "option": "--rotation"},
+    "rotation": {"kind": "rotation", "choices": ["free", "fixed", "limited", "upright"], "option": "--rotation"},
     "rigid": {"kind": "boolean", "option": "--rigid"},
     "stiffness": {"kind": "number", "min_exclusive": 0, "option": "--stiffness"},
     "pocket_fill": {"kind": "boolean", "option": "--no-pocket-fill"},
@@ -132,14 +132,65 @@ def _control_options(s: dict) -> tuple[str | None, bool, float | None]:
     return rotation, bool(s["rigid"]), stiffness
 
 
-def element_manifest(files: Sequence[tuple[str, float]]) -> str:
-    """An element manifest (``.toml``, see docs/controls.md) naming ``files`` (paths as
-    the manifest should give them) with their weights."""
-    lines = ["# the studio's elements and their weights (repulsionpak pack reads it as an element argument)"]
-    for name, weight in files:
+#: an element's own settings in the page (None: the run's setting applies)
+ELEMENT_KEYS = ("rotation", "rigid", "stiffness")
+
+
+def coerce_element(key: str, value: object) -> object:
+    """The page's ``value`` of element setting ``key`` typed and checked as the element
+    manifest checks it (empty or None: the run's setting applies, None); raises
+    :class:`ParameterError` with the manifest's words."""
+    if key not in ELEMENT_KEYS:
+        raise ParameterError(f"unknown element setting {key!r}; they are {', '.join(ELEMENT_KEYS)}")
+    if value is None or (isinstance(value, str) and value.strip().lower() in ("", "default")):
+        return None
+    if key == "rotation":
+        v = coerce("rotation", value)
+    elif key == "rigid":
+        v = coerce("rigid", value)
+    else:
+        v = coerce("stiffness", value)
+    manifest_keys({key: v})  # its check (ElementControls) and message
+    return v
+
+
+def manifest_keys(overrides: dict) -> dict:
+    """The element manifest's keys (``rotation``, ``angle``, ``max_rotation``, ``rigid``,
+    ``stiffness``) of an element's own settings (``rotation`` as ``--rotation`` gives
+    it: ``fixed:30``, ``limited:15``, ``upright:10``), checked by :class:`ElementControls`."""
+    from ..controls import parse_rotation
+
+    out: dict = {}
+    for key, v in overrides.items():
+        if v is None:
+            continue
+        if key == "rotation":
+            name, value = parse_rotation(str(v))
+            out["rotation"] = name
+            if value is not None:
+                out["angle" if name == "fixed" else "max_rotation"] = value
+        elif key == "rigid":
+            out["rigid"] = bool(v)
+        elif key == "stiffness":
+            out["stiffness"] = float(v)
+    try:
+        ElementControls(**out)
+    except ParameterError as exc:
+        raise ParameterError(f"element setting: {exc}") from None
+    return out
+
+
+def element_manifest(files: Sequence[tuple]) -> str:
+    """An element manifest (``.toml``, see docs/controls.md) naming ``files``: (path as the
+    manifest should give it, weight[, the element's own settings as in
+    :func:`manifest_keys`])."""
+    lines = ["# the studio's elements and their settings (repulsionpak pack reads it as an element argument)"]
+    for name, weight, *rest in files:
         lines += ["", "[[element]]", f"file = {json.dumps(str(name))}"]
         if weight != 1.0:
             lines.append(f"weight = {_num(weight)}")
+        for k, v in manifest_keys(dict(rest[0]) if rest else {}).items():
+            lines.append(f"{k} = " + (json.dumps(v) if isinstance(v, (str, bool)) else _num(v)))
     return "\n".join(lines) + "\n"
 
 
@@ -172,4 +223,5 @@ def command_line(settings: dict, container: str, elements: Sequence[str], output
     return shlex.join(args)
 
 
-__all__ = ["DEFAULTS", "SPEC", "coerce", "command_line", "element_manifest", "run_settings"]
+__all__ = ["DEFAULTS", "ELEMENT_KEYS", "SPEC", "coerce", "coerce_element", "command_line", "element_manifest",
+           "manifest_keys", "run_settings"]

@@ -8,6 +8,7 @@
   const q = (s) => document.querySelector(s);
   const stage = q("#stage"), regionLayer = q("#region-layer"), brushLayer = q("#brush-layer");
   const withToken = (path) => path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(token);
+  let shownLists = null;
   let state = null, mode = null, stroke = null, drag = null, lastPhase = null, busy = 0;
   const SETTINGS = ["gap", "count", "seed", "stiffness"];
 
@@ -23,7 +24,7 @@
       const text = await r.text();
       let body = null;
       try { body = JSON.parse(text); } catch (e) { body = { error: text }; }
-      if (!r.ok) { showError(body.error || ("error " + r.status)); render(state); return null; }
+      if (!r.ok) { showError(body.error || ("error " + r.status)); render(state, true); return null; }
       showError("");
       render(body);
       return body;
@@ -39,13 +40,16 @@
   }
 
   // -- the document ---------------------------------------------------------------------
-  function render(s) {
+  function render(s, force) {
     if (!s) return;
     state = s;
     window.repulsionpakStudio.state = s;
     q("#container-name").textContent = s.container ? s.container + (s.painted ? " + painted" : "")
       : (s.painted ? "painted" : "none: paint one with the brush");
-    for (const [field, sel] of [["elements", "#element-list"], ["secondary", "#secondary-list"]]) {
+    // the lists are rebuilt only when they changed (a field being typed in keeps its focus),
+    // or to show the document again after a refused value (force)
+    const listsKey = JSON.stringify([s.elements, s.weights, s.own, s.secondary]);
+    for (const [field, sel] of (listsKey === shownLists && !force) ? [] : [["elements", "#element-list"], ["secondary", "#secondary-list"]]) {
       const ul = q(sel);
       ul.innerHTML = "";
       s[field].forEach((name, i) => {
@@ -62,9 +66,12 @@
         const b = document.createElement("button");
         b.textContent = "×"; b.title = "remove " + name;
         b.addEventListener("click", () => edit({ op: "remove-element", index: i, secondary: field === "secondary" }));
-        li.appendChild(b); ul.appendChild(li);
+        li.appendChild(b);
+        if (field === "elements") li.appendChild(ownControls(name, i, (s.own && s.own[i]) || {}));
+        ul.appendChild(li);
       });
     }
+    shownLists = listsKey;
     q("#secondary-hint").classList.toggle("hidden", s.secondary.length > 0);
     const st = s.settings;
     for (const k of SETTINGS) {
@@ -93,6 +100,41 @@
     if (s.error) q("#message").textContent = "Failed: " + s.error;
   }
   window.repulsionpakStudio = { state: null, get busy() { return busy; } };
+
+  // an element's own settings (empty: the run's): rotation with its angle, rigid, stiffness
+  function ownControls(name, i, own) {
+    const box = document.createElement("div");
+    box.className = "own";
+    const [rot, ang] = own.rotation ? String(own.rotation).split(":") : ["", undefined];
+    const r = document.createElement("select");
+    r.className = "own-rotation"; r.title = "rotation of " + name;
+    for (const [v, t] of [["", "rotation: run's"], ["free", "free"], ["fixed", "fixed"], ["limited", "limited"], ["upright", "upright"]]) {
+      const o = document.createElement("option"); o.value = v; o.textContent = t; r.appendChild(o);
+    }
+    r.value = rot;
+    const a = document.createElement("input");
+    a.type = "number"; a.step = "any"; a.className = "own-angle"; a.placeholder = "°";
+    a.title = "fixed: the angle; limited, upright: degrees either side"; a.value = ang === undefined ? "" : ang;
+    const sendRot = () => {
+      const v = r.value, d = a.value.trim();
+      edit({ op: "element", index: i, key: "rotation", value: v && d && v !== "free" ? v + ":" + d : v });
+    };
+    r.addEventListener("change", sendRot); a.addEventListener("change", sendRot);
+    const g = document.createElement("select");
+    g.className = "own-rigid"; g.title = "rigid " + name;
+    for (const [v, t] of [["", "rigid: run's"], ["true", "rigid"], ["false", "deformable"]]) {
+      const o = document.createElement("option"); o.value = v; o.textContent = t; g.appendChild(o);
+    }
+    g.value = own.rigid === undefined ? "" : String(own.rigid);
+    g.addEventListener("change", () => edit({ op: "element", index: i, key: "rigid", value: g.value }));
+    const k = document.createElement("input");
+    k.type = "number"; k.step = "any"; k.min = "0"; k.className = "own-stiffness"; k.placeholder = "stiff.";
+    k.title = "stiffness of " + name + " (empty: the run's)";
+    k.value = own.stiffness === undefined ? "" : String(own.stiffness);
+    k.addEventListener("change", () => edit({ op: "element", index: i, key: "stiffness", value: k.value }));
+    box.append(r, a, g, k);
+    return box;
+  }
 
   // -- inputs ----------------------------------------------------------------------------
   q("#open-container").addEventListener("change", (ev) => {
