@@ -186,3 +186,105 @@ def test_page_sets_an_elements_own_rotation_rigid_and_stiffness(page):
     assert page.eval_on_selector(fish + "select.own-rotation", "e => e.value") == "fixed"
     assert page.eval_on_selector(fish + "input.own-angle", "e => e.value") == "45"
     assert page.eval_on_selector("#element-list li:nth-child(1) select.own-rigid", "e => e.value") == ""
+
+
+# -- folders and manifests through the inputs -----------------------------------------------
+
+
+def _svg(name: str) -> bytes:
+    return (EX / "elements" / name).read_bytes()
+
+
+def test_a_folder_adds_its_input_files_only(session):
+    st = session.add_elements([("animals/apple.svg", _svg("apple.svg")), ("animals/notes.txt", b"hello"),
+                               ("animals/sea/fish.svg", _svg("fish.svg")), ("animals/.hidden.svg", b"x")])
+    assert st["elements"] == ["apple.svg", "fish.svg"] and st["own"] == [{}, {}]
+    assert st["history"]["undo_label"] == "add apple.svg and 1 more"
+    with pytest.raises(ParameterError, match="no SVG or .path files"):
+        session.add_elements([("empty/notes.txt", b"hello")])
+    with pytest.raises(ParameterError, match="not a relative file name"):
+        session.add_elements([("../escape/apple.svg", _svg("apple.svg"))])
+
+
+MANIFEST = b'''[defaults]
+stiffness = 0.5
+
+[[element]]
+file = "shapes/apple.svg"
+weight = 2
+
+[[element]]
+file = "shapes/fish.svg"
+rotation = "fixed"
+angle = 30
+rigid = true
+'''
+
+
+def test_a_manifest_adds_the_files_it_names_with_their_settings(session):
+    # picked together with its files (no folders): a file of the named file's name stands in
+    st = session.add_elements([("elements.toml", MANIFEST), ("apple.svg", _svg("apple.svg")),
+                               ("fish.svg", _svg("fish.svg")), ("leaf.svg", _svg("leaf.svg"))])
+    assert st["elements"] == ["apple.svg", "fish.svg"]  # leaf.svg is not named
+    assert st["weights"] == [2.0, 1.0]
+    assert st["own"] == [{"stiffness": 0.5}, {"rigid": True, "rotation": "fixed:30", "stiffness": 0.5}]
+    session.use_examples("circle")
+    assert session.command() == "repulsionpak pack circle.svg elements.toml -o packing.svg"
+    session.undo()
+    session.undo()
+    assert session.state()["elements"] == []
+    # in a folder: the paths are the manifest's
+    st = session.add_elements([("scene/elements.toml", MANIFEST), ("scene/shapes/apple.svg", _svg("apple.svg")),
+                               ("scene/shapes/fish.svg", _svg("fish.svg"))])
+    assert st["elements"] == ["apple.svg", "fish.svg"] and st["weights"] == [2.0, 1.0]
+
+
+@pytest.mark.parametrize("text, words", [
+    (b'[[element]]\nfile = "apple.svg"\npins = [{x = 1, y = 2}]\n', ["elements.toml", "pins", "repulsionpak pack"]),
+    (b'[[element]]\nfile = "../apple.svg"\n', ["elements.toml", "not inside the files given"]),
+    (b'[[element]]\nfile = "pear.svg"\n', ["elements.toml", "pear.svg", "does not exist"]),
+    (b'[[element]]\nfile = "apple.svg"\nrotaton = "fixed"\n', ["elements.toml", "did you mean 'rotation'"]),
+    (b'[[element]]\nfile = "apple.svg"\nrotation = "limited"\nangle = 40\n', ["about angle 0 only"]),
+])
+def test_a_bad_manifest_is_refused_with_pack_s_message(session, text, words):
+    with pytest.raises(Exception) as exc:
+        session.add_elements([("elements.toml", text), ("apple.svg", _svg("apple.svg"))])
+    for w in words:
+        assert w in str(exc.value), str(exc.value)
+    assert str(session.dir) not in str(exc.value)
+    assert session.state()["elements"] == []
+
+
+def test_page_takes_a_folder_and_a_manifest(page, tmp_path):
+    scene = tmp_path / "scene"
+    (scene / "shapes").mkdir(parents=True)
+    (scene / "elements.toml").write_bytes(MANIFEST)
+    for n in ("apple.svg", "fish.svg", "leaf.svg"):
+        (scene / "shapes" / n).write_bytes(_svg(n))
+    # the manifest and its files through "Add SVGs…"
+    page.set_input_files("#open-elements", [str(scene / "elements.toml"), str(scene / "shapes" / "apple.svg"),
+                                            str(scene / "shapes" / "fish.svg")])
+    page.wait_for_function("window.repulsionpakStudio.state.elements.length === 2")
+    st = _state(page)
+    assert st["weights"] == [2.0, 1.0] and st["own"][1]["rotation"] == "fixed:30"
+    assert page.eval_on_selector("#element-list li:nth-child(2) select.own-rotation", "e => e.value") == "fixed"
+    # a folder through "Add folder…" (webkitdirectory): its own manifest decides
+    other = tmp_path / "plain"
+    (other / "deep").mkdir(parents=True)
+    (other / "leaf.svg").write_bytes(_svg("leaf.svg"))
+    (other / "deep" / "snake.svg").write_bytes(_svg("snake.svg"))
+    (other / "notes.txt").write_text("not an element")
+    page.set_input_files("#open-folder", str(other))
+    page.wait_for_function("window.repulsionpakStudio.state.elements.length === 4")
+    assert _state(page)["elements"] == ["apple.svg", "fish.svg", "leaf.svg", "snake.svg"]
+    # a dropped folder (DataTransfer of a directory entry is not scriptable): its files, as
+    # the page sends them with their relative paths
+    st = page.evaluate("""async (texts) => {
+        const files = texts.map(([p, t]) => { const f = new File([t], p.split('/').pop(), {type: 'image/svg+xml'});
+                                              f.relPath = p; return f; });
+        const fd = new FormData();
+        for (const f of files) fd.append('file', f, f.relPath);
+        const token = new URLSearchParams(location.search).get('token');
+        const r = await fetch('/open-elements?token=' + token, {method: 'POST', body: fd});
+        return await r.json(); }""", [["drop/bird.svg", _svg("bird.svg").decode()], ["drop/x/readme.md", "# no"]])
+    assert st["elements"] == ["apple.svg", "fish.svg", "leaf.svg", "snake.svg", "bird.svg"]

@@ -108,7 +108,40 @@ class Session:
 
     def add_elements(self, files: list[tuple[str, bytes]], secondary: bool = False) -> dict:
         """Add element files (name, contents), or secondary ones (the pockets' elements,
-        ``--secondary``); each is read as ``repulsionpak pack`` reads it."""
+        ``--secondary``); each is read as ``repulsionpak pack`` reads it.
+
+        A name may be a path relative to a chosen folder (``animals/cat.svg``): its input
+        files are added and the others left out. An element manifest (``.toml``) among
+        them adds the files it names with its weights and per-element keys (see
+        :func:`repulsionpak.studio.manifests.manifest_elements`), and only those."""
+        names = [str(n) for n, _ in files]
+        if any(n.lower().endswith(".toml") for n in names) or any(("/" in n or "\\" in n) for n in names):
+            return self._add_tree(files, secondary)
+        return self._add_files([(n, d, 1.0, ()) for n, d in files], secondary)
+
+    def _add_tree(self, files: list[tuple[str, bytes]], secondary: bool) -> dict:
+        """A folder's files, or manifests with the files they name."""
+        from .manifests import is_input, manifest_elements, store_tree
+
+        with self.lock:
+            self._n_files += 1
+            folder = self.dir / "trees" / f"{self._n_files:05d}"
+            folder.mkdir(parents=True)
+        rels = store_tree(folder, files)
+        manifests = [r for r in rels if r.suffix.lower() == ".toml"]
+        if manifests and secondary:
+            raise ParameterError("secondary elements take no manifest: give their SVG files")
+        if manifests:
+            inputs = [r for r in rels if is_input(r)]
+            chosen = [e for m in manifests for e in manifest_elements(folder, m, inputs)]
+            entries = [(f.name, (folder / f).read_bytes(), w, tuple(sorted(own.items()))) for f, w, own in chosen]
+        else:
+            entries = [(r.name, (folder / r).read_bytes(), 1.0, ()) for r in rels if is_input(r)]
+            if not entries:
+                raise ParameterError("no SVG or .path files among those given")
+        return self._add_files(entries, secondary)
+
+    def _add_files(self, files: list[tuple[str, bytes, float, tuple]], secondary: bool) -> dict:
         from .. import load_elements
 
         field = "secondary" if secondary else "elements"
@@ -118,7 +151,7 @@ class Session:
             if len(have) + len(files) > MAX_ELEMENTS:
                 raise ParameterError(f"the studio takes at most {MAX_ELEMENTS} {field} files")
             added = []
-            for name, data in files:
+            for name, data, weight, own in files:
                 name = safe_name(name)
                 stem, dot, ext = name.rpartition(".")
                 k = 2
@@ -131,7 +164,7 @@ class Session:
                     shutil.rmtree(path.parent, ignore_errors=True)
                     raise named_error(exc, path, name) from None
                 have.add(name)
-                added.append(InputFile(name, path))
+                added.append(InputFile(name, path, weight, own))
             if added:
                 label = f"add {added[0].name}" + (f" and {len(added) - 1} more" if len(added) > 1 else "")
                 self._edit(label, dataclasses.replace(self.doc, **{field: current + tuple(added)}))

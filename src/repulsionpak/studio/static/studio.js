@@ -35,7 +35,7 @@
   const edit = (obj) => post("/edit", obj);
   async function upload(path, files) {
     const fd = new FormData();
-    for (const f of files) fd.append("file", f, f.name);
+    for (const f of files) fd.append("file", f, f.relPath || f.webkitRelativePath || f.name);
     return call(path, { method: "POST", body: fd });
   }
 
@@ -145,6 +145,10 @@
     if (ev.target.files.length) upload("/open-elements", ev.target.files);
     ev.target.value = "";
   });
+  q("#open-folder").addEventListener("change", (ev) => {
+    if (ev.target.files.length) upload("/open-elements", ev.target.files);
+    ev.target.value = "";
+  });
   q("#open-secondary").addEventListener("change", (ev) => {
     if (ev.target.files.length) upload("/open-secondary", ev.target.files);
     ev.target.value = "";
@@ -156,12 +160,35 @@
   // files dropped on the page: a zip is a project; an SVG dropped on the container's section
   // opens the container; anywhere else, SVGs are added as elements
   document.addEventListener("dragover", (ev) => { ev.preventDefault(); });
+  // a dropped folder: its files with their paths relative to the folder's parent
+  async function entryFiles(entry, prefix, out) {
+    if (entry.isFile) {
+      const f = await new Promise((ok, bad) => entry.file(ok, bad));
+      f.relPath = prefix + f.name; out.push(f);
+    } else if (entry.isDirectory) {
+      const reader = entry.createReader();
+      for (;;) {
+        const batch = await new Promise((ok, bad) => reader.readEntries(ok, bad));
+        if (!batch.length) break;
+        for (const e of batch) await entryFiles(e, prefix + entry.name + "/", out);
+      }
+    }
+  }
   document.addEventListener("drop", async (ev) => {
     ev.preventDefault();
+    const entries = Array.from(ev.dataTransfer.items || []).map((it) => it.webkitGetAsEntry && it.webkitGetAsEntry())
+      .filter((e) => e);
+    if (entries.some((e) => e.isDirectory)) {
+      const tree = [];
+      for (const e of entries) await entryFiles(e, "", tree);
+      await upload("/open-elements", tree);
+      return;
+    }
     const files = Array.from(ev.dataTransfer.files || []);
     const zips = files.filter((f) => /\.zip$/i.test(f.name)), svgs = files.filter((f) => /\.(svg|path)$/i.test(f.name));
     if (zips.length) { await upload("/open-project", zips.slice(0, 1)); return; }
-    if (!svgs.length) { showError("drop SVG or .path files, or a saved project (.zip)"); return; }
+    if (files.some((f) => /\.toml$/i.test(f.name))) { await upload("/open-elements", files); return; }
+    if (!svgs.length) { showError("drop SVG or .path files, a folder, a manifest (.toml) with its files, or a saved project (.zip)"); return; }
     const onContainer = ev.target.closest && ev.target.closest("#panel section") === q("#open-container").closest("section");
     if (onContainer) {
       await upload("/open-container", svgs.slice(0, 1));
