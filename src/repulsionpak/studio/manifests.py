@@ -21,14 +21,18 @@ from .uploads import INPUT_SUFFIXES, check_size, named_error
 HELD_KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight")
 
 
-def relative_path(name: str) -> PurePosixPath:
+def relative_path(name: str, strict: bool = True) -> PurePosixPath:
     """An uploaded file's path relative to the chosen folder (control characters
-    replaced); raises :class:`ParameterError` for ``..`` or an absolute path, which would
-    lead out of the session's folder."""
+    replaced). ``strict``: raises :class:`ParameterError` for ``..`` or an absolute path,
+    which would lead out of the uploaded files (a manifest's ``file``); otherwise such
+    parts are dropped (an uploaded file's name is only a name)."""
     text = str(name)
     parts = [p for p in re.split(r"[\\/]", text) if p not in ("", ".")]
-    if not parts or ".." in parts or text.startswith(("/", "\\")) or re.match(r"^[A-Za-z]:", text):
+    if strict and (".." in parts or text.startswith(("/", "\\")) or re.match(r"^[A-Za-z]:", text)):
         raise ParameterError(f"{name}: not a relative file name inside the files given")
+    parts = [p for p in parts if p != ".." and not re.match(r"^[A-Za-z]:$", p)]
+    if not parts:
+        raise ParameterError(f"{name}: not a file name")
     return PurePosixPath(*(re.sub(r"[\x00-\x1f]", "_", p)[:200] for p in parts))
 
 
@@ -148,7 +152,7 @@ def store_tree(folder: Path, files: list[tuple[str, bytes]]) -> list[PurePosixPa
     relative paths (each size bounded); returns the paths in upload order."""
     out = []
     for name, data in files:
-        rel = relative_path(name)
+        rel = relative_path(name, strict=False)
         check_size(str(rel), len(data))
         dest = folder / rel
         dest.parent.mkdir(parents=True, exist_ok=True)
