@@ -290,3 +290,64 @@ def test_page_takes_a_folder_and_a_manifest(page, tmp_path):
         const r = await fetch('/open-elements?token=' + token, {method: 'POST', body: fd});
         return await r.json(); }""", [["drop/bird.svg", _svg("bird.svg").decode()], ["drop/x/readme.md", "# no"]])
     assert st["elements"] == ["apple.svg", "fish.svg", "leaf.svg", "snake.svg", "bird.svg"]
+
+
+# -- add copy, undoable; painted room grown into --------------------------------------------
+
+
+def test_an_added_copy_is_undone_and_redone(session):
+    session.use_examples("circle", ["apple"])
+    for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
+        session.set_setting(k, v)
+    session.start(paused=True)
+    ctl = session.controller
+    _wait(lambda: ctl.sim is not None)
+    _wait(lambda: ctl.paused and ctl.commands.empty())
+    n0 = ctl.sim.model.n_elements
+    with pytest.raises(ParameterError, match="'x' must be a finite number"):
+        session.add_copy(1, float("nan"), 0.0)
+    st = session.add_copy(1, 250.0, 250.0)
+    assert ctl.sim.model.n_elements == n0 + 1 and st["history"]["undo_label"] == "add a copy of element 1"
+    m = ctl.sim.model
+    a, b = int(m.elem_vstart[n0]), int(m.elem_vstart[n0 + 1])
+    x0 = ctl.sim.state.x[a:b].copy()
+    assert np.allclose(x0.mean(axis=0) * ctl.unit, [250.0, 250.0], atol=15.0)  # where it was put
+    session.undo()
+    _wait(lambda: n0 in ctl.removed)
+    assert n0 in ctl.layout_message()["removed"]
+    session.redo()
+    _wait(lambda: n0 not in ctl.removed and np.abs(ctl.sim.state.x[a:b] - x0).max() < 1e-9)
+    assert ctl.sim.state.moving[n0]
+    # a copy outside the container is refused and leaves no history
+    st = session.add_copy(1, 5000.0, 5000.0)
+    assert ctl.sim.model.n_elements == n0 + 1 and st["history"]["undo_label"] == "add a copy of element 1"
+    session.cancel(wait=60)
+
+
+def test_painted_room_raises_the_planned_sizes(session):
+    """Painting doubles the container: every element's planned size grows by √2 and the
+    run, settling or not, grows again (the elements take the room)."""
+    session.use_examples("circle", ["apple", "fish"])
+    for k, v in (("count", "10"), ("gap", "12"), ("seed", "3"), ("pocket_fill", False)):
+        session.set_setting(k, v)
+    session.start()
+    ctl = session.controller
+    _wait(lambda: ctl.sim is not None and ctl.sim.state.iteration > 100)
+    ctl.submit({"cmd": "pause"})
+    _wait(lambda: ctl.paused and ctl.commands.empty())
+    sim = ctl.sim
+    cap0 = sim.max_growth.copy()
+    area0 = sim.model.container_area
+    growth0 = np.asarray(sim.state.growth).copy()
+    st = session.stroke({"mode": "paint", "points": [[420, 250], [720, 250], [720, 700]], "radius": 150})
+    _wait(lambda: sim.model.container_area > 1.3 * area0, timeout=30)
+    ratio = sim.model.container_area / area0
+    assert sim.max_growth == pytest.approx(cap0 * np.sqrt(ratio), rel=1e-9)
+    assert sim.state.allow_growth and sim.state.settle_left is None
+    ctl.submit({"cmd": "resume"})
+    _wait(lambda: (np.asarray(sim.state.growth) > cap0).any() or not session.running, timeout=240)
+    grown = np.asarray(sim.state.growth)
+    assert (grown > growth0 + 1e-6).sum() >= 5, (growth0, grown)  # most elements grew again
+    assert (grown > cap0).any(), (cap0, grown)  # some past the first planned size
+    assert st["region_area"] > 1.3 * ctl.container.region.area / ratio
+    session.cancel(wait=60)

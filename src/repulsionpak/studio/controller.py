@@ -59,6 +59,8 @@ class StudioController(LiveController):
         self.layout_id = layout_id  # the page tells layouts apart by id: never reuse one
         self.cancelled = False
         self._removed_x = {}
+        self._area0 = None  # the run's first container area (simulation units)
+        self._room_scale = 1.0  # how far the planned sizes were raised for painted room
         self.stage = "meshing and placing"
         self.paused = bool(paused)
         self.phase = "preparing"
@@ -119,6 +121,9 @@ class StudioController(LiveController):
             return
         if cmd["cmd"] in ("remove", "unremove") and self._remove_undoable(cmd):
             return
+        if cmd["cmd"] == "add":
+            self._add_reported(cmd)
+            return
         if cmd["cmd"] == "placed":
             try:
                 cmd["future"].set_result(self._current_placed())
@@ -126,6 +131,46 @@ class StudioController(LiveController):
                 cmd["future"].set_exception(exc)
             return
         super()._apply(cmd)
+
+    def _add_reported(self, cmd: dict) -> None:
+        """The live view's ``add``, its new element's index told through ``cmd["future"]``
+        (None: refused); the copy's planned size is raised with the room painted so far."""
+        sim = self.sim
+        n0 = None if sim is None else sim.model.n_elements
+        added = False
+        try:
+            super()._apply(cmd)
+            sim = self.sim
+            added = sim is not None and n0 is not None and sim.model.n_elements > n0
+            if added and self._room_scale != 1.0:
+                sim.model.max_growth[n0:] *= self._room_scale
+                sim.max_growth = sim.model.max_growth * sim.params.max_size
+        finally:
+            if "future" in cmd and not cmd["future"].done():
+                cmd["future"].set_result(n0 if added else None)
+
+    def _raise_planned_sizes(self, area: float) -> None:
+        """Let the elements grow into painted room: the planned size of every element
+        scaled by the square root of the container's area over the run's first area (never
+        below 1: erased room does not shrink them), growth and the stopping rule restarted.
+
+        Notes
+        -----
+        The run sized its elements for its first container (count and gap fixed): with
+        more room, the same count fills it at a length scale √(area ratio) larger. Growth
+        stops at ``max_growth`` (``repulsionpak.sim``), so without this the new room stays
+        empty unless copies are added.
+        """
+        sim = self.sim
+        m = sim.model
+        if self._area0 is None:
+            self._area0 = float(m.container_area)
+        scale = float(np.sqrt(max(1.0, area / self._area0)))
+        if scale != self._room_scale:
+            m.max_growth = m.max_growth * (scale / self._room_scale)
+            self._room_scale = scale
+        st = sim.state
+        st.settle_left, st.allow_growth = None, True  # a settling run grows again
 
     def _remove_undoable(self, cmd: dict) -> bool:
         """``remove`` as the live view does it, keeping where the element was;
@@ -166,6 +211,7 @@ class StudioController(LiveController):
         if sim is not None and sim.phase == "primary" and not new.region.is_empty:
             m = sim.model
             region_sim = shapely.affinity.scale(new.region, 1 / self.unit, 1 / self.unit, origin=(0, 0))
+            self._raise_planned_sizes(float(region_sim.area))
             minx, miny, maxx, maxy = region_sim.bounds
             m.field = container_field(region_sim, m.gap / 3.0, 0.25 * max(maxx - minx, maxy - miny))
             m.corners = reflex_corners(region_sim)

@@ -280,6 +280,36 @@ class Session:
             self.history.push(f"remove element {index}", self.doc, cmd, dict(cmd, cmd="unremove"))
             return self.state()
 
+    def add_copy(self, index: int, x: float, y: float, timeout: float = 60.0) -> dict:
+        """Add a copy of element ``index`` of the running simulation growing at (x, y)
+        (container units); undoable: undo removes the copy, redo puts it back where it
+        was. A copy the run refuses (outside the container, a frozen element) is told to
+        the page and leaves no history."""
+        from concurrent.futures import Future
+        from concurrent.futures import TimeoutError as FutureTimeout
+
+        from ..live.protocol import parse_command
+
+        try:
+            cmd = parse_command({"cmd": "add", "index": int(index), "x": float(x), "y": float(y)})
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
+        if not self.running:
+            raise ParameterError("add a copy while a run goes on: press Start")
+        fut: Future = Future()
+        self.controller.submit(dict(cmd, future=fut))
+        try:
+            new = fut.result(timeout=timeout)
+        except FutureTimeout:
+            raise ParameterError("the run did not take the copy in time") from None
+        except RuntimeError as exc:  # the run was restarted meanwhile
+            raise ParameterError(str(exc)) from None
+        with self.lock:
+            if new is not None:
+                self.history.push(f"add a copy of element {index}", self.doc,
+                                  {"cmd": "unremove", "index": new}, {"cmd": "remove", "index": new})
+            return self.state()
+
     def moved(self, index: int, dx: float, dy: float) -> dict:
         """Record a drag the page made (it moved the element itself): undo moves it back."""
         with self.lock:

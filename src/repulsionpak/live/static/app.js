@@ -15,7 +15,8 @@
   // when they come faster than the page paints); drawMs: time spent writing the paths
   window.repulsionpak = { get frames() { return frames; }, get received() { return received; },
                           get drawMs() { return drawMs; }, get layout() { return layout; },
-                          get status() { return status; } };
+                          get status() { return status; },
+                          onAdd: null };  // a page around this one may take the add-copy clicks
 
   function send(cmd) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(cmd)); }
   function colour(t) { return "hsl(" + ((t * 137.5) % 360).toFixed(1) + " 55% 68%)"; }
@@ -194,7 +195,8 @@
   stage.addEventListener("pointerdown", (ev) => {
     if (adding) {
       const p = svgPoint(ev);
-      send({ cmd: "add", index: selected, x: p.x, y: p.y });
+      if (window.repulsionpak.onAdd) window.repulsionpak.onAdd(selected, p.x, p.y);
+      else send({ cmd: "add", index: selected, x: p.x, y: p.y });
       setAdding(false);
       ev.preventDefault();
       return;

@@ -225,7 +225,9 @@
   q("#undo").addEventListener("click", () => edit({ op: "undo" }));
   q("#redo").addEventListener("click", () => edit({ op: "redo" }));
 
-  // pins and removals go through the history (undoable): taken before app.js sends them itself
+  // added copies, pins and removals go through the history (undoable): taken before app.js
+  // sends them itself
+  window.repulsionpak.onAdd = (i, x, y) => edit({ op: "add", index: i, x, y });
   q("#pin").addEventListener("click", (ev) => {
     ev.stopImmediatePropagation();
     const g = stage.querySelector(".element.selected");
