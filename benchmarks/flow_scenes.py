@@ -7,9 +7,12 @@ guide drawn here (a spiral, waves, spokes, an S), writes the packing, evaluates 
 field at its centroid (:func:`repulsionpak.flow.alignment_angles`).
 
     python benchmarks/flow_scenes.py OUTDIR [--scene NAME ...] [--seed N] [--count N] [--png] [--inputs-only]
+        [--bend]
 
 prints one JSON line per scene: the alignment of the primaries and of all copies (median,
-p90, max, degrees), the gap statistics relative to the gap, overlap and the invariants.
+p90, max, degrees), the curvature match of the primaries' art with the streamlines
+(:func:`curvature_stats`), the gap statistics relative to the gap, overlap, distortion
+and the promises. ``--bend`` sets ``flow_bend`` on every element (outputs ``NAME-bend.*``).
 """
 
 from __future__ import annotations
@@ -60,7 +63,17 @@ def leaf_svg() -> str:
                 125, 50)
 
 
-ELEMENTS = {"ellipse": ellipse_svg, "fish": fish_svg, "leaf": leaf_svg}
+def eel_svg() -> str:
+    t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    body = np.column_stack([95 + 75 * np.cos(t), 20 + 11 * np.sin(t)])
+    tail = np.array([[30, 20], [0, 4], [10, 20], [0, 36]])
+    fin = np.array([[60, 12], [90, 2], [125, 11]])
+    return _svg(f'<path d="{_d(tail, True)}" fill="#2a9d8f"/><path d="{_d(fin, True)}" fill="#2a9d8f"/>'
+                f'<path d="{_d(body, True)}" fill="#8ecae6"/><circle cx="155" cy="17" r="3" fill="#223"/>',
+                170, 40)
+
+
+ELEMENTS = {"ellipse": ellipse_svg, "fish": fish_svg, "leaf": leaf_svg, "eel": eel_svg}
 
 
 # -- containers and guides ------------------------------------------------------------
@@ -118,7 +131,12 @@ SCENES = {
     "waves": (band_svg, waves_guides, ["fish", "ellipse"]),
     "radial": (disc_svg, radial_guides, ["leaf", "ellipse"]),
     "s": (square_svg, s_guides, ["ellipse", "fish", "leaf"]),
+    "school": (disc_svg, spiral_guides, ["fish", "eel"]),
 }
+
+
+#: scenes whose elements have a directed axis (manifest ``axis``): a school swims one way
+SCENE_AXIS = {"school": 0.0}
 
 
 def write_scene(name: str, outdir: Path) -> tuple[Path, Path, list[Path]]:
@@ -137,34 +155,88 @@ def write_scene(name: str, outdir: Path) -> tuple[Path, Path, list[Path]]:
     return c, g, files
 
 
-def run_scene(name: str, outdir: Path, seed: int = 1, count: int | None = None, png: bool = False) -> dict:
+def run_scene(name: str, outdir: Path, seed: int = 1, count: int | None = None, png: bool = False,
+              bend: bool = False) -> dict:
+    import dataclasses
+
     from repulsionpak import load_container, load_elements, pack
     from repulsionpak.flow import alignment_angles, field_from_guides, load_guides
-    from repulsionpak.measure import evaluate_file
+    from repulsionpak.measure import check_promises, evaluate_file
     from repulsionpak.params import Params, PlacementParams
+    from repulsionpak.types import ElementControls
 
     c, g, files = write_scene(name, outdir)
     container = load_container(c)
     elements = load_elements(files)
+    axis = SCENE_AXIS.get(name)
+    if bend or axis is not None:
+        elements = [dataclasses.replace(e, controls=ElementControls(axis=axis, flow_bend=bend)) for e in elements]
     field = field_from_guides(load_guides(g), container.region.bounds)
     params = Params(seed=seed, placement=PlacementParams(count=count))
     packing = pack(container, elements, params, flow=field)
-    out = outdir / f"{name}.svg"
+    tag = f"{name}-bend" if bend else name
+    out = outdir / f"{tag}.svg"
     packing.save(out)
     if png:
-        (outdir / f"{name}.png").write_bytes(packing.png_bytes(900))
-    prim = alignment_angles([p for p in packing.placed if p.kind == "primary"], elements, field)
+        (outdir / f"{tag}.png").write_bytes(packing.png_bytes(900))
+    primaries = [p for p in packing.placed if p.kind == "primary"]
+    prim = alignment_angles(primaries, elements, field)
     every = alignment_angles(packing.placed, elements, field)
-    ev = evaluate_file(out)
-    return {"scene": name, "primary": prim.to_dict(), "all": every.to_dict(), "evaluate": _brief(ev)}
+    ev = evaluate_file(out, sources=elements)
+    ev["promises"] = check_promises(ev, {e.source: _category(e) for e in elements},
+                                    sources=[p.source for p in packing.placed])
+    return {"scene": tag, "primary": prim.to_dict(), "all": every.to_dict(),
+            "curvature": curvature_stats(primaries, elements, field, params), "evaluate": _brief(ev),
+            "straightened": len(packing.verification.straightened)}
+
+
+def curvature_stats(placed, elements, field, params, min_turn: float = 5.0) -> dict:
+    """The curvature match of the copies (:func:`repulsionpak.flow.bend.curvature_match`),
+    as turnings over each copy's length (degrees): the median |art − streamline|; over
+    the copies whose streamline turns ≥ ``min_turn``°: the median relative error
+    |κ_art − κ_stream| / |κ_stream|, the same against the capped target (the streamline's
+    turning limited to the element's bend cap, :func:`repulsionpak.flow.hook.bend_cap`),
+    and the share bent the right way."""
+    from repulsionpak.flow.align import element_axis
+    from repulsionpak.flow.bend import curvature_match, source_axis
+    from repulsionpak.flow.hook import bend_cap
+
+    m = curvature_match(placed, elements, field)
+    by = {e.source: e for e in elements}
+    caps = {k: bend_cap(e, source_axis(e.controls, element_axis(e)[0]), params) for k, e in by.items()}
+    art = np.degrees(m["art"] * m["length"])
+    stream = np.degrees(m["stream"] * m["length"])
+    cap = np.degrees(np.array([caps[k] for k in m["source"]]))
+    target = np.clip(stream, -cap, cap)
+    big = np.abs(stream) >= min_turn
+    r = lambda v: round(float(v), 3)  # noqa: E731
+    return {"n": int(len(art)), "n_turning": int(big.sum()),
+            "art_turn_median": r(np.median(np.abs(art))), "stream_turn_median": r(np.median(np.abs(stream))),
+            "cap_median": r(np.median(cap)),
+            "turn_error_median": r(np.median(np.abs(art - stream))),
+            "rel_error_median": r(np.median(np.abs(art - stream)[big] / np.abs(stream[big]))) if big.any() else None,
+            "rel_error_capped_median": r(np.median(np.abs(art - target)[big] / np.abs(target[big]))) if big.any() else None,
+            "right_sign": r(np.mean(np.sign(art[big]) == np.sign(stream[big]))) if big.any() else None}
+
+
+def _category(element) -> str:
+    """``convex`` for art covering ≥ 0.9 of its hull (the stricter distortion promise),
+    else ``spiky``."""
+    from repulsionpak.art_area import art_area
+
+    g = art_area(element.paths)
+    return "convex" if g.area >= 0.9 * g.convex_hull.area else "spiky"
 
 
 def _brief(ev: dict) -> dict:
     g = ev["gap"]
+    d = ev.get("distortion") or {}
     return {"area_fraction": round(ev["area_fraction"], 4), "overlap_area": ev["overlap_area"],
             "outside": ev["n_outside"], "primaries": ev["n_primary"], "secondaries": ev["n_secondary"],
             "gap_median_rel": round(g["median"] / g["requested"], 3),
-            "gap_p10_rel": round(g["p10"] / g["requested"], 3)}
+            "gap_p10_rel": round(g["p10"] / g["requested"], 3),
+            "distortion_p95": None if d.get("p95") is None else round(d["p95"], 4),
+            "promises": {k: v.get("ok") if isinstance(v, dict) else v for k, v in ev["promises"].items()}}
 
 
 def main() -> None:
@@ -175,12 +247,13 @@ def main() -> None:
     ap.add_argument("--count", type=int, default=None)
     ap.add_argument("--png", action="store_true")
     ap.add_argument("--inputs-only", action="store_true", help="only write the scenes' SVG inputs")
+    ap.add_argument("--bend", action="store_true", help="every element bends along the flow (flow_bend)")
     a = ap.parse_args()
     for name in a.scene or list(SCENES):
         if a.inputs_only:
             write_scene(name, a.outdir)
             continue
-        print(json.dumps(run_scene(name, a.outdir, a.seed, a.count, a.png)), flush=True)
+        print(json.dumps(run_scene(name, a.outdir, a.seed, a.count, a.png, a.bend)), flush=True)
 
 
 if __name__ == "__main__":

@@ -131,3 +131,91 @@ def test_copies_align_with_a_wave_flow(fish):
     assert 0.9 <= m["gap"]["median"] / packing.gap <= 1.1
     svg = packing.svg_text(debug_layers=True)
     assert 'id="debug-flow"' in svg and 'id="debug-flow"' not in packing.svg_text()
+
+
+def test_bend_points_and_streamline_curvature(tmp_path):
+    import shapely
+
+    from repulsionpak.flow.bend import bend_points, max_turn, streamline_curvature
+    from repulsionpak.measure.similarity import distortion
+
+    # a clockwise circle (SVG's circle runs clockwise on screen): the field's angle grows along it
+    g = _svg(tmp_path / "ring.svg", '<circle cx="200" cy="200" r="120" fill="none" stroke="black"/>')
+    field = field_from_guides(load_guides(g), (0, 0, 400, 400))
+    k = streamline_curvature(field, np.array([[320.0, 200.0], [200.0, 80.0]]), np.array([80.0, 80.0]))
+    assert np.allclose(k, 1 / 120, rtol=0.1), k
+    # the bend keeps lengths along the axis: the axis becomes an arc of radius 1/κ
+    s = np.column_stack([np.linspace(-50, 50, 11), np.zeros(11)])
+    b = bend_points(s, np.zeros(2), np.array([1.0, 0.0]), 0.01)
+    assert np.allclose(np.hypot(b[:, 0], b[:, 1] - 100), 100) and b[:, 1].min() >= 0  # turns towards +y
+    assert np.isclose(np.hypot(*np.diff(b, axis=0).T).sum(), 100, rtol=1e-3)
+    # the cap: the bent art's distortion is the budget
+    ell = shapely.affinity.scale(shapely.Point(0, 0).buffer(1, 64), 80, 20)
+    turn = max_turn(ell, 0.0, 0.04)
+    bent = shapely.transform(ell, lambda p: bend_points(p, np.zeros(2), np.array([1.0, 0.0]), turn / 160))
+    assert math.radians(5) < turn < math.radians(20)
+    assert abs(distortion(ell, bent) - 0.04) < 0.006
+
+
+@pytest.fixture(scope="module")
+def ring_packings(tmp_path_factory):
+    """A long ellipse packed along a circular flow, with and without flow_bend."""
+    import dataclasses
+
+    from repulsionpak import load_container, load_elements, pack
+    from repulsionpak.params import Params, PlacementParams
+    from repulsionpak.types import ElementControls
+
+    d = tmp_path_factory.mktemp("bend")
+    e = load_elements([_svg(d / "ell.svg", '<ellipse cx="80" cy="20" rx="80" ry="20" fill="#4a7fb5"/>', 160, 40)])
+    c = load_container(_svg(d / "disc.svg", '<circle cx="200" cy="200" r="190" fill="none" stroke="black"/>'))
+    g = _svg(d / "ring.svg", '<circle cx="200" cy="200" r="120" fill="none" stroke="black"/>')
+    field = field_from_guides(load_guides(g), c.region.bounds)
+    out = {}
+    for bend in (False, True):
+        els = [dataclasses.replace(x, controls=ElementControls(flow_bend=bend)) for x in e]
+        out[bend] = (els, pack(c, els, Params(seed=1, placement=PlacementParams(count=12)), flow=field))
+    return field, out
+
+
+def test_flow_bend_curves_copies_along_the_streamline(ring_packings):
+    from repulsionpak.flow.bend import curvature_match
+    from repulsionpak.flow.hook import bend_cap
+
+    field, out = ring_packings
+    turns = {}
+    for bend, (els, packing) in out.items():
+        m = curvature_match([p for p in packing.placed if p.kind == "primary"], els, field)
+        turns[bend] = np.degrees(m["art"] * m["length"]), np.degrees(m["stream"] * m["length"])
+        assert len(m["art"]) >= 10
+    art, stream = turns[True]
+    cap = math.degrees(bend_cap(out[True][0][0], 0.0))
+    target = np.clip(stream, -cap, cap)
+    turning = np.abs(stream) >= 5
+    assert turning.sum() >= 8
+    assert np.mean(np.sign(art[turning]) == np.sign(stream[turning])) >= 0.9, (art, stream)
+    rel = np.abs(art - target)[turning] / np.abs(target[turning])
+    assert np.median(rel) <= 0.4, (art, target)
+    # without flow_bend the copies are bent only by their contacts, about as much as the cap
+    # allows the flow's bend (the convex ellipse's promise is strict) but not all along the flow
+    free, free_stream = turns[False]
+    along = np.sign(free_stream) * free
+    assert np.mean(along > 0) <= 0.8 and np.mean(along) < 0.75 * np.mean(np.sign(stream) * art), (free, art)
+
+
+def test_flow_bend_keeps_the_packing_promises(ring_packings):
+    import dataclasses
+
+    from repulsionpak.flow.hook import check_elements
+    from repulsionpak.types import ElementControls
+
+    _, out = ring_packings
+    els, packing = out[True]
+    m = packing.evaluate(distortion=True)
+    assert m["overlap_area"] == 0.0 and m["n_outside"] == 0
+    assert 0.9 <= m["gap"]["median"] / packing.gap <= 1.1 and m["gap"]["p10"] / packing.gap >= 0.8
+    assert m["distortion"]["p95"] <= 0.08, m["distortion"]  # the ellipse is convex: the stricter promise
+    assert packing.verification.straightened == []
+    bad = [dataclasses.replace(els[0], controls=ElementControls(flow="ignore", flow_bend=True))]
+    with pytest.raises(ParameterError, match="flow_bend needs an element that follows the flow"):
+        check_elements(bad)

@@ -14,6 +14,7 @@ from ..errors import ParameterError
 from .align import element_axis, flow_targets
 from .field import FlowField, field_from_guides
 from .guides import load_guides
+from .bend import BEND_SHARE, FlowBend, max_turn
 from .steer import FlowSteer
 
 #: degrees a free copy that aligns may turn away from the field (its rotation window)
@@ -22,7 +23,7 @@ ALIGN_TOLERANCE = 4.0
 
 def run_field(flow, container) -> FlowField:
     """``flow`` (a :class:`FlowField`, or the path of a guide SVG) as the field over
-    ``container``; refuses ``flow_bend``, which is not built."""
+    ``container``."""
     if isinstance(flow, FlowField):
         return flow
     if isinstance(flow, (str, os.PathLike)):
@@ -31,11 +32,14 @@ def run_field(flow, container) -> FlowField:
 
 
 def check_elements(elements: Sequence) -> None:
+    """Refuse ``flow_bend`` on an element that does not follow the flow (``flow = "ignore"``)
+    or is rigid: its copies have no streamline to bend along, or cannot bend."""
     for e in elements:
         c = getattr(e, "controls", None)
-        if c is not None and c.flow_bend:
-            raise ParameterError(f"{e.source}: flow_bend is not supported yet (elements turn with the "
-                                 "flow but do not bend along it); leave it false")
+        if c is not None and c.flow_bend and (c.flow == "ignore" or c.rigid):
+            why = 'flow = "ignore"' if c.flow == "ignore" else "rigid = true"
+            raise ParameterError(f"{e.source}: flow_bend needs an element that follows the flow and may "
+                                 f"bend; it has {why}")
 
 
 class Orienter:
@@ -57,9 +61,12 @@ class Orienter:
         return out
 
 
-def attach(model, field: FlowField, placement, ctrls: Sequence, elements: Sequence, pinned, unit: float) -> None:
+def attach(model, field: FlowField, placement, ctrls: Sequence, elements: Sequence, pinned, unit: float,
+           params=None) -> None:
     """Steer the model's free aligning copies (``ctrls`` per copy, ``pinned`` copies left
-    alone) by ``field``; the model's rotation windows are set for the start."""
+    alone) by ``field``; the model's rotation windows are set for the start. Copies whose
+    controls ask for ``flow_bend`` also bend along it (:mod:`.bend`), within a share of the
+    shape promise of ``params`` (default parameters when None)."""
     n = len(ctrls)
     idx = np.asarray(placement.template_index)[:n]
     free = ~np.asarray(pinned, bool)[:n] if pinned is not None else np.ones(n, bool)
@@ -80,9 +87,53 @@ def attach(model, field: FlowField, placement, ctrls: Sequence, elements: Sequen
     model.rot_lo[steer.index], model.rot_hi[steer.index] = steer.windows(
         np.asarray(placement.position, float)[steer.index])
     model.flow = steer
+    bending = [j for j, k in enumerate(steer.index) if ctrls[int(k)].flow_bend]
+    if bending:
+        steer.bend = _bend(model, field, steer, np.array(bending), idx, elements, params, unit)
 
 
-__all__ = ["ALIGN_TOLERANCE", "Orienter", "attach", "check_elements", "extend", "run_field"]
+def bend_cap(element, axis_deg: float, params=None) -> float:
+    """The largest turning (radians, over the art's length along ``axis_deg``) a copy of
+    ``element`` may bend: its art distortion stays within :data:`~.bend.BEND_SHARE` of the
+    verification's straightening limit (``verify.straighten`` × ``sim.bend_limit``, or
+    ``bend_limit_convex`` for an element covering ≥ 0.9 of its convex hull, as
+    :func:`repulsionpak.render.placed.is_convex`) of ``params`` (defaults when None)."""
+    import shapely  # noqa: PLC0415
+
+    from ..art_area import art_area  # noqa: PLC0415
+    from ..params import Params  # noqa: PLC0415
+
+    p = params if params is not None else Params()
+    g = art_area(element.paths)
+    hull = g.convex_hull.area
+    convex = hull > 0 and g.area >= 0.9 * hull
+    limit = (p.sim.bend_limit_convex if convex else p.sim.bend_limit) * p.verify.straighten
+    return max_turn(shapely.make_valid(g), axis_deg, BEND_SHARE * limit)
+
+
+def _bend(model, field: FlowField, steer: FlowSteer, rows: np.ndarray, idx: np.ndarray, elements: Sequence,
+          params, unit: float) -> FlowBend:
+    """The bend of the aligning copies ``steer.index[rows]`` (``idx``: each copy's
+    element), applied to their rest shapes at once; their mesh bend limits give up
+    :data:`~.bend.BEND_SHARE` of the budget to the bend."""
+    copies = steer.index[rows]
+    offset = steer.offset[rows]
+    turns: dict = {}
+    turn = np.zeros(len(copies))
+    for r, (k, off) in enumerate(zip(copies, offset)):
+        i = int(idx[k])
+        key = (i, round(float(off), 9))
+        if key not in turns:
+            turns[key] = bend_cap(elements[i], math.degrees(-off), params)
+        turn[r] = turns[key]
+    axis = steer.rest[rows] - offset  # the axis in the placed rest shape's frame
+    bend = FlowBend.for_copies(field, model, copies, axis, turn, unit)
+    model.bend_limit[copies] *= 1.0 - BEND_SHARE
+    bend.update(model.x_rest.copy(), model)  # the start: bent for the placed positions
+    return bend
+
+
+__all__ = ["ALIGN_TOLERANCE", "Orienter", "attach", "bend_cap", "check_elements", "extend", "run_field"]
 
 
 def extend(model, base, ctrls: Sequence, angles: np.ndarray) -> None:

@@ -30,6 +30,7 @@ class FlowSteer:
     half: np.ndarray
     rest: np.ndarray
     unit: float
+    bend: object | None = None  # repulsionpak.flow.bend.FlowBend: copies that bend along the flow
 
     @staticmethod
     def for_copies(field, positions: np.ndarray, angles: np.ndarray, ctrls, axes: np.ndarray,
@@ -50,7 +51,10 @@ class FlowSteer:
 
     def update(self, x: np.ndarray, model) -> None:
         """Move the rotation windows of the aligning copies to the field at their
-        centroids (``x``: the vertices, simulation units)."""
+        centroids (``x``: the vertices, simulation units); the bending copies' rest shapes
+        follow the streamlines through them (:class:`~repulsionpak.flow.bend.FlowBend`)."""
+        if self.bend is not None:
+            self.bend.update(x, model)
         if not len(self.index):
             return
         vs = model.elem_vstart
