@@ -351,3 +351,135 @@ def test_painted_room_raises_the_planned_sizes(session):
     assert (grown > cap0).any(), (cap0, grown)  # some past the first planned size
     assert st["region_area"] > 1.3 * ctl.container.region.area / ratio
     session.cancel(wait=60)
+
+
+# -- flow guides ------------------------------------------------------------------------------
+
+
+def test_guides_reach_the_command_the_run_and_the_project(session, tmp_path):
+    """A guide drawn left to right: the command gets --flow guides.svg, the copies of the
+    export lie along it (angles measured on the art against the field), and the command run
+    in the unpacked project writes the same bytes."""
+    from repulsionpak.flow import alignment_angles, field_from_guides, load_guides
+
+    session.use_examples("circle", ["fish", "leaf"])
+    with pytest.raises(ParameterError, match="two distinct points"):
+        session.guide({"points": [[10, 10], [10, 10]]})
+    st = session.guide({"points": [[60, 400], [250, 300], [440, 200]]})
+    assert st["history"]["undo_label"] == "guide" and st["guides"][0][0] == [60.0, 400.0]
+    assert st["field"].count("M") > 100  # the field's arrows: shaft and head each
+    for k, v in (("count", "12"), ("gap", "12"), ("seed", "4"), ("pocket_fill", False)):
+        session.set_setting(k, v)
+    assert session.command() == ("repulsionpak pack circle.svg elements/fish.svg elements/leaf.svg -o packing.svg "
+                                 "--flow guides.svg --gap 12 --seed 4 --count 12 --no-pocket-fill")
+    session.start()
+    _finish(session)
+    svg = session.export("svg")
+    proj = tmp_path / "proj"
+    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    _cli_in(proj, session.command())
+    assert (proj / "packing.svg").read_bytes() == svg
+    container, placed, _ = repulsionpak.read_packing_svg(proj / "packing.svg")
+    field = field_from_guides(load_guides(proj / "guides.svg"), container.region.bounds)
+    els = repulsionpak.load_elements([EX / "elements" / "fish.svg", EX / "elements" / "leaf.svg"])
+    stats = alignment_angles([p for p in placed if p.kind == "primary"], els, field)
+    assert len(stats.angles) >= 10
+    assert np.median(stats.angles) < 6.0 and np.percentile(stats.angles, 90) < 12.0, stats.angles
+    other = Session()
+    try:
+        assert other.open_project(session.project_zip())["guides"] == st["guides"]
+        assert other.command() == session.command()
+    finally:
+        other.close()
+    session.clear_guides()
+    assert "--flow" not in session.command() and session.state()["field"] == ""
+    session.undo()
+    assert session.state()["guides"] == st["guides"]
+
+
+def test_live_view_scene_carries_the_field_of_flow(tmp_path):
+    """``pack --live --flow G.svg``: the page's scene holds the field's arrows, each
+    pointing along the guide (a straight guide: every arrow's shaft is parallel to it)."""
+    import re
+
+    from repulsionpak.live import LiveRun
+    from repulsionpak.params import Params
+    from repulsionpak.studio.guides import guides_svg
+
+    cont = repulsionpak.load_container(EX / "containers" / "circle.svg")
+    g = tmp_path / "g.svg"
+    g.write_text(guides_svg([((40.0, 400.0), (460.0, 100.0))], (0, 0, 500, 500)))
+    run = LiveRun(cont, Params(gap=12.0), port=0, open_browser=False, flow=g)
+    d = run.controller.scene()["field"]
+    shafts = re.findall(r"M([-\d.]+) ([-\d.]+)L([-\d.]+) ([-\d.]+)M", d)
+    assert len(shafts) > 300
+    v = np.array([[float(c) - float(a), float(dd) - float(b)] for a, b, c, dd in shafts])
+    ang = np.degrees(np.arctan2(v[:, 1], v[:, 0]))
+    want = np.degrees(np.arctan2(-300.0, 420.0))
+    assert np.abs(ang - want).max() < 1.0
+    assert "field" not in LiveRun(cont, Params(gap=12.0), port=0, open_browser=False).controller.scene()
+
+
+def test_page_guide_drawn_with_the_mouse_aligns_the_copies_and_add_copy_undoes(page, tmp_path):
+    from repulsionpak.flow import alignment_angles, field_from_guides
+
+    page.select_option("#example-container", "circle")
+    page.wait_for_function("window.repulsionpakStudio.state.container === 'circle.svg'")
+    page.set_input_files("#open-elements", [str(EX / "elements" / "fish.svg"), str(EX / "elements" / "leaf.svg")])
+    page.wait_for_function("window.repulsionpakStudio.state.elements.length === 2")
+    for sel, value in (("#gap", "12"), ("#count", "12"), ("#seed", "4")):
+        page.fill(sel, value)
+        page.dispatch_event(sel, "change")
+    page.wait_for_function("window.repulsionpakStudio.state.settings.seed === 4")
+    # a guide from lower left to upper right, dragged with the mouse
+    page.click("#guide")
+    ctm = page.evaluate("(() => { const m = document.querySelector('#stage').getScreenCTM();"
+                        " return [m.a, m.d, m.e, m.f]; })()")
+
+    def screen(x, y):
+        return ctm[0] * x + ctm[2], ctm[1] * y + ctm[3]
+
+    page.mouse.move(*screen(60, 400))
+    page.mouse.down()
+    for k in range(1, 21):
+        page.mouse.move(*screen(60 + 19 * k, 400 - 10 * k))
+    page.mouse.up()
+    page.wait_for_function("window.repulsionpakStudio.state.guides.length === 1 && window.repulsionpakStudio.busy === 0")
+    guide = np.array(_state(page)["guides"][0])
+    assert np.abs(guide[0] - [60, 400]).max() < 2 and np.abs(guide[-1] - [440, 200]).max() < 2
+    assert "--flow guides.svg" in page.text_content("#command")
+    assert page.locator("#guide-layer path").count() == 1
+    assert page.get_attribute("#field-layer path.field", "d").count("M") > 100
+    assert page.is_visible("#field-layer path.field")
+    page.uncheck("#show-field")
+    assert not page.is_visible("#field-layer path.field")
+    page.check("#show-field")
+    page.click("#guide")  # guide tool off
+    # run; add a copy while it is paused, undo and redo it
+    page.click("#start")
+    page.wait_for_function("document.querySelectorAll('#stage g.element').length === 12", timeout=120_000)
+    page.click("#pause")
+    page.wait_for_function("window.repulsionpak.status.paused === true")
+    page.locator('#stage g.element[data-index="3"] path').click()
+    page.click("#add-copy")
+    page.mouse.click(*screen(250, 250))
+    page.wait_for_function("document.querySelectorAll('#stage g.element').length === 13")
+    page.wait_for_function("window.repulsionpakStudio.state.history.undo_label === 'add a copy of element 3'")
+    page.click("#undo")
+    page.wait_for_selector('#stage g.element[data-index="12"].removed', state="attached")
+    page.click("#redo")
+    page.wait_for_selector('#stage g.element[data-index="12"]:not(.removed)', state="attached")
+    page.click("#pause")  # resume
+    page.wait_for_function("window.repulsionpak.status.done === true", timeout=300_000)
+    page.wait_for_function("window.repulsionpakStudio.state.finished === true")
+    with page.expect_download() as dl:
+        page.click("#export-svg")
+    out = tmp_path / "studio.svg"
+    dl.value.save_as(out)
+    container, placed, _ = repulsionpak.read_packing_svg(out)
+    primary = [p for p in placed if p.kind == "primary"]
+    assert len(primary) == 13  # the added copy is in the packing
+    field = field_from_guides([guide], container.region.bounds)
+    els = repulsionpak.load_elements([EX / "elements" / "fish.svg", EX / "elements" / "leaf.svg"])
+    stats = alignment_angles(primary, els, field)
+    assert stats.median < 8.0 and stats.p90 < 20.0, stats.angles

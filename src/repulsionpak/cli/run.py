@@ -224,7 +224,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
             if live is not None:  # the browser view steers through the two callbacks
                 from ..live import LiveRun
 
-                viewer = LiveRun(cont, params, external_stop=stop, **live)
+                viewer = LiveRun(cont, params, external_stop=stop, flow=flow, **live)
                 viewer.start()
                 on_snapshot = viewer.on_snapshot(on_snapshot)
             packing = pack(cont, elems, params, secondary=secs, on_snapshot=on_snapshot,

@@ -31,13 +31,17 @@ class LiveRun:
 
     def __init__(self, container, params, port: int = 8765, open_browser: bool = True,
                  external_stop: Callable[[], bool] | None = None, token: str | None = None,
-                 paused: bool = False):
+                 paused: bool = False, flow=None):
         if not 0 <= int(port) <= 65535:
             raise ParameterError(f"--port must be in 0..65535, got {port}")
         gap = float(params.gap)
         self.controller = LiveController(container, gap, params.render, external_stop=external_stop,
                                          container_paint=params.output.container_paint)
         self.controller.paused = bool(paused)  # from the first frame on
+        if flow is not None:  # --flow: the page shows the field's arrows
+            from ..flow.hook import run_field
+
+            self.controller.field = run_field(flow, container)
         self.server = LiveServer(self.controller, port, token=token)
         self.open_browser = open_browser
 

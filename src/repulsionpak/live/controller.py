@@ -64,6 +64,7 @@ class LiveController:
         self.frames_sent = 0
         self.final_svg: str | None = None
         self.final_status: dict | None = None
+        self.field = None  # the flow field the elements follow (a FlowField), shown as arrows
 
     # -- called by the runner (simulation thread) -------------------------------------
     def on_snapshot(self, snap) -> None:
@@ -132,7 +133,7 @@ class LiveController:
         """Container rings and view box (container units) for the page, and how to draw
         the container (``paint``, as the outputs do): ``outline`` with its ``colour`` and
         ``width`` (container units), ``as-drawn`` with ``markup`` (the output's container
-        group), or ``none``."""
+        group), or ``none``; with a flow field, ``field``: its arrows as one path's ``d``."""
         from ..render.container_paint import outline_colour, outline_width
 
         rings = []
@@ -149,7 +150,12 @@ class LiveController:
             from ..render.svg import container_lines
 
             paint["markup"] = "\n".join(container_lines(self.container, "as-drawn", 0.0, indent=""))
-        return {"type": "scene", "rings": rings, "gap": self.gap, **paint,
+        field = {}
+        if self.field is not None:  # the flow field's arrows (live/field_layer.py)
+            from .field_layer import field_path
+
+            field = {"field": field_path(self.field, self.container.region)}
+        return {"type": "scene", "rings": rings, "gap": self.gap, **paint, **field,
                 "viewBox": [minx - pad, miny - pad, maxx - minx + 2 * pad, maxy - miny + 2 * pad]}
 
     def estimates(self) -> dict:

@@ -1,7 +1,7 @@
 """What the designer edits, and the undo/redo stack of those edits.
 
 A :class:`Document` is immutable: the container file, the brush strokes, the element
-files and the settings. Every edit makes a new document and pushes an :class:`Edit`
+files, the settings and the flow guides. Every edit makes a new document and pushes an :class:`Edit`
 record (the documents before and after, and for edits of the running simulation — a pin,
 a drag — the commands that redo and undo it). Undo and redo move along that stack; a new
 edit after an undo drops the redo side, as editors do.
@@ -51,6 +51,7 @@ class Document:
     elements: tuple[InputFile, ...] = ()
     secondary: tuple[InputFile, ...] = ()  # the pockets' elements (``--secondary``)
     settings: tuple[tuple[str, object], ...] = tuple(DEFAULTS.items())
+    guides: tuple[tuple[tuple[float, float], ...], ...] = ()  # flow guides, in the order drawn (``--flow``)
 
     @property
     def settings_dict(self) -> dict:

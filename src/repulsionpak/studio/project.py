@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 from ..errors import ParameterError
 from ..types import ElementControls
+from .guides import GUIDES_NAME, MAX_GUIDES, parse_guide
 from .settings import DEFAULTS, coerce, coerce_element, element_manifest, run_settings
 from .uploads import MAX_ELEMENTS, MAX_PROJECT_BYTES, UploadTooLarge, check_size
 
@@ -37,9 +38,10 @@ class ProjectFiles:
     secondary: list[tuple[str, bytes]] = field(default_factory=list)
     weights: list[float] = field(default_factory=list)  # of the elements
     own: list[dict] = field(default_factory=list)  # each element's own settings
+    guides: list[tuple] = field(default_factory=list)  # flow guides (polylines)
 
 
-def write_project(doc, container, command: str | None, manifest: str | None = None) -> bytes:
+def write_project(doc, container, command: str | None, manifest: str | None = None, guides=None) -> bytes:
     """The zip of ``doc`` (a :class:`~.document.Document`).
 
     Parameters
@@ -52,6 +54,9 @@ def write_project(doc, container, command: str | None, manifest: str | None = No
     manifest : str or None
         The name of an element manifest to write beside them (the elements' weights, for
         the command line); None: none.
+    guides : Path or None
+        The guide SVG of the document's flow guides (``--flow``), written as
+        ``guides.svg``; the strokes themselves go to ``project.toml`` (``guides``).
 
     Returns
     -------
@@ -79,6 +84,10 @@ def write_project(doc, container, command: str | None, manifest: str | None = No
         if manifest:
             zf.writestr(manifest, element_manifest([(f"elements/{e.name}", e.weight, e.own)
                                                     for e in doc.elements]))
+        if guides is not None:
+            zf.write(guides, GUIDES_NAME)
+            lines.append("guides = [" + ", ".join(
+                "[" + ", ".join(f"[{x!r}, {y!r}]" for x, y in g) + "]" for g in doc.guides) + "]")
         if command:
             lines.append(f"command = {json.dumps(command)}")
         lines += ["", "[settings]  # missing: chosen by the run (auto gap and count, random seed)"]
@@ -144,7 +153,12 @@ def read_project(data: bytes) -> ProjectFiles:
         if not isinstance(own, list) or len(own) != len(out["elements"]) or not all(isinstance(o, dict) for o in own):
             raise ParameterError(f"{PROJECT_MANIFEST}: 'own' must be a table of settings per element")
         own = [{k: v for k, v in ((k, coerce_element(k, v)) for k, v in o.items()) if v is not None} for o in own]
-        return ProjectFiles(settings, container, out["elements"], out["secondary"], [float(w) for w in weights], own)
+        guides = studio.get("guides", [])
+        if not isinstance(guides, list) or len(guides) > MAX_GUIDES:
+            raise ParameterError(f"{PROJECT_MANIFEST}: 'guides' must be a list of at most {MAX_GUIDES} strokes")
+        guides = [parse_guide({"points": g}) for g in guides]
+        return ProjectFiles(settings, container, out["elements"], out["secondary"], [float(w) for w in weights], own,
+                            guides)
 
 
 __all__ = ["PROJECT_MANIFEST", "ProjectFiles", "read_project", "write_project"]

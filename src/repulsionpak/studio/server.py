@@ -11,7 +11,7 @@ origin is refused with 403):
 - ``POST /open-secondary``      multipart, files: secondary element files added
 - ``POST /open-project``        multipart, one zip: a saved project
 - ``POST /edit``                JSON ``{"op": ...}``: ``stroke``, ``setting``, ``weight``, ``element``
-  (an element's own ``key``: rotation, rigid, stiffness), ``pin``, ``remove``, ``moved``, ``add`` (a copy), ``undo``, ``redo``, ``examples``, ``remove-element``
+  (an element's own ``key``: rotation, rigid, stiffness), ``pin``, ``remove``, ``moved``, ``add`` (a copy), ``guide`` (a flow guide), ``clear-guides``, ``undo``, ``redo``, ``examples``, ``remove-element``
 - ``POST /run``                 JSON ``{"action": "start" | "restart"}``
 - ``GET /export.svg``, ``/export.pdf``, ``/export.png``, ``/project.zip``   downloads
 - ``GET /packing.svg``          the current packing (as ``/export.svg``)
@@ -179,6 +179,8 @@ class StudioServer(LiveServer):
             "element": lambda: s.set_element(_index(msg), str(msg.get("key")), msg.get("value")),
             "moved": lambda: s.moved(_index(msg), _number(msg, "dx"), _number(msg, "dy")),
             "add": lambda: s.add_copy(_index(msg), _number(msg, "x"), _number(msg, "y")),
+            "guide": lambda: s.guide(msg.get("guide")),
+            "clear-guides": s.clear_guides,
             "undo": s.undo,
             "redo": s.redo,
             "examples": lambda: s.use_examples(msg.get("container"), msg.get("elements")),

@@ -25,6 +25,7 @@ import shapely
 from ..errors import ParameterError, RepulsionPakError
 from .controller import StudioController
 from .document import Document, History, InputFile
+from .guides import GUIDES_NAME, MAX_GUIDES, guides_field, guides_svg, parse_guide
 from .project import read_project, write_project
 from .region import Stroke, painted_region, region_svg, rings_of
 from .settings import coerce, coerce_element, command_line, element_manifest, run_settings
@@ -62,6 +63,8 @@ class Session:
         self._n_files = 0
         self._containers: dict[Path, object] = {}
         self._painted: dict[tuple, tuple[Path, object]] = {}
+        self._guide_files: dict[tuple, Path] = {}
+        self._fields: dict[tuple, str] = {}
 
     @property
     def doc(self) -> Document:
@@ -209,7 +212,11 @@ class Session:
         self._apply_change(before, after)
 
     def _apply_change(self, before: Document, after: Document) -> None:
-        """Show the new document; a changed region reaches a running simulation at once."""
+        """Show the new document; a changed region reaches a running simulation at once
+        (changed guides apply to the next run)."""
+        if before.guides != after.guides and self.running:
+            self.controller.publish("json", {"type": "error", "message": "the flow guides apply when you "
+                                             "start again"})
         if (before.container, before.strokes) == (after.container, after.strokes):
             return
         if after.container != before.container:
@@ -250,6 +257,50 @@ class Session:
             self._edit("paint" if s.mode == "paint" else "erase", dataclasses.replace(
                 self.doc, strokes=self.doc.strokes + (s,)))
             return self.state()
+
+    def guide(self, msg: object) -> dict:
+        """Add a flow guide stroke (``{"points": [[x, y], ...]}``, container units, in the
+        direction of travel); the run follows the field of the guides (``--flow``)."""
+        g = parse_guide(msg)
+        with self.lock:
+            if len(self.doc.guides) >= MAX_GUIDES:
+                raise ParameterError(f"the studio takes at most {MAX_GUIDES} flow guides")
+            self._edit("guide", dataclasses.replace(self.doc, guides=self.doc.guides + (g,)))
+            return self.state()
+
+    def clear_guides(self) -> dict:
+        """Take every flow guide out (undoable)."""
+        with self.lock:
+            if self.doc.guides:
+                self._edit("clear guides", dataclasses.replace(self.doc, guides=()))
+            return self.state()
+
+    def guides_file(self, doc: Document) -> Path | None:
+        """The guide SVG a run of ``doc`` reads (``--flow``); None without guides."""
+        if not doc.guides:
+            return None
+        key = (doc.guides, tuple(self.controller.view_box))
+        if key not in self._guide_files:
+            d = self.dir / "guides" / f"{len(self._guide_files):05d}"
+            d.mkdir(parents=True)
+            path = d / GUIDES_NAME
+            path.write_text(guides_svg(doc.guides, self.controller.view_box), encoding="utf-8")
+            self._guide_files[key] = path
+        return self._guide_files[key]
+
+    def field_path(self, doc: Document) -> str:
+        """The arrows of ``doc``'s flow field inside its container, as the page draws
+        them ('' without guides or container)."""
+        region = self.region_of(doc)
+        if not doc.guides or region.is_empty:
+            return ""
+        key = (doc.guides, region.wkb)
+        if key not in self._fields:
+            from ..live.field_layer import field_path
+
+            self._fields.clear()  # (one at a time: the current document's)
+            self._fields[key] = field_path(guides_field(doc.guides, region.bounds), region)
+        return self._fields[key]
 
     def set_setting(self, name: str, value: object) -> dict:
         """Change one setting; refused (nothing changes) with the CLI's message when the
@@ -397,7 +448,8 @@ class Session:
                 self.packing, self.packing_doc, self.error = None, None, None
                 self._gen += 1
                 gen = self._gen
-            self._thread = threading.Thread(target=self._run, args=(gen, inputs, doc),
+            flow = self.guides_file(doc)
+            self._thread = threading.Thread(target=self._run, args=(gen, inputs, doc, flow),
                                             name="repulsionpak-studio-run", daemon=True)
             self._thread.start()
             return self.state()
@@ -419,7 +471,7 @@ class Session:
             pass
         t.join(wait)
 
-    def _run(self, gen: int, inputs, doc: Document) -> None:
+    def _run(self, gen: int, inputs, doc: Document, flow: Path | None = None) -> None:
         """The run's thread: :func:`repulsionpak.pack` with the controller's callbacks,
         inert once the run was cancelled (``gen`` is no longer the session's)."""
         from .. import pack
@@ -435,7 +487,8 @@ class Session:
         try:
             packing = pack(inputs.container, list(inputs.elements), inputs.params,
                            secondary=list(inputs.secondary), on_snapshot=guarded(ctl.on_snapshot),
-                           should_stop=guarded(ctl.should_stop, True), on_stage=guarded(ctl.on_stage))
+                           should_stop=guarded(ctl.should_stop, True), on_stage=guarded(ctl.on_stage),
+                           flow=flow)
             with self._callback_lock:
                 if gen != self._gen:
                     return
@@ -515,7 +568,8 @@ class Session:
             return None
         elements = [ELEMENTS_MANIFEST] if weighted(doc) else [f"elements/{e.name}" for e in doc.elements]
         return command_line(doc.settings_dict, cfile.name, elements,
-                            secondary=[f"secondary/{e.name}" for e in doc.secondary])
+                            secondary=[f"secondary/{e.name}" for e in doc.secondary],
+                            flow=GUIDES_NAME if doc.guides else None)
 
     def set_weight(self, index: int, value: object) -> dict:
         """Element ``index``'s weight (relative frequency of its free copies; 0: none),
@@ -560,14 +614,14 @@ class Session:
         with self.lock:
             doc = self.doc
             return write_project(doc, self.container_file(doc), self.command(doc),
-                                 ELEMENTS_MANIFEST if weighted(doc) else None)
+                                 ELEMENTS_MANIFEST if weighted(doc) else None, self.guides_file(doc))
 
     def open_project(self, data: bytes) -> dict:
         """Open a project saved by :meth:`project_zip` (one undoable edit); every file is
         read as an opened one is, every setting checked."""
         project = read_project(data)
         with self.lock:
-            doc = Document(settings=tuple(project.settings.items()))
+            doc = Document(settings=tuple(project.settings.items()), guides=tuple(project.guides))
             if project.container is not None:
                 name, content = project.container
                 path = self._store(safe_name(name), content)
@@ -607,6 +661,8 @@ class Session:
             "own": [e.own_dict for e in doc.elements],
             "secondary": [e.name for e in doc.secondary],
             "settings": doc.settings_dict,
+            "guides": [[list(p) for p in g] for g in doc.guides],
+            "field": self.field_path(doc),
             "command": self.command(doc),
             "history": self.history.state(),
             "running": self.running,

@@ -199,12 +199,15 @@ def _num(v: float) -> str:
 
 
 def command_line(settings: dict, container: str, elements: Sequence[str], output: str = "packing.svg",
-                 secondary: Sequence[str] = ()) -> str:
-    """The ``repulsionpak pack`` command with these settings (paths as given, quoted for a shell)."""
+                 secondary: Sequence[str] = (), flow: str | None = None) -> str:
+    """The ``repulsionpak pack`` command with these settings (paths as given, quoted for a
+    shell; ``flow``: the guide file, ``--flow``)."""
     s = dict(DEFAULTS, **settings)
     args = ["repulsionpak", "pack", container, *elements, "-o", output]
     for f in secondary:
         args += ["--secondary", f]
+    if flow is not None:
+        args += ["--flow", flow]
     if s["gap"] is not None:
         args += ["--gap", _num(s["gap"])]
     if s["seed"] is not None:

@@ -16,13 +16,31 @@
   window.repulsionpak = { get frames() { return frames; }, get received() { return received; },
                           get drawMs() { return drawMs; }, get layout() { return layout; },
                           get status() { return status; },
-                          onAdd: null };  // a page around this one may take the add-copy clicks
+                          onAdd: null, drawField, fieldOwner: false };  // a page around this one may take the add-copy clicks
 
   function send(cmd) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(cmd)); }
   function colour(t) { return "hsl(" + ((t * 137.5) % 360).toFixed(1) + " 55% 68%)"; }
   function fmt(x, d) { return (x === null || x === undefined) ? "–" : Number(x).toFixed(d); }
 
+  // the flow field's arrows (one path, container units) over the elements; #show-field
+  // toggles the layer
+  function drawField(d) {
+    const layer = q("#field-layer"), toggle = q("#field-toggle");
+    if (!layer) return;
+    layer.innerHTML = "";
+    if (toggle) toggle.classList.toggle("hidden", !d);
+    if (!d) return;
+    const p = document.createElementNS(NS, "path");
+    p.setAttribute("d", d); p.setAttribute("class", "field");
+    layer.appendChild(p);
+  }
+  const showField = q("#show-field");
+  if (showField) showField.addEventListener("change", () => {
+    q("#field-layer").classList.toggle("hidden", !showField.checked);
+  });
+
   function onScene(m) {
+    if (!window.repulsionpak.fieldOwner) drawField(m.field || "");  // (the studio draws its own)
     stage.setAttribute("viewBox", m.viewBox.join(" "));
     let d = "";
     for (const ring of m.rings) d += "M" + ring.map((p) => p[0] + " " + p[1]).join("L") + "Z";

@@ -8,7 +8,8 @@
   const q = (s) => document.querySelector(s);
   const stage = q("#stage"), regionLayer = q("#region-layer"), brushLayer = q("#brush-layer");
   const withToken = (path) => path + (path.includes("?") ? "&" : "?") + "token=" + encodeURIComponent(token);
-  let shownLists = null;
+  let shownLists = null, shownField = null;
+  window.repulsionpak.fieldOwner = true;  // the field is the document's guides' (drawn by render)
   let state = null, mode = null, stroke = null, drag = null, lastPhase = null, busy = 0;
   const SETTINGS = ["gap", "count", "seed", "stiffness"];
 
@@ -97,6 +98,16 @@
       regionLayer.appendChild(p);
     }
     stage.setAttribute("viewBox", s.view_box.join(" "));
+    // the flow guides (arrowheads: the direction of travel) and the field's arrows
+    const gl = q("#guide-layer");
+    gl.innerHTML = "";
+    for (const g of s.guides || []) {
+      const p = document.createElementNS(NS, "path");
+      p.setAttribute("d", "M" + g.map((pt) => pt[0] + " " + pt[1]).join("L"));
+      gl.appendChild(p);
+    }
+    if (s.field !== shownField) { window.repulsionpak.drawField(s.field || ""); shownField = s.field; }
+    q("#clear-guides").disabled = !(s.guides && s.guides.length);
     if (s.error) q("#message").textContent = "Failed: " + s.error;
   }
   window.repulsionpakStudio = { state: null, get busy() { return busy; } };
@@ -108,7 +119,7 @@
     const [rot, ang] = own.rotation ? String(own.rotation).split(":") : ["", undefined];
     const r = document.createElement("select");
     r.className = "own-rotation"; r.title = "rotation of " + name;
-    for (const [v, t] of [["", "rotation: run's"], ["free", "free"], ["fixed", "fixed"], ["limited", "limited"], ["upright", "upright"]]) {
+    for (const [v, t] of [["", "rot.: run's"], ["free", "free"], ["fixed", "fixed"], ["limited", "limited"], ["upright", "upright"]]) {
       const o = document.createElement("option"); o.value = v; o.textContent = t; r.appendChild(o);
     }
     r.value = rot;
@@ -128,7 +139,7 @@
     g.value = own.rigid === undefined ? "" : String(own.rigid);
     g.addEventListener("change", () => edit({ op: "element", index: i, key: "rigid", value: g.value }));
     const k = document.createElement("input");
-    k.type = "number"; k.step = "any"; k.min = "0"; k.className = "own-stiffness"; k.placeholder = "stiff.";
+    k.type = "number"; k.step = "any"; k.min = "0"; k.className = "own-stiffness"; k.placeholder = "k";
     k.title = "stiffness of " + name + " (empty: the run's)";
     k.value = own.stiffness === undefined ? "" : String(own.stiffness);
     k.addEventListener("change", () => edit({ op: "element", index: i, key: "stiffness", value: k.value }));
@@ -245,11 +256,14 @@
     mode = mode === m ? null : m;
     q("#brush").classList.toggle("on", mode === "paint");
     q("#eraser").classList.toggle("on", mode === "erase");
+    q("#guide").classList.toggle("on", mode === "guide");
     stage.classList.toggle("painting", mode !== null);
     if (!mode) cursor(null);
   }
   q("#brush").addEventListener("click", () => setMode("paint"));
   q("#eraser").addEventListener("click", () => setMode("erase"));
+  q("#guide").addEventListener("click", () => setMode("guide"));
+  q("#clear-guides").addEventListener("click", () => edit({ op: "clear-guides" }));
   function svgPoint(ev) {
     const p = stage.createSVGPoint(); p.x = ev.clientX; p.y = ev.clientY;
     return p.matrixTransform(stage.getScreenCTM().inverse());
@@ -276,7 +290,7 @@
     const p = svgPoint(ev), r = radius();
     const path = document.createElementNS(NS, "path");
     path.setAttribute("class", "stroke " + mode);
-    path.setAttribute("stroke-width", 2 * r);
+    if (mode !== "guide") path.setAttribute("stroke-width", 2 * r);
     brushLayer.appendChild(path);
     stroke = { mode, radius: r, points: [[p.x, p.y]], path };
     drawStroke();
@@ -285,10 +299,10 @@
   function drawStroke() {
     const pts = stroke.points;
     stroke.path.setAttribute("d", "M" + pts.map((p) => p[0].toFixed(2) + " " + p[1].toFixed(2)).join("L") +
-      (pts.length === 1 ? "l0.01 0" : ""));
+      (pts.length === 1 && stroke.mode !== "guide" ? "l0.01 0" : ""));
   }
   body.addEventListener("pointermove", (ev) => {
-    if (mode) cursor(svgPoint(ev));
+    if (mode) cursor(mode === "guide" ? null : svgPoint(ev));
     if (drag) drag.end = svgPoint(ev);
     if (!stroke) return;
     ev.stopPropagation();
@@ -306,7 +320,11 @@
     if (!stroke) return;
     ev.stopPropagation();
     const s = stroke; stroke = null;
-    await edit({ op: "stroke", stroke: { mode: s.mode, radius: s.radius, points: s.points } });
+    if (s.mode === "guide") {
+      if (s.points.length > 1) await edit({ op: "guide", guide: { points: s.points } });
+    } else {
+      await edit({ op: "stroke", stroke: { mode: s.mode, radius: s.radius, points: s.points } });
+    }
     s.path.remove();
   }
   body.addEventListener("pointerup", endStroke, true);
@@ -318,6 +336,7 @@
     if ((ev.ctrlKey || ev.metaKey) && ev.key.toLowerCase() === "z") {
       ev.preventDefault(); edit({ op: ev.shiftKey ? "redo" : "undo" });
     } else if (ev.key === "b") setMode("paint");
+    else if (ev.key === "g") setMode("guide");
     else if (ev.key === "e") setMode("erase");
   });
 
