@@ -483,3 +483,49 @@ def test_page_guide_drawn_with_the_mouse_aligns_the_copies_and_add_copy_undoes(p
     els = repulsionpak.load_elements([EX / "elements" / "fish.svg", EX / "elements" / "leaf.svg"])
     stats = alignment_angles(primary, els, field)
     assert stats.median < 8.0 and stats.p90 < 20.0, stats.angles
+
+
+def test_pack_live_flow_serves_the_field(tmp_path):
+    """``repulsionpak pack ... --live --flow G.svg``: the page's scene over the WebSocket
+    carries the field's arrows."""
+    import asyncio
+    import json
+    import signal
+    import subprocess
+    import sys
+
+    import aiohttp
+
+    from repulsionpak.studio.guides import guides_svg
+
+    g = tmp_path / "g.svg"
+    g.write_text(guides_svg([((40.0, 250.0), (460.0, 250.0))], (0, 0, 500, 500)))
+    env = dict(os.environ, PYTHONPATH=str(EX.parent.parent) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "repulsionpak.cli", "pack", str(EX / "containers" / "circle.svg"),
+                             str(EX / "elements" / "fish.svg"), "--count", "6", "--gap", "20", "--seed", "1",
+                             "--flow", str(g), "-o", str(tmp_path / "out.svg"), "--live", "--no-browser",
+                             "--port", "0", "--paused", "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:"), proc.stderr.read()
+
+        async def scene():
+            async with aiohttp.ClientSession() as c:
+                async with c.ws_connect(url.replace("http://", "ws://").replace("/?token=", "/ws?token=")) as ws:
+                    for _ in range(20):
+                        m = await ws.receive(timeout=60)
+                        if m.type == aiohttp.WSMsgType.TEXT and json.loads(m.data).get("type") == "scene":
+                            return json.loads(m.data)
+            return None
+
+        msg = asyncio.run(scene())
+        assert msg is not None and msg["field"].count("M") > 300
+        # a horizontal guide: every shaft is horizontal, left to right
+        first = msg["field"].split("M")[1]
+        (x0, y0), (x1, y1) = (tuple(map(float, p.split())) for p in first.split("L"))
+        assert x1 > x0 and abs(y1 - y0) < 1e-6 * abs(x1 - x0) + 0.011
+    finally:
+        proc.send_signal(signal.SIGINT)
+        rc = proc.wait(timeout=60)
+    assert rc in (0, 130), proc.stderr.read()
