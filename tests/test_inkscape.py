@@ -237,6 +237,23 @@ def test_controls_reach_the_library(capsys):
     assert deformation["true"] < 1e-3 < deformation["false"], deformation
 
 
+def test_the_dialog_offers_every_rotation_of_the_library(capsys):
+    """The .inx's rotation choices are the library's, and "upright" reaches the layer."""
+    from importlib import resources
+
+    from repulsionpak.types import ROTATIONS
+
+    inx = etree.fromstring((resources.files("repulsionpak.inkscape") / INX_NAME).read_bytes())
+    ns = {"i": "http://www.inkscape.org/namespace/inkscape/extension"}
+    offered = [o.get("value") for o in inx.iterfind(".//i:param[@name='rotation']/i:option", ns)]
+    assert sorted(offered) == sorted(ROTATIONS)
+    status, doc, err = run_effect(["--id=oval", "--id=square", "--id=star", "--count=4", "--seed=5",
+                                   "--pocket_fill=false", "--rotation=upright", "--max_rotation=10"], SCALED, capsys)
+    assert status == 0 and err == ""
+    (layer,) = packing_layers(etree.fromstring(doc))
+    assert layer.get("data-rp-rotation") == "upright" and float(layer.get("data-rp-max-rotation")) == 10
+
+
 @pytest.mark.parametrize("args, words", [
     ([], "nothing selected"),
     (["--id=flower", "--id=leafclone"], "no closed shape"),

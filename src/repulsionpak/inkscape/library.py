@@ -3,9 +3,9 @@
 The effect hands over standalone SVG documents (bytes) and a :class:`Request`; this module
 writes them to a temporary folder, reads them with the library's own readers, packs them
 with :func:`repulsionpak.pack` and returns the packing as the SVG ``repulsionpak pack``
-writes. Everything it imports comes from the package's top level (or, for the designer
+writes. Everything it imports comes from the package's top level (and, for the designer
 controls, :mod:`repulsionpak.types`), so the extension gets the library's packing and
-policy for the same inputs and seed, whatever the library's modules are called inside.
+policy for the same inputs and seed.
 """
 
 from __future__ import annotations
@@ -18,17 +18,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 
-#: the rotation choices of the dialog; "upright" joins them where the library knows it
-BASE_ROTATIONS = ("free", "fixed", "limited")
-
-
 @dataclass(frozen=True)
 class Request:
     """One packing as the dialog asks for it, in the document's root user units.
 
     gap: None for the library's default gap. count: None for the library's default count.
-    rotation: "free" | "fixed" | "limited" (| "upright" where the library has it);
-    max_rotation: degrees either side, when limited. rigid, stiffness: the element
+    rotation: "free" | "fixed" | "limited" | "upright"; max_rotation: degrees either
+    side, when limited or upright. rigid, stiffness: the element
     controls. pocket_fill: False leaves the pockets empty (``--no-pocket-fill``).
     container_paint: "outline" | "as-drawn" | "none".
     """
@@ -50,23 +46,15 @@ class PackError(Exception):
 
 
 def rotations() -> tuple[str, ...]:
-    """The rotation choices the installed library supports."""
-    try:
-        from repulsionpak.types import ROTATIONS  # noqa: PLC0415
-    except ImportError:
-        try:
-            from repulsionpak.controls import ROTATIONS  # noqa: PLC0415
-        except ImportError:
-            return BASE_ROTATIONS
+    """The rotation choices of the library (and of the dialog)."""
+    from repulsionpak.types import ROTATIONS  # noqa: PLC0415
+
     return tuple(ROTATIONS)
 
 
 def _controls(req: Request):
     """The element controls of ``req`` (None: the defaults, the paper's packing)."""
-    try:
-        from repulsionpak.types import ElementControls  # noqa: PLC0415
-    except ImportError:
-        from repulsionpak.controls import ElementControls  # noqa: PLC0415
+    from repulsionpak.types import ElementControls  # noqa: PLC0415
 
     kw: dict = {"rotation": req.rotation, "rigid": bool(req.rigid), "stiffness": float(req.stiffness)}
     if req.rotation in ("limited", "upright"):
