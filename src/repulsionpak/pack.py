@@ -268,7 +268,7 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
     if flow is not None:
         from .flow.hook import attach  # noqa: PLC0415
 
-        attach(model, flow, placement, ctrl, elements, pinned, frame.unit, params)
+        attach(model, flow, placement, ctrl, elements, pinned, frame.unit, params, templates)
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     sim.templates = templates

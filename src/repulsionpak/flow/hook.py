@@ -62,11 +62,12 @@ class Orienter:
 
 
 def attach(model, field: FlowField, placement, ctrls: Sequence, elements: Sequence, pinned, unit: float,
-           params=None) -> None:
+           params=None, templates=None) -> None:
     """Steer the model's free aligning copies (``ctrls`` per copy, ``pinned`` copies left
     alone) by ``field``; the model's rotation windows are set for the start. Copies whose
     controls ask for ``flow_bend`` also bend along it (:mod:`.bend`), within a share of the
-    shape promise of ``params`` (default parameters when None)."""
+    shape promise of ``params`` (default parameters when None; ``templates``, the meshed
+    elements, relate the art's length to the mesh's)."""
     n = len(ctrls)
     idx = np.asarray(placement.template_index)[:n]
     free = ~np.asarray(pinned, bool)[:n] if pinned is not None else np.ones(n, bool)
@@ -89,7 +90,7 @@ def attach(model, field: FlowField, placement, ctrls: Sequence, elements: Sequen
     model.flow = steer
     bending = [j for j, k in enumerate(steer.index) if ctrls[int(k)].flow_bend]
     if bending:
-        steer.bend = _bend(model, field, steer, np.array(bending), idx, elements, params, unit)
+        steer.bend = _bend(model, field, steer, np.array(bending), idx, elements, params, unit, templates)
 
 
 def bend_cap(element, axis_deg: float, params=None) -> float:
@@ -111,8 +112,21 @@ def bend_cap(element, axis_deg: float, params=None) -> float:
     return max_turn(shapely.make_valid(g), axis_deg, BEND_SHARE * limit)
 
 
+def _mesh_over_art(template, axis: float) -> float:
+    """The template's mesh length over its art's length along ``axis`` (radians; the
+    outline is in the source's units, the mesh at the template's scale)."""
+    import shapely  # noqa: PLC0415
+
+    a = np.array([math.cos(axis), math.sin(axis)])
+    art = shapely.get_coordinates(template.outline.geometry) @ a
+    mesh = np.asarray(template.verts, float) @ a
+    if not len(art) or not np.ptp(art) > 0:
+        return 1.0
+    return float(np.ptp(mesh) / (np.ptp(art) * template.scale))
+
+
 def _bend(model, field: FlowField, steer: FlowSteer, rows: np.ndarray, idx: np.ndarray, elements: Sequence,
-          params, unit: float) -> FlowBend:
+          params, unit: float, templates=None) -> FlowBend:
     """The bend of the aligning copies ``steer.index[rows]`` (``idx``: each copy's
     element), applied to their rest shapes at once; their mesh bend limits give up
     :data:`~.bend.BEND_SHARE` of the budget to the bend."""
@@ -125,6 +139,8 @@ def _bend(model, field: FlowField, steer: FlowSteer, rows: np.ndarray, idx: np.n
         key = (i, round(float(off), 9))
         if key not in turns:
             turns[key] = bend_cap(elements[i], math.degrees(-off), params)
+            if templates is not None:  # the cap is the art's turning: the longer mesh turns more
+                turns[key] *= _mesh_over_art(templates[i], -float(off))
         turn[r] = turns[key]
     axis = steer.rest[rows] - offset  # the axis in the placed rest shape's frame
     bend = FlowBend.for_copies(field, model, copies, axis, turn, unit)
