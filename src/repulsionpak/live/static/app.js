@@ -18,6 +18,15 @@
                           get status() { return status; },
                           onAdd: null, drawField, fieldOwner: false };  // a page around this one may take the add-copy clicks
 
+  // the elements' outline is one screen pixel wide: --px (user units per pixel) follows
+  // the stage's size and view box
+  function updatePx() {
+    const m = stage.getScreenCTM();
+    if (m && m.a > 0) elemLayer.style.setProperty("--px", (1 / m.a) + "px");
+  }
+  new ResizeObserver(updatePx).observe(stage);
+  new MutationObserver(updatePx).observe(stage, { attributes: true, attributeFilter: ["viewBox"] });
+
   function send(cmd) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(cmd)); }
   function colour(t) { return "hsl(" + ((t * 137.5) % 360).toFixed(1) + " 55% 68%)"; }
   function fmt(x, d) { return (x === null || x === undefined) ? "–" : Number(x).toFixed(d); }
