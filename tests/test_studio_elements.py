@@ -427,6 +427,7 @@ def test_page_guide_drawn_with_the_mouse_aligns_the_copies_and_add_copy_undoes(p
     page.wait_for_function("window.repulsionpakStudio.state.container === 'circle.svg'")
     page.set_input_files("#open-elements", [str(EX / "elements" / "fish.svg"), str(EX / "elements" / "leaf.svg")])
     page.wait_for_function("window.repulsionpakStudio.state.elements.length === 2")
+    assert page.locator("#element-list select.own-flow").count() == 0  # no guides: no flow keys
     for sel, value in (("#gap", "12"), ("#count", "12"), ("#seed", "4")):
         page.fill(sel, value)
         page.dispatch_event(sel, "change")
@@ -449,6 +450,7 @@ def test_page_guide_drawn_with_the_mouse_aligns_the_copies_and_add_copy_undoes(p
     assert np.abs(guide[0] - [60, 400]).max() < 2 and np.abs(guide[-1] - [440, 200]).max() < 2
     assert "--flow guides.svg" in page.text_content("#command")
     assert page.locator("#guide-layer path").count() == 1
+    assert page.locator("#element-list select.own-flow").count() == 2  # the flow keys, with guides
     assert page.get_attribute("#field-layer path.field", "d").count("M") > 100
     assert page.is_visible("#field-layer path.field")
     page.uncheck("#show-field")
@@ -529,3 +531,39 @@ def test_pack_live_flow_serves_the_field(tmp_path):
         proc.send_signal(signal.SIGINT)
         rc = proc.wait(timeout=60)
     assert rc in (0, 130), proc.stderr.read()
+
+
+def test_an_elements_own_flow_keys(session, tmp_path):
+    """flow = "ignore" keeps a fixed-rotation element at its angle while the other follows
+    the guide; the keys reach the manifest the command reads."""
+    from repulsionpak.flow import alignment_angles, field_from_guides, load_guides
+
+    session.use_examples("circle", ["fish", "leaf"])
+    session.guide({"points": [[60, 250], [440, 250]]})
+    with pytest.raises(ParameterError, match="flow must be one of align, ignore"):
+        session.set_element(0, "flow", "sideways")
+    session.set_element(0, "flow", "ignore")
+    session.set_element(0, "rotation", "fixed:90")
+    session.set_element(1, "axis", "0")
+    for k, v in (("count", "10"), ("gap", "12"), ("seed", "4"), ("pocket_fill", False)):
+        session.set_setting(k, v)
+    session.start()
+    _finish(session)
+    proj = tmp_path / "proj"
+    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    manifest = (proj / "elements.toml").read_text()
+    assert 'file = "elements/fish.svg"\nflow = "ignore"\nrotation = "fixed"\nangle = 90' in manifest
+    assert 'file = "elements/leaf.svg"\naxis = 0' in manifest
+    _cli_in(proj, session.command())
+    assert (proj / "packing.svg").read_bytes() == session.export("svg")
+    _, placed, _ = repulsionpak.read_packing_svg(proj / "packing.svg")
+    from repulsionpak.io.manifest import load_manifest
+
+    els = load_manifest(proj / "elements.toml")
+    rots, _, which = copy_rotations([p for p in placed if p.kind == "primary"], els)
+    fish = np.array([r for r, e in zip(rots, which) if e.source == "fish.svg"])
+    assert len(fish) >= 3 and np.abs(np.mod(fish - 90.0 + 180.0, 360.0) - 180.0).max() < 3.0, fish
+    container = repulsionpak.load_container(proj / "circle.svg")
+    field = field_from_guides(load_guides(proj / "guides.svg"), container.region.bounds)
+    leaves = alignment_angles([p for p in placed if p.source == "leaf.svg" and p.kind == "primary"], els, field)
+    assert len(leaves.angles) >= 3 and leaves.median < 8.0, leaves.angles

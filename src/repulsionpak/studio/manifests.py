@@ -18,7 +18,7 @@ from ..errors import ParameterError, RepulsionPakError
 from .uploads import INPUT_SUFFIXES, check_size, named_error
 
 #: manifest keys the studio holds per element (the others are refused with a message)
-HELD_KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight")
+HELD_KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight", "axis", "flow", "flow_bend")
 
 
 def relative_path(name: str, strict: bool = True) -> PurePosixPath:
@@ -62,8 +62,13 @@ def _own(where: str, keys: dict) -> tuple[float, dict]:
             own["rotation"] = str(rot)
     if "rigid" in keys:
         own["rigid"] = bool(keys["rigid"])
-    if "stiffness" in keys:
-        own["stiffness"] = float(keys["stiffness"])
+    for k in ("stiffness", "axis"):
+        if k in keys:
+            own[k] = float(keys[k])
+    if "flow" in keys:
+        own["flow"] = str(keys["flow"])
+    if "flow_bend" in keys:
+        own["flow_bend"] = bool(keys["flow_bend"])
     return weight, own
 
 
@@ -90,7 +95,7 @@ def manifest_elements(folder: Path, manifest: PurePosixPath, uploaded: list[Pure
     ------
     RepulsionPakError
         The manifest's own message (``repulsionpak pack``'s), with the uploaded names; a
-        key the studio does not hold per element (pins, axis, flow, flow_bend) is refused.
+        key the studio does not hold per element (pins) is refused.
 
     Notes
     -----

@@ -133,7 +133,7 @@ def _control_options(s: dict) -> tuple[str | None, bool, float | None]:
 
 
 #: an element's own settings in the page (None: the run's setting applies)
-ELEMENT_KEYS = ("rotation", "rigid", "stiffness")
+ELEMENT_KEYS = ("rotation", "rigid", "stiffness", "axis", "flow", "flow_bend")
 
 
 def coerce_element(key: str, value: object) -> object:
@@ -146,17 +146,22 @@ def coerce_element(key: str, value: object) -> object:
         return None
     if key == "rotation":
         v = coerce("rotation", value)
-    elif key == "rigid":
+    elif key in ("rigid", "flow_bend"):
         v = coerce("rigid", value)
+    elif key == "flow":
+        v = str(value).strip().lower()
     else:
-        v = coerce("stiffness", value)
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{key} must be a number, got {value!r}") from None
     manifest_keys({key: v})  # its check (ElementControls) and message
     return v
 
 
 def manifest_keys(overrides: dict) -> dict:
     """The element manifest's keys (``rotation``, ``angle``, ``max_rotation``, ``rigid``,
-    ``stiffness``) of an element's own settings (``rotation`` as ``--rotation`` gives
+    ``stiffness``, ``axis``, ``flow``, ``flow_bend``) of an element's own settings (``rotation`` as ``--rotation`` gives
     it: ``fixed:30``, ``limited:15``, ``upright:10``), checked by :class:`ElementControls`."""
     from ..controls import parse_rotation
 
@@ -171,8 +176,12 @@ def manifest_keys(overrides: dict) -> dict:
                 out["angle" if name == "fixed" else "max_rotation"] = value
         elif key == "rigid":
             out["rigid"] = bool(v)
-        elif key == "stiffness":
-            out["stiffness"] = float(v)
+        elif key in ("stiffness", "axis"):
+            out[key] = float(v)
+        elif key == "flow":
+            out["flow"] = str(v)
+        elif key == "flow_bend":
+            out["flow_bend"] = bool(v)
     try:
         ElementControls(**out)
     except ParameterError as exc:

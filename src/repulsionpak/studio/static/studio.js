@@ -49,7 +49,7 @@
       : (s.painted ? "painted" : "none: paint one with the brush");
     // the lists are rebuilt only when they changed (a field being typed in keeps its focus),
     // or to show the document again after a refused value (force)
-    const listsKey = JSON.stringify([s.elements, s.weights, s.own, s.secondary]);
+    const listsKey = JSON.stringify([s.elements, s.weights, s.own, s.secondary, !!(s.guides && s.guides.length)]);
     for (const [field, sel] of (listsKey === shownLists && !force) ? [] : [["elements", "#element-list"], ["secondary", "#secondary-list"]]) {
       const ul = q(sel);
       ul.innerHTML = "";
@@ -68,7 +68,12 @@
         b.textContent = "×"; b.title = "remove " + name;
         b.addEventListener("click", () => edit({ op: "remove-element", index: i, secondary: field === "secondary" }));
         li.appendChild(b);
-        if (field === "elements") li.appendChild(ownControls(name, i, (s.own && s.own[i]) || {}));
+        if (field === "elements") {
+          const own = (s.own && s.own[i]) || {};
+          li.appendChild(ownControls(name, i, own));
+          if ((s.guides && s.guides.length) || "flow" in own || "axis" in own || "flow_bend" in own)
+            li.appendChild(ownFlowControls(name, i, own));
+        }
         ul.appendChild(li);
       });
     }
@@ -144,6 +149,32 @@
     k.value = own.stiffness === undefined ? "" : String(own.stiffness);
     k.addEventListener("change", () => edit({ op: "element", index: i, key: "stiffness", value: k.value }));
     box.append(r, a, g, k);
+    return box;
+  }
+  // an element's own flow keys (shown with flow guides): follow or ignore the field, its
+  // axis (degrees in its source's frame; empty: its principal axis), bending along it
+  function ownFlowControls(name, i, own) {
+    const box = document.createElement("div");
+    box.className = "own own-flow-row";
+    const f = document.createElement("select");
+    f.className = "own-flow"; f.title = "how " + name + " follows the flow";
+    for (const [v, t] of [["", "flow: follows"], ["align", "follows"], ["ignore", "ignores"]]) {
+      const o = document.createElement("option"); o.value = v; o.textContent = t; f.appendChild(o);
+    }
+    f.value = own.flow || "";
+    f.addEventListener("change", () => edit({ op: "element", index: i, key: "flow", value: f.value }));
+    const ax = document.createElement("input");
+    ax.type = "number"; ax.step = "any"; ax.className = "own-axis"; ax.placeholder = "axis";
+    ax.title = "axis of " + name + ": degrees clockwise in its file, pointing along the flow (empty: its principal axis)";
+    ax.value = own.axis === undefined ? "" : String(own.axis);
+    ax.addEventListener("change", () => edit({ op: "element", index: i, key: "axis", value: ax.value }));
+    const bl = document.createElement("label");
+    bl.className = "check"; bl.title = "bend " + name + " along the streamline";
+    const b = document.createElement("input");
+    b.type = "checkbox"; b.className = "own-bend"; b.checked = !!own.flow_bend;
+    b.addEventListener("change", () => edit({ op: "element", index: i, key: "flow_bend", value: b.checked ? true : "" }));
+    bl.append(b, " bend");
+    box.append(f, ax, bl);
     return box;
   }
 
