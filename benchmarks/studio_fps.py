@@ -3,9 +3,11 @@
 A studio session packs the example elements into the example heart with ``--count N``;
 once the elements are on the stage, frames are counted for ``--seconds`` at two places:
 a WebSocket client (what the server sends) and, with Chromium and Playwright, the page
-itself (``window.repulsionpak.frames``: frames received and drawn into ``#stage``). The
-simulation's own iteration rate is printed beside them: a frame is sent at most once per
-iteration and at most 30 times a second (the live view's cap).
+itself (``window.repulsionpak.frames``: frames drawn into ``#stage``; ``received``: frames
+that arrived, the newest of which is drawn at each animation frame), with Chromium's
+main-thread times per drawn frame (``Performance.getMetrics``) and the page's own time
+writing the paths. The simulation's own iteration rate is printed beside them: a frame is
+sent at most once per iteration and at most 30 times a second (the live view's cap).
 
     python benchmarks/studio_fps.py [--count 300] [--seconds 10] [--no-browser]
 """
