@@ -202,6 +202,8 @@ def test_a_folder_adds_its_input_files_only(session):
     assert st["history"]["undo_label"] == "add apple.svg and 1 more"
     with pytest.raises(ParameterError, match="no SVG or .path files"):
         session.add_elements([("empty/notes.txt", b"hello")])
+    with pytest.raises(ParameterError, match="at most 1000 at once"):
+        session.add_elements([(f"big/{i}.txt", b"") for i in range(1001)])
     st = session.add_elements([("../../escape/leaf.svg", _svg("leaf.svg"))])  # a name is only a name
     assert st["elements"][-1] == "leaf.svg"
     assert session.doc.elements[-1].path.resolve().is_relative_to(session.dir.resolve())

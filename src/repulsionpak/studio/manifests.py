@@ -17,6 +17,8 @@ from pathlib import Path, PurePosixPath
 from ..errors import ParameterError, RepulsionPakError
 from .uploads import INPUT_SUFFIXES, check_size, named_error
 
+#: most files of one folder upload (inputs and others)
+MAX_TREE_FILES = 1000
 #: manifest keys the studio holds per element (the others are refused with a message)
 HELD_KEYS = ("rotation", "angle", "max_rotation", "rigid", "stiffness", "weight", "axis", "flow", "flow_bend")
 
@@ -154,7 +156,10 @@ def manifest_elements(folder: Path, manifest: PurePosixPath, uploaded: list[Pure
 
 def store_tree(folder: Path, files: list[tuple[str, bytes]]) -> list[PurePosixPath]:
     """Write uploaded ``files`` (relative name, contents) under ``folder`` at their
-    relative paths (each size bounded); returns the paths in upload order."""
+    relative paths (each size bounded, at most :data:`MAX_TREE_FILES` of them); returns
+    the paths in upload order."""
+    if len(files) > MAX_TREE_FILES:
+        raise ParameterError(f"a folder of {len(files)} files: the studio takes at most {MAX_TREE_FILES} at once")
     out = []
     for name, data in files:
         rel = relative_path(name, strict=False)
@@ -166,4 +171,4 @@ def store_tree(folder: Path, files: list[tuple[str, bytes]]) -> list[PurePosixPa
     return out
 
 
-__all__ = ["HELD_KEYS", "is_input", "manifest_elements", "relative_path", "store_tree"]
+__all__ = ["HELD_KEYS", "MAX_TREE_FILES", "is_input", "manifest_elements", "relative_path", "store_tree"]

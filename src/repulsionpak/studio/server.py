@@ -82,19 +82,27 @@ class StudioServer(LiveServer):
             raise web.HTTPBadRequest(text=json.dumps({"error": str(exc)}), content_type="application/json") from None
 
     async def _files(self, request: web.Request, limit: int = MAX_FILE_BYTES) -> list[tuple[str, bytes]]:
-        """The files of a multipart upload, each refused past ``limit`` bytes as it arrives."""
+        """The files of a multipart upload, each refused past ``limit`` bytes as it arrives,
+        all of them together past the project limit (a folder)."""
         try:
             reader = await request.multipart()
         except (AssertionError, ValueError, KeyError):
             raise web.HTTPBadRequest(text=json.dumps({"error": "expected a file upload (multipart/form-data)"}),
                                      content_type="application/json") from None
-        out = []
+        out, total = [], 0
         while (part := await reader.next()) is not None:
             if not getattr(part, "filename", None):
                 continue
             buf = bytearray()
             while chunk := await part.read_chunk(1 << 16):
                 buf += chunk
+                total += len(chunk)
+                if total > MAX_PROJECT_BYTES:
+                    msg = (f"the upload is larger than {MAX_PROJECT_BYTES / 2**20:.0f} MB, the most the studio "
+                           f"accepts at once")
+                    raise web.HTTPRequestEntityTooLarge(max_size=MAX_PROJECT_BYTES, actual_size=total,
+                                                        text=json.dumps({"error": msg}),
+                                                        content_type="application/json")
                 if len(buf) > limit:
                     msg = (f"{part.filename}: the file is larger than {limit / 2**20:.0f} MB, "
                            f"the most the studio accepts")
