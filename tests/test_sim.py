@@ -16,7 +16,7 @@ import pytest
 import shapely
 from shapely.geometry import box
 
-from repulsionpak.errors import ConfigError, ParameterError
+from repulsionpak.errors import ConfigError, InputError, ParameterError
 from repulsionpak.pack import pack
 from repulsionpak.sim.integrate import skin_areas
 from repulsionpak.params import (
@@ -356,11 +356,13 @@ def test_pack_names_the_argument_of_the_wrong_kind():
     p = scene_params(seed=1, max_iterations=10, settle=0)
     for args, fragment in [((CONTAINER, el, None), "params must be a Params"),
                            ((CONTAINER, el, {"gap": 5}), "params must be a Params"),
-                           (("circle.svg", el, p), "the container must be a Container"),
+                           ((42, el, p), "the container must be a Container"),
                            ((CONTAINER, el[0], p), "elements must be a list of Element"),
                            ((CONTAINER, ["a.svg"], p), "got a str in it")]:
         with pytest.raises(ParameterError, match=fragment):
             pack(*args)
+    with pytest.raises(InputError, match="circle.svg: container file not found"):  # a path is read
+        pack("circle.svg", el, p)
 
 
 def test_params_numbers_become_plain_python_numbers_or_are_refused():
