@@ -358,11 +358,13 @@ def test_pack_names_the_argument_of_the_wrong_kind():
                            ((CONTAINER, el, {"gap": 5}), "params must be a Params"),
                            ((42, el, p), "the container must be a Container"),
                            ((CONTAINER, el[0], p), "elements must be a list of Element"),
-                           ((CONTAINER, ["a.svg"], p), "got a str in it")]:
+                           ((CONTAINER, [el[0], "a.svg"], p), "or of paths, got a Element in it")]:
         with pytest.raises(ParameterError, match=fragment):
             pack(*args)
-    with pytest.raises(InputError, match="circle.svg: container file not found"):  # a path is read
+    with pytest.raises(InputError, match="circle.svg: container file not found"):  # paths are read
         pack("circle.svg", el, p)
+    with pytest.raises(InputError, match="a.svg: element file not found"):
+        pack(CONTAINER, ["a.svg"], p)
 
 
 def test_params_numbers_become_plain_python_numbers_or_are_refused():
