@@ -1,5 +1,5 @@
 """Make docs/images/studio.png: the studio in Chromium (Playwright) with the example heart,
-a painted lobe beside it, the example elements and a finished run.
+a painted lobe beside it, a flow guide, the example elements and a finished run.
 
     python docs/make_studio_screenshot.py [--out docs/images/studio.png]
 
@@ -53,6 +53,17 @@ def main() -> None:
             page.mouse.up()
             page.wait_for_function("window.repulsionpakStudio.state.painted && window.repulsionpakStudio.busy === 0")
             page.click("#brush")
+            # a flow guide across the heart, left to right and rising
+            page.click("#guide")
+            x0, y0 = box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.75
+            page.mouse.move(x0, y0)
+            page.mouse.down()
+            for k in range(1, 21):
+                page.mouse.move(x0 + 18 * k, y0 - 9 * k)
+            page.mouse.up()
+            page.wait_for_function("window.repulsionpakStudio.state.guides.length === 1 && "
+                                   "window.repulsionpakStudio.busy === 0")
+            page.click("#guide")
             page.click("#start")
             page.wait_for_function("window.repulsionpak.status.done === true", timeout=600_000)
             page.click("#stage g.element >> nth=5")
