@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import asyncio
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -25,19 +24,12 @@ aiohttp = pytest.importorskip("aiohttp", reason="the live view needs aiohttp: pi
 
 import repulsionpak  # noqa: E402
 from repulsionpak.live.protocol import decode_frame, encode_frame, parse_command  # noqa: E402
+from browser_support import chromium  # noqa: E402
 
 PKG = Path(repulsionpak.__file__).parent
 EX = PKG / "examples"
 SVG_NS = "{http://www.w3.org/2000/svg}"
 COUNT = 8
-
-
-def _chromium() -> str | None:
-    for p in (os.environ.get("REPULSIONPAK_CHROMIUM"), shutil.which("chromium"),
-              shutil.which("chromium-browser"), "/usr/bin/chromium"):
-        if p and Path(p).exists():
-            return p
-    return None
 
 
 def _cli(*args: str) -> list[str]:
@@ -303,7 +295,7 @@ def _d(page, i: int) -> str:
 
 
 def test_browser_pause_step_drag_pin_remove_add_download(live, tmp_path):
-    exe = _chromium()
+    exe = chromium()
     if exe is None:
         pytest.skip("no Chromium found: install it with `apt-get install chromium` "
                     "(or set REPULSIONPAK_CHROMIUM)")

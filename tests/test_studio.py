@@ -11,7 +11,6 @@ import io
 import json
 import math
 import os
-import shutil
 import time
 import zipfile
 from pathlib import Path
@@ -24,28 +23,15 @@ aiohttp = pytest.importorskip("aiohttp", reason="the studio needs aiohttp: pip i
 
 import repulsionpak  # noqa: E402
 from repulsionpak.errors import ParameterError  # noqa: E402
-from repulsionpak.studio import Session, StudioServer  # noqa: E402
+from repulsionpak.studio import Session  # noqa: E402
 from repulsionpak.studio.document import Document, History  # noqa: E402
 from repulsionpak.studio.region import Stroke, painted_region, region_svg  # noqa: E402
 from repulsionpak.studio.uploads import MAX_FILE_BYTES  # noqa: E402
 from repulsionpak.studio.settings import DEFAULTS, coerce, command_line, run_settings  # noqa: E402
+from browser_support import playwright_chromium, finish, page_state, wait  # noqa: E402
+from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
-
-
-def _wait(cond, timeout: float = 120.0, poll: float = 0.1):
-    t_end = time.monotonic() + timeout
-    while time.monotonic() < t_end:
-        v = cond()
-        if v:
-            return v
-        time.sleep(poll)
-    raise AssertionError(f"timed out after {timeout} s")
-
-
-def _finish(session: Session, timeout: float = 240.0) -> None:
-    _wait(lambda: session._thread is not None and not session._thread.is_alive(), timeout)  # noqa: SLF001
-    assert session.error is None, session.error
 
 
 # -- the brush region --------------------------------------------------------------------
@@ -149,13 +135,6 @@ def test_settings_defaults_and_messages_are_the_libraries():
 # -- the session ---------------------------------------------------------------------------
 
 
-@pytest.fixture
-def session():
-    s = Session()
-    yield s
-    s.close()
-
-
 def test_session_paints_undoes_and_redoes_the_region(session):
     assert session.state()["region_area"] == 0.0
     stroke = {"mode": "paint", "points": [[200, 500], [800, 500]], "radius": 150}
@@ -195,7 +174,7 @@ def test_export_equals_what_pack_writes_and_the_project_reopens(session, tmp_pat
     for k, v in (("count", "8"), ("gap", "12"), ("seed", "1")):
         session.set_setting(k, v)
     session.start()
-    _finish(session)
+    finish(session)
     svg = session.export("svg")
     assert 'class="element secondary" data-source="star.svg"' in svg.decode()
     # the project: the files, the settings and the command that makes the same bytes
@@ -240,7 +219,7 @@ def test_weights_go_through_an_element_manifest(session, tmp_path):
     assert session.command() == ("repulsionpak pack circle.svg elements.toml -o packing.svg --gap 12 --seed 2 "
                                  "--count 6 --no-pocket-fill")
     session.start()
-    _finish(session)
+    finish(session)
     svg = session.export("svg")
     text = svg.decode()
     assert text.count('data-source="apple.svg"') == 6 and 'data-source="fish.svg"' not in text
@@ -274,13 +253,13 @@ def test_painting_while_running_changes_the_simulations_container(session):
         session.set_setting(k, v)
     session.start()
     ctl = session.controller
-    _wait(lambda: ctl.sim is not None and ctl.sim.state.iteration > 150)
+    wait(lambda: ctl.sim is not None and ctl.sim.state.iteration > 150)
     ctl.submit({"cmd": "pause"})
     old_area = ctl.sim.model.container_area
     circle = ctl.container.region
     # a wide band across the right side of the circle and beyond it
     st = session.stroke({"mode": "paint", "points": [[420, 250], [700, 250]], "radius": 120})
-    _wait(lambda: ctl.sim.model.container_area > 1.2 * old_area, timeout=30)
+    wait(lambda: ctl.sim.model.container_area > 1.2 * old_area, timeout=30)
     assert ctl.container.region.area == pytest.approx(st["region_area"], rel=1e-3)
     f = ctl.sim.model.field
     x, y = np.array([650.0, 250.0]) / ctl.unit  # inside the new room, outside the circle
@@ -293,7 +272,7 @@ def test_painting_while_running_changes_the_simulations_container(session):
         pts = ctl.last_points
         return pts is not None and int(shapely.contains_xy(new_room, pts[:, 0], pts[:, 1]).sum()) > 20
 
-    _wait(entered, timeout=120)
+    wait(entered, timeout=120)
     session.cancel(wait=60)
 
 
@@ -303,35 +282,35 @@ def test_pins_drags_and_removals_of_a_running_simulation_are_undone(session):
         session.set_setting(k, v)
     session.start(paused=True)
     ctl = session.controller
-    _wait(lambda: ctl.sim is not None)
-    _wait(lambda: ctl.paused and ctl.commands.empty())
+    wait(lambda: ctl.sim is not None)
+    wait(lambda: ctl.paused and ctl.commands.empty())
     m, st = ctl.sim.model, ctl.sim.state
     a, b = int(m.elem_vstart[2]), int(m.elem_vstart[3])
     x0 = st.x[a:b].copy()
     ctl.submit({"cmd": "move", "index": 2, "dx": 30.0, "dy": -10.0})  # the page's drag
     session.moved(2, 30.0, -10.0)
-    _wait(lambda: ctl.commands.empty() and abs((st.x[a:b] - x0)[:, 0].mean() * ctl.unit - 30.0) < 1e-6)
+    wait(lambda: ctl.commands.empty() and abs((st.x[a:b] - x0)[:, 0].mean() * ctl.unit - 30.0) < 1e-6)
     session.pin(2, True)
-    _wait(lambda: 2 in ctl.pinned)
+    wait(lambda: 2 in ctl.pinned)
     assert session.state()["history"]["undo_label"] == "pin element 2"
     session.undo()
-    _wait(lambda: 2 not in ctl.pinned)
+    wait(lambda: 2 not in ctl.pinned)
     session.undo()
-    _wait(lambda: np.abs(st.x[a:b] - x0).max() < 1e-9)  # back where it was (paused: exactly)
+    wait(lambda: np.abs(st.x[a:b] - x0).max() < 1e-9)  # back where it was (paused: exactly)
     session.redo()
-    _wait(lambda: abs((st.x[a:b] - x0)[:, 1].mean() * ctl.unit + 10.0) < 1e-6)
+    wait(lambda: abs((st.x[a:b] - x0)[:, 1].mean() * ctl.unit + 10.0) < 1e-6)
     session.redo()
-    _wait(lambda: 2 in ctl.pinned)
+    wait(lambda: 2 in ctl.pinned)
     # a removed element comes back where it was, moving again
     c, d = int(m.elem_vstart[4]), int(m.elem_vstart[5])
     y0 = st.x[c:d].copy()
     session.remove(4)
-    _wait(lambda: 4 in ctl.removed and np.ptp(st.x[c:d], axis=0).max() < 0.05 * np.ptp(y0, axis=0).max())
+    wait(lambda: 4 in ctl.removed and np.ptp(st.x[c:d], axis=0).max() < 0.05 * np.ptp(y0, axis=0).max())
     session.undo()
-    _wait(lambda: 4 not in ctl.removed and np.abs(st.x[c:d] - y0).max() < 1e-9)
+    wait(lambda: 4 not in ctl.removed and np.abs(st.x[c:d] - y0).max() < 1e-9)
     assert ctl.sim.state.moving[4] and 4 not in ctl.layout_message()["removed"]
     session.redo()
-    _wait(lambda: 4 in ctl.removed)
+    wait(lambda: 4 in ctl.removed)
     session.cancel(wait=60)
 
 
@@ -341,7 +320,7 @@ def test_opening_another_container_ends_the_run(session):
         session.set_setting(k, v)
     session.start(paused=True)
     ctl = session.controller
-    _wait(lambda: ctl.sim is not None and ctl.paused)
+    wait(lambda: ctl.sim is not None and ctl.paused)
     layout = ctl.layout_id
     st = session.use_examples("heart")
     assert not st["running"] and ctl.sim is None and ctl.layout_id > layout
@@ -355,30 +334,20 @@ def test_restart_with_a_new_seed_ends_a_paused_run_at_once(session):
         session.set_setting(k, v)
     session.start(paused=True)
     ctl = session.controller
-    _wait(lambda: ctl.sim is not None and ctl.paused)
+    wait(lambda: ctl.sim is not None and ctl.paused)
     old_sim = ctl.sim
     t0 = time.monotonic()
     st = session.start(new_seed=True)
     assert time.monotonic() - t0 < 10.0  # not held up by the paused run
     seed = st["settings"]["seed"]
     assert seed != 5 and str(seed) in session.command()
-    _finish(session)
+    finish(session)
     assert ctl.sim is not old_sim and ctl.status()["done"]
     svg = session.export("svg").decode()
     assert f'data-seed="{seed}"' in svg
 
 
 # -- the server ------------------------------------------------------------------------------
-
-
-@pytest.fixture
-def server():
-    s = Session()
-    srv = StudioServer(s, port=0)
-    srv.start()
-    yield srv
-    srv.stop()
-    s.close()
 
 
 async def _status(method: str, url: str, **kw) -> tuple[int, str]:
@@ -451,34 +420,14 @@ def test_server_upload_limits_and_messages(server):
 # -- the page in a real browser ------------------------------------------------------------------
 
 
-def _chromium() -> str | None:
-    for p in (os.environ.get("REPULSIONPAK_CHROMIUM"), shutil.which("chromium"),
-              shutil.which("chromium-browser"), "/usr/bin/chromium"):
-        if p and Path(p).exists():
-            return p
-    return None
-
-
-def _browser():
-    exe = _chromium()
-    if exe is None:
-        pytest.skip("no Chromium found: install it with `apt-get install chromium` (or set REPULSIONPAK_CHROMIUM)")
-    sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
-    return sync_api, exe
-
-
 def test_page_paint_fill_setting_pin_export(server, tmp_path):
-    sync_api, exe = _browser()
+    sync_api, exe = playwright_chromium()
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=exe, args=["--no-sandbox"])
         try:
             _drive(browser, server, tmp_path)
         finally:
             browser.close()
-
-
-def _state(page) -> dict:
-    return page.evaluate("window.repulsionpakStudio.state")
 
 
 def _drive(browser, server, tmp_path):
@@ -516,7 +465,7 @@ def _drive(browser, server, tmp_path):
     page.wait_for_function("window.repulsionpakStudio.state.history.undo_label === 'paint' && "
                            "window.repulsionpakStudio.state.region.length > 0 && "
                            "window.repulsionpakStudio.busy === 0")
-    st = _state(page)
+    st = page_state(page)
     region = shapely.Polygon(st["region"][0])
     assert len(st["region"]) == 1 and region.area > 0  # the two strokes overlap: one blob
     assert "container.svg" in page.text_content("#command") and "--gap 14" in page.text_content("#command")
@@ -536,7 +485,7 @@ def _drive(browser, server, tmp_path):
                   idx)
     page.click("#pin")
     page.wait_for_selector(f'#stage g.element[data-index="{idx}"][data-pinned="true"]', timeout=30_000)
-    assert _state(page)["history"]["undo_label"] == f"pin element {idx}"
+    assert page_state(page)["history"]["undo_label"] == f"pin element {idx}"
     page.wait_for_function("window.repulsionpak.status.done === true", timeout=300_000)
     page.wait_for_function("window.repulsionpakStudio.state.finished === true")
     # export through the page's link and measure it
@@ -591,7 +540,7 @@ def test_studio_command_prints_the_url_and_opens_its_files(tmp_path):
 def test_page_drop_files_and_undo(server):
     """Files dropped on the container's section open the container, elsewhere add elements;
     Undo and Redo in the page walk the history."""
-    sync_api, exe = _browser()
+    sync_api, exe = playwright_chromium()
     circle = (EX / "containers" / "circle.svg").read_text()
     apple = (EX / "elements" / "apple.svg").read_text()
     with sync_api.sync_playwright() as pw:
@@ -607,7 +556,7 @@ def test_page_drop_files_and_undo(server):
             page.wait_for_function("window.repulsionpakStudio.state.container === 'circle.svg'")
             page.evaluate(drop, ["#stage", "apple.svg", apple])
             page.wait_for_function("window.repulsionpakStudio.state.elements.join() === 'apple.svg'")
-            st = _state(page)
+            st = page_state(page)
             assert st["region_area"] == pytest.approx(
                 repulsionpak.load_container(EX / "containers" / "circle.svg").area, rel=1e-6)
             assert st["command"] == "repulsionpak pack circle.svg elements/apple.svg -o packing.svg"

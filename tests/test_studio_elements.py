@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import io
 import os
-import shutil
-import time
 import zipfile
 from pathlib import Path
 
@@ -20,24 +18,11 @@ pytest.importorskip("aiohttp", reason="the studio needs aiohttp: pip install -e 
 import repulsionpak  # noqa: E402
 from repulsionpak.errors import ParameterError  # noqa: E402
 from repulsionpak.flow.align import copy_rotations  # noqa: E402
-from repulsionpak.studio import Session, StudioServer  # noqa: E402
+from repulsionpak.studio import Session  # noqa: E402
+from browser_support import playwright_chromium, finish, page_state, wait  # noqa: E402
+from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
-
-
-def _wait(cond, timeout: float = 120.0, poll: float = 0.1):
-    t_end = time.monotonic() + timeout
-    while time.monotonic() < t_end:
-        v = cond()
-        if v:
-            return v
-        time.sleep(poll)
-    raise AssertionError(f"timed out after {timeout} s")
-
-
-def _finish(session: Session, timeout: float = 240.0) -> None:
-    _wait(lambda: session._thread is not None and not session._thread.is_alive(), timeout)  # noqa: SLF001
-    assert session.error is None, session.error
 
 
 def _cli_in(folder: Path, cmd: str) -> None:
@@ -52,13 +37,6 @@ def _cli_in(folder: Path, cmd: str) -> None:
     finally:
         os.chdir(cwd)
     assert res.exit_code == 0, res.output
-
-
-@pytest.fixture
-def session():
-    s = Session()
-    yield s
-    s.close()
 
 
 def test_an_elements_own_rotation_reaches_the_command_the_run_and_the_project(session, tmp_path):
@@ -78,7 +56,7 @@ def test_an_elements_own_rotation_reaches_the_command_the_run_and_the_project(se
         session.set_setting(k, v)
     assert session.command() == "repulsionpak pack circle.svg elements.toml -o packing.svg --gap 12 --seed 3 --count 10"
     session.start()
-    _finish(session)
+    finish(session)
     svg = session.export("svg")
     out = tmp_path / "studio.svg"
     out.write_bytes(svg)
@@ -114,35 +92,9 @@ def test_an_elements_own_rotation_reaches_the_command_the_run_and_the_project(se
 # -- the page in Chromium -----------------------------------------------------------------
 
 
-def _chromium() -> str | None:
-    for p in (os.environ.get("REPULSIONPAK_CHROMIUM"), shutil.which("chromium"),
-              shutil.which("chromium-browser"), "/usr/bin/chromium"):
-        if p and Path(p).exists():
-            return p
-    return None
-
-
-def _browser():
-    exe = _chromium()
-    if exe is None:
-        pytest.skip("no Chromium found: install it with `apt-get install chromium` (or set REPULSIONPAK_CHROMIUM)")
-    sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
-    return sync_api, exe
-
-
-@pytest.fixture
-def server():
-    s = Session()
-    srv = StudioServer(s, port=0)
-    srv.start()
-    yield srv
-    srv.stop()
-    s.close()
-
-
 @pytest.fixture
 def page(server):
-    sync_api, exe = _browser()
+    sync_api, exe = playwright_chromium()
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=exe, args=["--no-sandbox"])
         try:
@@ -155,10 +107,6 @@ def page(server):
             assert not errors, errors
         finally:
             browser.close()
-
-
-def _state(page) -> dict:
-    return page.evaluate("window.repulsionpakStudio.state")
 
 
 def test_page_sets_an_elements_own_rotation_rigid_and_stiffness(page):
@@ -177,7 +125,7 @@ def test_page_sets_an_elements_own_rotation_rigid_and_stiffness(page):
     page.fill("#element-list li:nth-child(1) input.own-stiffness", "-2")
     page.dispatch_event("#element-list li:nth-child(1) input.own-stiffness", "change")
     page.wait_for_function("document.querySelector('#setting-error').textContent.includes('stiffness must be > 0')")
-    assert _state(page)["own"] == [{"rigid": True}, {"rotation": "fixed:45"}]
+    assert page_state(page)["own"] == [{"rigid": True}, {"rotation": "fixed:45"}]
     assert page.eval_on_selector("#element-list li:nth-child(1) input.own-stiffness", "e => e.value") == ""
     assert "elements.toml" in page.text_content("#command")
     # the controls show the document after a re-render (undo of the rigid one)
@@ -269,7 +217,7 @@ def test_page_takes_a_folder_and_a_manifest(page, tmp_path):
     page.set_input_files("#open-elements", [str(scene / "elements.toml"), str(scene / "shapes" / "apple.svg"),
                                             str(scene / "shapes" / "fish.svg")])
     page.wait_for_function("window.repulsionpakStudio.state.elements.length === 2")
-    st = _state(page)
+    st = page_state(page)
     assert st["weights"] == [2.0, 1.0] and st["own"][1]["rotation"] == "fixed:30"
     assert page.eval_on_selector("#element-list li:nth-child(2) select.own-rotation", "e => e.value") == "fixed"
     # a folder through "Add folder…" (webkitdirectory): its own manifest decides
@@ -280,7 +228,7 @@ def test_page_takes_a_folder_and_a_manifest(page, tmp_path):
     (other / "notes.txt").write_text("not an element")
     page.set_input_files("#open-folder", str(other))
     page.wait_for_function("window.repulsionpakStudio.state.elements.length === 4")
-    assert _state(page)["elements"] == ["apple.svg", "fish.svg", "leaf.svg", "snake.svg"]
+    assert page_state(page)["elements"] == ["apple.svg", "fish.svg", "leaf.svg", "snake.svg"]
     # a dropped folder (DataTransfer of a directory entry is not scriptable): its files, as
     # the page sends them with their relative paths
     st = page.evaluate("""async (texts) => {
@@ -303,8 +251,8 @@ def test_an_added_copy_is_undone_and_redone(session):
         session.set_setting(k, v)
     session.start(paused=True)
     ctl = session.controller
-    _wait(lambda: ctl.sim is not None)
-    _wait(lambda: ctl.paused and ctl.commands.empty())
+    wait(lambda: ctl.sim is not None)
+    wait(lambda: ctl.paused and ctl.commands.empty())
     n0 = ctl.sim.model.n_elements
     with pytest.raises(ParameterError, match="'x' must be a finite number"):
         session.add_copy(1, float("nan"), 0.0)
@@ -315,10 +263,10 @@ def test_an_added_copy_is_undone_and_redone(session):
     x0 = ctl.sim.state.x[a:b].copy()
     assert np.allclose(x0.mean(axis=0) * ctl.unit, [250.0, 250.0], atol=15.0)  # where it was put
     session.undo()
-    _wait(lambda: n0 in ctl.removed)
+    wait(lambda: n0 in ctl.removed)
     assert n0 in ctl.layout_message()["removed"]
     session.redo()
-    _wait(lambda: n0 not in ctl.removed and np.abs(ctl.sim.state.x[a:b] - x0).max() < 1e-9)
+    wait(lambda: n0 not in ctl.removed and np.abs(ctl.sim.state.x[a:b] - x0).max() < 1e-9)
     assert ctl.sim.state.moving[n0]
     # a copy outside the container is refused and leaves no history
     st = session.add_copy(1, 5000.0, 5000.0)
@@ -334,20 +282,20 @@ def test_painted_room_raises_the_planned_sizes(session):
         session.set_setting(k, v)
     session.start()
     ctl = session.controller
-    _wait(lambda: ctl.sim is not None and ctl.sim.state.iteration > 100)
+    wait(lambda: ctl.sim is not None and ctl.sim.state.iteration > 100)
     ctl.submit({"cmd": "pause"})
-    _wait(lambda: ctl.paused and ctl.commands.empty())
+    wait(lambda: ctl.paused and ctl.commands.empty())
     sim = ctl.sim
     cap0 = sim.max_growth.copy()
     area0 = sim.model.container_area
     growth0 = np.asarray(sim.state.growth).copy()
     st = session.stroke({"mode": "paint", "points": [[420, 250], [720, 250], [720, 700]], "radius": 150})
-    _wait(lambda: sim.model.container_area > 1.3 * area0, timeout=30)
+    wait(lambda: sim.model.container_area > 1.3 * area0, timeout=30)
     ratio = sim.model.container_area / area0
     assert sim.max_growth == pytest.approx(cap0 * np.sqrt(ratio), rel=1e-9)
     assert sim.state.allow_growth and sim.state.settle_left is None
     ctl.submit({"cmd": "resume"})
-    _wait(lambda: (np.asarray(sim.state.growth) > cap0).any() or not session.running, timeout=240)
+    wait(lambda: (np.asarray(sim.state.growth) > cap0).any() or not session.running, timeout=240)
     grown = np.asarray(sim.state.growth)
     assert (grown > growth0 + 1e-6).sum() >= 5, (growth0, grown)  # most elements grew again
     assert (grown > cap0).any(), (cap0, grown)  # some past the first planned size
@@ -375,7 +323,7 @@ def test_guides_reach_the_command_the_run_and_the_project(session, tmp_path):
     assert session.command() == ("repulsionpak pack circle.svg elements/fish.svg elements/leaf.svg -o packing.svg "
                                  "--flow guides.svg --gap 12 --seed 4 --count 12 --no-pocket-fill")
     session.start()
-    _finish(session)
+    finish(session)
     svg = session.export("svg")
     proj = tmp_path / "proj"
     zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
@@ -448,7 +396,7 @@ def test_page_guide_drawn_with_the_mouse_aligns_the_copies_and_add_copy_undoes(p
         page.mouse.move(*screen(60 + 19 * k, 400 - 10 * k))
     page.mouse.up()
     page.wait_for_function("window.repulsionpakStudio.state.guides.length === 1 && window.repulsionpakStudio.busy === 0")
-    guide = np.array(_state(page)["guides"][0])
+    guide = np.array(page_state(page)["guides"][0])
     assert np.abs(guide[0] - [60, 400]).max() < 2 and np.abs(guide[-1] - [440, 200]).max() < 2
     assert "--flow guides.svg" in page.text_content("#command")
     assert page.locator("#guide-layer path").count() == 1
@@ -550,7 +498,7 @@ def test_an_elements_own_flow_keys(session, tmp_path):
     for k, v in (("count", "10"), ("gap", "12"), ("seed", "4"), ("pocket_fill", False)):
         session.set_setting(k, v)
     session.start()
-    _finish(session)
+    finish(session)
     proj = tmp_path / "proj"
     zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
     manifest = (proj / "elements.toml").read_text()

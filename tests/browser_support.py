@@ -1,0 +1,77 @@
+"""What the live view's and the studio's tests share: finding Debian's Chromium for
+Playwright, waiting on a condition, and the studio's session and server fixtures.
+
+Test modules import the fixtures by name (``from browser_support import server, session``),
+so pytest finds them there.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+
+
+def chromium() -> str | None:
+    """The Chromium executable Playwright drives (it cannot download its own browser
+    here): ``REPULSIONPAK_CHROMIUM``, or Debian's ``chromium`` on the PATH."""
+    for p in (os.environ.get("REPULSIONPAK_CHROMIUM"), shutil.which("chromium"),
+              shutil.which("chromium-browser"), "/usr/bin/chromium"):
+        if p and Path(p).exists():
+            return p
+    return None
+
+
+def playwright_chromium():
+    """(playwright.sync_api, Chromium's path), or skip the test, saying what is missing."""
+    exe = chromium()
+    if exe is None:
+        pytest.skip("no Chromium found: install it with `apt-get install chromium` (or set REPULSIONPAK_CHROMIUM)")
+    sync_api = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
+    return sync_api, exe
+
+
+def wait(cond, timeout: float = 120.0, poll: float = 0.1):
+    """``cond()``'s first true value, polled every ``poll`` s; AssertionError after ``timeout`` s."""
+    t_end = time.monotonic() + timeout
+    while time.monotonic() < t_end:
+        v = cond()
+        if v:
+            return v
+        time.sleep(poll)
+    raise AssertionError(f"timed out after {timeout} s")
+
+
+def finish(session, timeout: float = 240.0) -> None:
+    """Wait for a studio session's run to end, and check it ended without an error."""
+    wait(lambda: session._thread is not None and not session._thread.is_alive(), timeout)  # noqa: SLF001
+    assert session.error is None, session.error
+
+
+def page_state(page) -> dict:
+    """The studio page's own state object."""
+    return page.evaluate("window.repulsionpakStudio.state")
+
+
+@pytest.fixture
+def session():
+    from repulsionpak.studio import Session
+
+    s = Session()
+    yield s
+    s.close()
+
+
+@pytest.fixture
+def server():
+    from repulsionpak.studio import Session, StudioServer
+
+    s = Session()
+    srv = StudioServer(s, port=0)
+    srv.start()
+    yield srv
+    srv.stop()
+    s.close()
