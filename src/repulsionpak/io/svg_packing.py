@@ -43,6 +43,17 @@ from .svg_xml import local_name
 __all__ = ["read_packing_svg"]
 
 
+def _art_paths(path, shapes, tol: float, budget) -> list[ArtPath]:
+    """Each shape flattened within ``tol`` as one :class:`ArtPath` (shapes that flatten to
+    nothing are left out)."""
+    arts = []
+    for sh in shapes:
+        subs = flatten_shape(path, sh, tol, budget)
+        if subs:
+            arts.append(ArtPath(tuple(q for q, _ in subs), tuple(c for _, c in subs), sh.style))
+    return arts
+
+
 def _classes(attrs: dict) -> set[str]:
     return set(str(attrs.get("class") or "").split())
 
@@ -141,21 +152,10 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
                     pts for pts, _ in flatten_shape(p, sh, tol, budget) if len(pts) >= 3
                 )
             region = finalize_region(p, rings_to_region(rings, "evenodd", p))
-            arts = []
-            for sh in container_shapes:
-                subs = flatten_shape(p, sh, tol, budget)
-                if subs:
-                    arts.append(
-                        ArtPath(
-                            tuple(q for q, _ in subs),
-                            tuple(c for _, c in subs),
-                            sh.style,
-                        )
-                    )
             container = Container(
                 source=source,
                 region=region,
-                paths=tuple(arts),
+                paths=tuple(_art_paths(p, container_shapes, tol, budget)),
                 svg_root=dict(doc.svg_root),
             )
         else:
@@ -168,21 +168,11 @@ def read_packing_svg(path: str | Path) -> tuple[Container, list[PlacedArt], dict
         for grp, shapes in groups.values():
             cls = _classes(grp)
             kind = "primary" if "primary" in cls else "secondary"
-            arts = []
             # small copies (pocket fillers) are flattened relative to their own size too
             b = shape_bounds(shapes)
             size = float(np.hypot(b[2] - b[0], b[3] - b[1])) if b is not None else 0.0
             el_tol = min(tol, 1e-4 * size) if size > 0 else tol
-            for sh in shapes:
-                subs = flatten_shape(p, sh, el_tol, budget)
-                if subs:
-                    arts.append(
-                        ArtPath(
-                            tuple(q for q, _ in subs),
-                            tuple(c for _, c in subs),
-                            sh.style,
-                        )
-                    )
+            arts = _art_paths(p, shapes, el_tol, budget)
             deformation = grp.get("data-deformation")
             try:
                 deformation = float(deformation) if deformation is not None else None
