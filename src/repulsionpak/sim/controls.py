@@ -1,4 +1,4 @@
-"""Designer controls in the simulation (issue 12): per-element spring stiffness, rotation
+"""Designer controls in the simulation: per-element spring stiffness, rotation
 limits and rigid bodies, as constraints projected after every Euler step.
 
 Each element's motion is split, by the least-squares similarity (rotation θ, uniform
