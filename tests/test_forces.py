@@ -78,7 +78,7 @@ def run_grow(inside, outside, vstart, nskin, moving, n_grow, growth, k, allow):
     return _call_by_name(grow, {
         "inside": inside, "outside": outside, "elem_vstart": vstart, "elem_nskin": nskin,
         "moving": moving, "n_grow": n_grow, "growth": growth, "k_g_dt": k, "allow": allow,
-        "max_growth": np.full(len(n_grow), np.inf)})
+        "max_growth": np.full(len(n_grow), np.inf), "steps": np.ones(len(n_grow), np.int64)})
 
 
 def make_model(templates, placement, frame, region, cell_size, field_h):

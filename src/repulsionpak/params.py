@@ -62,7 +62,10 @@ class PlacementParams:
         "the larger, the fewer and bigger the elements, and the less of the container their gaps take "
         "(15 covers more than 12 on 48 of the 53 suite scenes, see docs/quality.md).")
     initial_fraction: float = _doc(
-        0.075, "-", "Share of the container area the skins occupy at the start (paper: 5–10%).")
+        0.22, "-", "Share of the container area the skins occupy at the start (paper: 5–10%). "
+        "Blue noise spreads larger elements as evenly as small ones, and they start where the "
+        "paper's growth would take ~1,500 cheap iterations to bring them: the heart with 30 "
+        "animals packs denser at 0.22 than at 0.075 (docs/algorithm.md, growth).")
     follow_room: bool = _doc(
         True, "-", "Size and count the primaries from the room the container has (its separate "
         "regions and their local width, repulsionpak.sizing) when it is uneven: several regions, or "
@@ -123,6 +126,17 @@ class SimParams:
     dt: float = _doc(0.1, "-", "Δt, explicit Euler time step (paper: 0.1).")
     velocity_cap: float = _doc(5.0, "× Δt", "Velocities are capped at velocity_cap·Δt (paper: 5).")
     k_growth: float = _doc(0.01, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6).")
+    fast_growth: int = _doc(
+        4, "× k_g", "An element with room grows this many times faster (beyond the paper): while "
+        "no other skin and no container edge is within fast_growth_clearance of its skin, its growth "
+        "counter n_M advances by this many steps per iteration, and its velocity cap follows; with a "
+        "neighbour that close it grows at the paper's rate (1 = the paper's rule everywhere).")
+    fast_growth_clearance: float = _doc(
+        0.5, "× gap", "The room an element needs around its skin to grow at the fast_growth rate.")
+    fast_growth_until: float = _doc(
+        0.7, "-", "Fast growth ends once an element has grown this share of the way from its placed "
+        "size to its largest (max_size): the last stretch, where the jam forms, is grown at the "
+        "paper's rate everywhere.")
     growth_headroom: float = _doc(
         2.0, "-", "An element's velocity cap is at least this many times the speed its farthest "
         "vertex needs to follow its growth (k_g × its placed radius), so large elements are not "
@@ -446,6 +460,8 @@ class Params:
             *[(getattr(s, k) >= 0, f"sim.{k} must be >= 0 (a force constant), got {getattr(s, k)!r}")
               for k in ("k_repulsion", "k_edge", "k_overlap", "k_boundary", "k_shape")],
             (s.k_growth >= 0, "sim.k_growth must be >= 0"),
+            (s.fast_growth >= 1, "sim.fast_growth must be >= 1"),
+            (s.fast_growth_clearance >= 0, "sim.fast_growth_clearance must be >= 0"),
             (s.bend_limit >= 0 and s.bend_limit_convex >= 0, "sim.bend_limit and bend_limit_convex must be >= 0"),
             (0 <= s.skin_width <= 1, "sim.skin_width must be in [0, 1]"),
             (s.soft > 0, "sim.soft must be > 0"),

@@ -97,15 +97,18 @@ def confined_contacts(x, inside, elem_vstart, elem_nskin, moving, one_sided, out
 
 
 @njit(cache=True)
-def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_dt, allow, max_growth):
-    """Sec. 6: every moving element with no skin vertex inside another mesh grows by one
-    step; growth factor = 1 + n_M·k_g·Δt. Returns the number of elements that grew.
+def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_dt, allow, max_growth,
+         steps=None):
+    """Sec. 6: every moving element with no skin vertex inside another mesh grows by
+    ``steps[e]`` steps (the paper, and ``steps=None``: 1); growth factor = 1 + n_M·k_g·Δt. Returns the number
+    of elements that grew.
 
     Beyond the paper, a skin vertex outside the container (``outside``) also makes its
     element wait: growth pressure would push border elements through the penalty
     boundary force; and no element grows past ``max_growth`` (its nominal size times a
     margin), so elements that found room early do not dwarf their twins that got stuck
-    (relative sizes are kept, sec. 6) and skins keep the width they were built with.
+    (relative sizes are kept, sec. 6) and skins keep the width they were built with. An
+    element given several steps takes as many as fit under ``max_growth``.
     """
     grew = 0
     if not allow:
@@ -118,12 +121,73 @@ def grow(inside, outside, elem_vstart, elem_nskin, moving, n_grow, growth, k_g_d
             if inside[i] or outside[i]:
                 blocked = True
                 break
-        if blocked or 1.0 + (n_grow[e] + 1) * k_g_dt > max_growth[e]:
+        if blocked:
             continue
-        n_grow[e] += 1
+        k = 1 if steps is None else steps[e]
+        while k > 0 and 1.0 + (n_grow[e] + k) * k_g_dt > max_growth[e]:
+            k -= 1
+        if k == 0:
+            continue
+        n_grow[e] += k
         grew += 1
         growth[e] = 1.0 + n_grow[e] * k_g_dt
     return grew
+
+
+@njit(cache=True)
+def growth_steps(x, elem_vstart, elem_nskin, moving, nb_count, nb_d2, values, ox, oy, inv_h, clear,
+                 fast, growth, until, steps):
+    """The growth steps of each element this iteration into ``steps`` (M,): ``fast`` for
+    a moving element with room — no neighbouring skin (``nb_d2``, the contacts' squared
+    distances) closer than ``clear`` to any of its skin vertices, and every one of them at
+    least ``clear`` inside the container (``values``, its signed distance field) — else 1
+    (the paper's rate). Returns the number of elements with room.
+
+    Notes
+    -----
+    The paper grows every element by the same small step until it touches a neighbour,
+    so a packing spends its first few thousand iterations growing elements that touch
+    nothing. An element with room takes several steps at once; within ``clear`` of a
+    neighbour or of the edge it is back at the paper's rate, so contacts form as slowly
+    as in the paper and the jam is the same kind of jam. Between full queries the contacts
+    refresh every neighbour within ``sim.far_update`` (2 gaps) each step, so a clearance
+    below that is judged on current distances; the every-step point-in-mesh radius
+    (``Simulator.near2``, 1–2 gaps) is wider than the clearance, so an element is back at
+    the paper's rate and caps before it can reach a neighbour.
+    """
+    n_fast = 0
+    clear2 = clear * clear
+    ny, nx = values.shape
+    for e in range(steps.shape[0]):
+        steps[e] = 1
+        if not moving[e] or fast <= 1 or growth[e] >= until[e]:
+            continue
+        room = True
+        for i in range(elem_vstart[e], elem_vstart[e] + elem_nskin[e]):
+            for j in range(nb_count[i]):
+                if nb_d2[i, j] < clear2:
+                    room = False
+                    break
+            if not room:
+                break
+            fx = (x[i, 0] - ox) * inv_h
+            fy = (x[i, 1] - oy) * inv_h
+            if fx < 0.0 or fy < 0.0 or fx >= nx - 1 or fy >= ny - 1:
+                room = False
+                break
+            ii = int(fx)
+            jj = int(fy)
+            tx = fx - ii
+            ty = fy - jj
+            d = ((values[jj, ii] * (1 - tx) + values[jj, ii + 1] * tx) * (1 - ty)
+                 + (values[jj + 1, ii] * (1 - tx) + values[jj + 1, ii + 1] * tx) * ty)
+            if d > -clear:
+                room = False
+                break
+        if room:
+            steps[e] = fast
+            n_fast += 1
+    return n_fast
 
 
 @njit(cache=True)

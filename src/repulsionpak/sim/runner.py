@@ -25,7 +25,8 @@ from .contacts import find_contacts, follow_contacts
 from .controls import apply_controls
 from .forces import corner_candidates, mark_corners_near, project_inside
 from .grid import Grid, bin_points
-from .integrate import confined_contacts, count_inside, euler_step, grow, growth_speed_caps, skin_areas, window_change
+from .integrate import (confined_contacts, count_inside, euler_step, grow, growth_speed_caps, growth_steps,
+                        skin_areas, window_change)
 from .model import Model, State
 from .selfintersect import relax_self_intersections
 from .shape import limit_deformation
@@ -108,8 +109,16 @@ class Simulator:
         # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
         self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
                                       params.dt, params.k_growth, params.growth_headroom)
+        # the caps of an element growing fast (``fast_growth`` steps an iteration: it has room)
+        self.vmax_fast = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
+                                           params.dt, params.k_growth * params.fast_growth,
+                                           params.growth_headroom)
+        self.grow_steps = np.ones(m.n_elements, np.int64)  # growth steps per element this iteration
+        self.n_fast = 0  # elements growing fast this iteration
         self.dt = params.dt
         self.max_growth = m.max_growth * params.max_size
+        # fast growth ends this far along from the placed size to the largest
+        self.fast_until = 1.0 + (self.max_growth - 1.0) * params.fast_growth_until
         self.far2 = (params.far_update * m.gap) ** 2
         # a vertex this close to a neighbouring skin gets a point-in-mesh test every step
         # (frozen elements do not move: only the moving ones' caps bound an approach)
@@ -127,16 +136,19 @@ class Simulator:
     def dt(self, value: float) -> None:
         self.state.dt = float(value)
         self._vmax_dt = self.vmax * (self.state.dt / self.params.dt)
+        self._vmax_fast_dt = self.vmax_fast * (self.state.dt / self.params.dt)
+        self._vmax_step = self._vmax_dt.copy()  # this iteration's caps (fast growers': higher)
 
     # -- one iteration -------------------------------------------------------------
     def step(self) -> float:
         """Advance one iteration (sec. 5–8); return the area fraction of the meshes."""
         m, st, p, F = self.model, self.state, self.params, self.F
         self.update_contacts(full=st.iteration % p.requery_every == 0)
+        vmax = self._growth_rates()
         F[:] = 0.0
         for term in self.terms:  # F = F_r + F_e + F_b + F_o (Eq. 1), and the terms beyond it
             term(m, st, F)
-        euler_step(st.x, st.v, F, st.active_all, self.dt, self._vmax_dt, m.vert_elem)
+        euler_step(st.x, st.v, F, st.active_all, self.dt, vmax, m.vert_elem)
         self._constrain()
         self._grow()
         if p.relax_passes > 0:  # fix self-intersections (sec. 7)
@@ -194,7 +206,24 @@ class Simulator:
                               st.blocking)
             blocking = st.blocking
         grow(blocking, st.outside, m.elem_vstart, m.elem_nskin, st.moving, st.n_grow,
-             st.growth, p.k_growth * p.dt, st.allow_growth, self.max_growth)
+             st.growth, p.k_growth * p.dt, st.allow_growth, self.max_growth, self.grow_steps)
+
+    def _growth_rates(self) -> np.ndarray:
+        """Each element's growth steps this iteration (``self.grow_steps``: ``fast_growth``
+        for one with room, :func:`~repulsionpak.sim.integrate.growth_steps`, else 1) and
+        the velocity caps that go with them (returned: a fast grower's vertices must keep
+        up with its rest lengths)."""
+        m, st, p = self.model, self.state, self.params
+        fast = p.fast_growth if st.allow_growth else 1
+        f = m.field
+        self.n_fast = growth_steps(st.x, m.elem_vstart, m.elem_nskin, st.moving, st.nb_count, st.nb_d2,
+                                   f.values, f.ox, f.oy, 1.0 / f.h, p.fast_growth_clearance * m.gap,
+                                   fast, st.growth, self.fast_until, self.grow_steps)
+        if self.n_fast == 0:
+            return self._vmax_dt
+        np.copyto(self._vmax_step, self._vmax_dt)
+        np.copyto(self._vmax_step, self._vmax_fast_dt, where=self.grow_steps > 1)
+        return self._vmax_step
 
     def _gather_corner_triangles(self, by_cells: bool | None = None) -> None:
         """The reflex corners near a moving mesh and their candidate triangles, from the

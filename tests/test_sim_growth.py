@@ -1,0 +1,163 @@
+"""Fast growth while an element has room (``sim.fast_growth``): the rate per element, the
+velocity caps that follow it, and determinism.
+
+The kernel cases are built by hand; the run cases use the small square scene of
+``test_sim.py`` (a 200×200 square, 8 elements, gap 4).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numba
+import numpy as np
+import pytest
+
+from repulsionpak.pack import pack
+from repulsionpak.params import Params
+from repulsionpak.sim.integrate import grow, growth_steps, skin_areas
+from test_sim import CONTAINER, library, scene_params
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_numba_thread():
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    yield
+    numba.set_num_threads(old)
+
+
+def _square_field(side=100.0, h=1.0):
+    """Signed distance (negative inside) of the square [0, side]² on a grid with margin."""
+    xs = np.arange(-10.0, side + 10.0 + h, h)
+    gx, gy = np.meshgrid(xs, xs)
+    inside = np.minimum(np.minimum(gx, side - gx), np.minimum(gy, side - gy))
+    return np.ascontiguousarray(-inside), -10.0, -10.0, 1.0 / h
+
+
+def _elements(centres, r=3.0, n=8):
+    """Rings of ``n`` skin vertices of radius ``r`` around ``centres``."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = np.column_stack([np.cos(t), np.sin(t)]) * r
+    x = np.concatenate([ring + c for c in centres])
+    m = len(centres)
+    return (x, np.arange(0, n * m, n).astype(np.int32), np.full(m, n, np.int32))
+
+
+def test_growth_steps_are_fast_only_with_room():
+    """Element 0 has a neighbouring skin 1.0 from one vertex (< clearance 2), element 1
+    none, element 2 is 1.5 from the container's edge, element 3 is pinned, element 4 has
+    room but has grown past ``until``: only element 1 grows fast."""
+    x, vstart, nskin = _elements([(30, 30), (60, 60), (4.5, 50), (80, 20), (50, 85)])
+    N, K = len(x), 4
+    nb_count = np.zeros(N, np.int64)
+    nb_d2 = np.zeros((N, K))
+    nb_count[3], nb_d2[3, 0] = 1, 1.0 ** 2        # element 0: a neighbour 1.0 away
+    nb_count[8:16], nb_d2[8:16, 0] = 1, 2.5 ** 2  # element 1: its neighbours 2.5 away
+    values, ox, oy, inv_h = _square_field()
+    moving = np.array([True, True, True, False, True])
+    growth = np.array([1.0, 1.0, 1.0, 1.0, 2.0])
+    until = np.full(5, 1.8)
+    steps = np.zeros(5, np.int64)
+    n = growth_steps(x, vstart, nskin, moving, nb_count, nb_d2, values, ox, oy, inv_h, 2.0, 4,
+                     growth, until, steps)
+    assert n == 1
+    assert steps.tolist() == [1, 4, 1, 1, 1]
+    # the paper's rule (fast = 1): every element one step
+    n = growth_steps(x, vstart, nskin, moving, nb_count, nb_d2, values, ox, oy, inv_h, 2.0, 1,
+                     growth, until, steps)
+    assert n == 0 and steps.tolist() == [1] * 5
+
+
+def test_grow_takes_the_steps_that_fit_under_the_largest_size():
+    vstart = np.array([0, 4, 8], np.int32)
+    nskin = np.array([4, 4, 4], np.int32)
+    inside = np.zeros(12, np.bool_)
+    inside[9] = True  # element 2 touches a mesh: no growth at any rate
+    n_grow = np.array([0, 8, 0], np.int64)
+    growth = 1.0 + n_grow * 0.01
+    grew = grow(inside, np.zeros(12, np.bool_), vstart, nskin, np.ones(3, np.bool_), n_grow, growth,
+                0.01, True, np.array([2.0, 1.1, 2.0]), np.array([4, 4, 4], np.int64))
+    assert grew == 2
+    assert n_grow.tolist() == [4, 10, 0]  # element 1 stops at 1.1 = 1 + 10·0.01
+    np.testing.assert_allclose(growth, 1.0 + n_grow * 0.01)
+
+
+def _fast(p: Params, fast=4, clearance=2.0, until=1.0) -> Params:
+    return replace(p, sim=replace(p.sim, fast_growth=fast, fast_growth_clearance=clearance,
+                                  fast_growth_until=until))
+
+
+def test_an_element_near_a_neighbour_grows_at_the_papers_rate():
+    """Every iteration of a run with fast growth: an element with a neighbouring skin or
+    the container's edge within the clearance takes one growth step (or none), one with
+    room takes ``fast_growth`` steps; the counters advance by exactly that."""
+    p = _fast(scene_params(max_iterations=600, settle=0))
+    clear = p.sim.fast_growth_clearance
+    seen = {"fast": 0, "near": 0}
+    last = {}
+
+    def snap(s):
+        if s.phase != "primary" or s.done:
+            return
+        sim, m, st = s.sim, s.model, s.state
+        steps = sim.grow_steps
+        for e in range(m.n_elements):
+            a, n = int(m.elem_vstart[e]), int(m.elem_nskin[e])
+            c = st.nb_count[a:a + n]
+            d2 = [st.nb_d2[i, j] for i in range(a, a + n) for j in range(c[i - a])]
+            near = bool(d2) and min(d2) < (clear * m.gap) ** 2
+            grew = st.n_grow[e] - last[e] if e in last else 0
+            if near:
+                assert steps[e] == 1 and grew <= 1, (s.iteration, e)
+                seen["near"] += 1
+            elif steps[e] > 1:
+                seen["fast"] += 1
+            assert 0 <= grew <= steps[e]
+            last[e] = int(st.n_grow[e])
+
+    pack(CONTAINER, library(), p, on_snapshot=snap, snapshot_every=1)
+    assert seen["fast"] > 0 and seen["near"] > 0
+
+
+def test_fast_growth_is_deterministic_and_faster():
+    """Same seed, same bytes; and the skins reach the paper's area at iteration 300 in
+    fewer iterations."""
+    p = _fast(scene_params(max_iterations=300, settle=0))
+    a, b = pack(CONTAINER, library(), p), pack(CONTAINER, library(), p)
+    assert np.array_equal(a.state.x, b.state.x)
+    assert np.array_equal(a.state.n_grow, b.state.n_grow)
+    paper = pack(CONTAINER, library(), _fast(scene_params(max_iterations=300, settle=0), fast=1))
+    target = paper.state.area_history[-1]
+    first = next(i for i, v in enumerate(a.state.area_history) if v >= target)
+    assert first < 0.6 * len(paper.state.area_history)
+
+
+def _fast_lag(headroom: float, at: int = 50) -> list[float]:
+    """Skin area over what its growth asks (placed skin area × growth factor²) at
+    iteration ``at`` of each of two large discs that grew fast until then."""
+    p = _fast(scene_params(count=2, max_iterations=at, settle=0), clearance=0.5)
+    p = replace(p, placement=replace(p.placement, initial_fraction=0.05),
+                sim=replace(p.sim, growth_headroom=headroom))
+    got: list[float] = []
+
+    def snap(s):
+        if s.phase == "primary" and s.iteration == at and not got:
+            m, sim = s.model, s.sim
+            placed = np.zeros(m.n_elements)
+            skin_areas(m.x_rest, m.elem_vstart, m.elem_nskin, sim.state.moving, placed)
+            fast = sim.state.n_grow >= 2 * at  # took fast steps for most of the run
+            got.extend((sim.state.areas / (placed * sim.state.growth ** 2))[fast])
+
+    pack(CONTAINER, library()[2:], p, on_snapshot=snap, snapshot_every=5)
+    return got
+
+
+def test_fast_growing_meshes_keep_up_with_their_growth():
+    """A disc ~100 units across in the 1000-unit frame growing four times the paper's
+    rate: its velocity cap follows the rate, so its skin keeps up with its rest lengths;
+    with the paper's cap alone it lags."""
+    now = _fast_lag(Params().sim.growth_headroom)
+    paper = _fast_lag(0.0)
+    assert len(now) >= 1 and min(now) > 0.97
+    assert len(paper) >= 1 and max(paper) < 0.9
