@@ -64,8 +64,8 @@ class PlacementParams:
     initial_fraction: float = _doc(
         0.22, "-", "Share of the container area the skins occupy at the start (paper: 5–10%). "
         "Blue noise spreads larger elements as evenly as small ones, and they start where the "
-        "paper's growth would take ~1,500 cheap iterations to bring them: the heart with 30 "
-        "animals packs denser at 0.22 than at 0.075 (docs/algorithm.md, growth).")
+        "paper's growth would take ~1,500 cheap iterations to bring them: the heart packs denser and "
+        "in fewer iterations at 0.22 than at 0.075 (docs/benchmarks.md, growth).")
     follow_room: bool = _doc(
         True, "-", "Size and count the primaries from the room the container has (its separate "
         "regions and their local width, repulsionpak.sizing) when it is uneven: several regions, or "
@@ -127,10 +127,13 @@ class SimParams:
     velocity_cap: float = _doc(5.0, "× Δt", "Velocities are capped at velocity_cap·Δt (paper: 5).")
     k_growth: float = _doc(0.01, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6).")
     fast_growth: int = _doc(
-        4, "× k_g", "An element with room grows this many times faster (beyond the paper): while "
+        1, "× k_g", "An element with room grows this many times faster (beyond the paper): while "
         "no other skin and no container edge is within fast_growth_clearance of its skin, its growth "
         "counter n_M advances by this many steps per iteration, and its velocity cap follows; with a "
-        "neighbour that close it grows at the paper's rate (1 = the paper's rule everywhere).")
+        "neighbour that close it grows at the paper's rate (1 = the paper's rule everywhere). "
+        "4 cuts the heart's primary iterations by a quarter, but the elements with room outgrow "
+        "those placed close together (size spread p90/p10 1.6 -> 2.2-2.6), so it is off by default "
+        "(docs/benchmarks.md, growth).")
     fast_growth_clearance: float = _doc(
         0.5, "× gap", "The room an element needs around its skin to grow at the fast_growth rate.")
     fast_growth_until: float = _doc(
