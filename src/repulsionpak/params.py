@@ -62,10 +62,10 @@ class PlacementParams:
         "the larger, the fewer and bigger the elements, and the less of the container their gaps take "
         "(15 covers more than 12 on 48 of the 53 suite scenes, see docs/quality.md).")
     initial_fraction: float = _doc(
-        0.22, "-", "Share of the container area the skins occupy at the start (paper: 5–10%). "
-        "Blue noise spreads larger elements as evenly as small ones, and they start where the "
-        "paper's growth would take ~1,500 cheap iterations to bring them: the heart packs denser and "
-        "in fewer iterations at 0.22 than at 0.075 (docs/benchmarks.md, growth).")
+        0.075, "-", "Share of the container area the skins occupy at the start (paper: 5–10%). "
+        "0.22 packs the paper's heart denser and in fewer iterations (docs/benchmarks.md, growth), "
+        "but its larger start leaves skins past the container's edge in the first frames and "
+        "loosens some suite scenes, so it is not the default.")
     follow_room: bool = _doc(
         True, "-", "Size and count the primaries from the room the container has (its separate "
         "regions and their local width, repulsionpak.sizing) when it is uneven: several regions, or "
