@@ -473,7 +473,8 @@ def _drive(browser, server, tmp_path):
     # run: the elements fill the painted region
     page.click("#start")
     page.wait_for_function("document.querySelectorAll('#stage g.element').length >= 10", timeout=120_000)
-    assert int(page.text_content("#iteration")) > 0
+    # the first frame (iteration 0) may be drawn before the next one's number arrives
+    page.wait_for_function("Number(document.querySelector('#iteration').textContent) > 0", timeout=60_000)
     # pin an element while it runs
     g = page.locator("#stage g.element").first
     idx = g.get_attribute("data-index")
@@ -485,7 +486,9 @@ def _drive(browser, server, tmp_path):
                   idx)
     page.click("#pin")
     page.wait_for_selector(f'#stage g.element[data-index="{idx}"][data-pinned="true"]', timeout=30_000)
-    assert page_state(page)["history"]["undo_label"] == f"pin element {idx}"
+    # the pin shows in the next frame; the history in the next state message
+    page.wait_for_function(f"window.repulsionpakStudio.state.history.undo_label === 'pin element {idx}'",
+                           timeout=30_000)
     page.wait_for_function("window.repulsionpak.status.done === true", timeout=300_000)
     page.wait_for_function("window.repulsionpakStudio.state.finished === true")
     # export through the page's link and measure it
