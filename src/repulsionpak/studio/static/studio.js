@@ -18,7 +18,8 @@
 
   function showError(msg) { q("#setting-error").textContent = msg || ""; }
 
-  async function call(path, opts) {
+  // refresh: a state poll, which leaves the last edit's error message in place
+  async function call(path, opts, refresh) {
     busy++;
     try {
       const r = await fetch(withToken(path), opts);
@@ -26,7 +27,7 @@
       let body = null;
       try { body = JSON.parse(text); } catch (e) { body = { error: text }; }
       if (!r.ok) { showError(body.error || ("error " + r.status)); render(state, true); return null; }
-      showError("");
+      if (!refresh) showError("");
       render(body);
       return body;
     } finally { busy--; }
@@ -384,7 +385,7 @@
       ["#pause", "#step"].forEach((s) => { q(s).disabled = false; });
     }
     if (st.phase === "failed") q("#message").textContent = "Failed";
-    call("/state");
+    call("/state", undefined, true);
   }, 250);
-  call("/state");
+  call("/state", undefined, true);
 })();
