@@ -51,6 +51,19 @@ def finish(session, timeout: float = 240.0) -> None:
     assert session.error is None, session.error
 
 
+def paused_apples(session):
+    """Start ``session`` paused on six apples in the example circle (gap 12, seed 5) and
+    return its controller once the run waits at its first frame with no command queued."""
+    session.use_examples("circle", ["apple"])
+    for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
+        session.set_setting(k, v)
+    session.start(paused=True)
+    ctl = session.controller
+    wait(lambda: ctl.sim is not None)
+    wait(lambda: ctl.paused and ctl.commands.empty())
+    return ctl
+
+
 def page_state(page) -> dict:
     """The studio page's own state object."""
     return page.evaluate("window.repulsionpakStudio.state")

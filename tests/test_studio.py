@@ -28,7 +28,7 @@ from repulsionpak.studio.document import Document, History  # noqa: E402
 from repulsionpak.studio.region import Stroke, painted_region, region_svg  # noqa: E402
 from repulsionpak.studio.uploads import MAX_FILE_BYTES  # noqa: E402
 from repulsionpak.studio.settings import DEFAULTS, coerce, command_line, run_settings  # noqa: E402
-from browser_support import playwright_chromium, finish, page_state, wait  # noqa: E402
+from browser_support import paused_apples, playwright_chromium, finish, page_state, wait  # noqa: E402
 from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
@@ -277,13 +277,7 @@ def test_painting_while_running_changes_the_simulations_container(session):
 
 
 def test_pins_drags_and_removals_of_a_running_simulation_are_undone(session):
-    session.use_examples("circle", ["apple"])
-    for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
-        session.set_setting(k, v)
-    session.start(paused=True)
-    ctl = session.controller
-    wait(lambda: ctl.sim is not None)
-    wait(lambda: ctl.paused and ctl.commands.empty())
+    ctl = paused_apples(session)
     m, st = ctl.sim.model, ctl.sim.state
     a, b = int(m.elem_vstart[2]), int(m.elem_vstart[3])
     x0 = st.x[a:b].copy()

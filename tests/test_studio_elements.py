@@ -19,7 +19,7 @@ import repulsionpak  # noqa: E402
 from repulsionpak.errors import ParameterError  # noqa: E402
 from repulsionpak.flow.align import copy_rotations  # noqa: E402
 from repulsionpak.studio import Session  # noqa: E402
-from browser_support import playwright_chromium, finish, page_state, wait  # noqa: E402
+from browser_support import paused_apples, playwright_chromium, finish, page_state, wait  # noqa: E402
 from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
@@ -246,13 +246,7 @@ def test_page_takes_a_folder_and_a_manifest(page, tmp_path):
 
 
 def test_an_added_copy_is_undone_and_redone(session):
-    session.use_examples("circle", ["apple"])
-    for k, v in (("count", "6"), ("gap", "12"), ("seed", "5")):
-        session.set_setting(k, v)
-    session.start(paused=True)
-    ctl = session.controller
-    wait(lambda: ctl.sim is not None)
-    wait(lambda: ctl.paused and ctl.commands.empty())
+    ctl = paused_apples(session)
     n0 = ctl.sim.model.n_elements
     with pytest.raises(ParameterError, match="'x' must be a finite number"):
         session.add_copy(1, float("nan"), 0.0)
