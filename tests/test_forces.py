@@ -21,6 +21,7 @@ from repulsionpak.preprocess import build_template, outline_of
 from repulsionpak.sim.forces import (
     boundary_force,
     contact_query,
+    deep_elements,
     edge_force,
     outside_distance,
     overlap_force,
@@ -70,7 +71,7 @@ def run_boundary(x, active, fld, k_b, F):
     _call_by_name(boundary_force, {
         "x": x, "active_all": np.asarray(active, np.int64), "values": fld.values, "ox": fld.ox,
         "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": k_b, "F": F, "outside": outside, "block_depth": 0.0,
-        "inset": 0.0})
+        "inset": 0.0, "deep": np.zeros(1, np.bool_), "vert_elem": np.zeros(len(x), np.int32)})
     return outside
 
 
@@ -294,6 +295,41 @@ def test_container_field_is_a_signed_distance(square_field):
     assert f.values.min() < 0 < f.values.max()
 
 
+def test_deep_elements_skip_only_what_the_force_cannot_reach(square_field):
+    """Elements marked deep get no boundary force and no outside flag, exactly as the field
+    says: the skip changes no result (a ring of vertices per element, some deep inside the
+    square, some across its edge or within the reach of it)."""
+    rng = np.random.default_rng(3)
+    centres = np.array([[500.0, 500.0], [30.0, 500.0], [500.0, 990.0], [200.0, 700.0], [1003.0, 40.0],
+                        [60.0, 60.0]])
+    radii = np.array([40.0, 35.0, 20.0, 100.0, 15.0, 25.0])
+    xs, vert_elem, vstart = [], [], [0]
+    for e, (c, r) in enumerate(zip(centres, radii)):
+        t = np.sort(rng.uniform(0, 2 * np.pi, 30))
+        xs.append(c + r * np.c_[np.cos(t), np.sin(t)] * rng.uniform(0.5, 1.0, (30, 1)))
+        vert_elem += [e] * 30
+        vstart.append(vstart[-1] + 30)
+    x = np.concatenate(xs)
+    f = square_field
+    active = np.arange(len(x), dtype=np.int64)
+    vert_elem = np.array(vert_elem, np.int32)
+    for inset, block in [(0.0, 0.0), (12.0, 3.0), (40.0, 0.0)]:
+        deep = np.zeros(len(centres), np.bool_)
+        deep_elements(x, np.array(vstart, np.int32), np.ones(len(centres), np.bool_), f.values, f.ox, f.oy,
+                      1.0 / f.h, max(inset, -block, 0.0), deep)
+        got, want = np.zeros_like(x), np.zeros_like(x)
+        out_got, out_want = np.zeros(len(x), np.bool_), np.zeros(len(x), np.bool_)
+        boundary_force(x, active, f.values, f.ox, f.oy, 1.0 / f.h, 80.0, got, out_got, block, inset, deep,
+                       vert_elem)
+        boundary_force(x, active, f.values, f.ox, f.oy, 1.0 / f.h, 80.0, want, out_want, block, inset,
+                       np.zeros(len(centres), np.bool_), vert_elem)
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(out_got, out_want)
+        assert deep[0] and (deep[3] or inset == 40.0)  # the central ones are skipped
+        assert not deep[1] and not deep[2] and not deep[4] and not deep[5]
+        assert (np.abs(want) > 0).any()  # the edge elements do get a force
+
+
 def test_boundary_force_zero_inside(square_field):
     x = np.array([[500.0, 500.0], [1.0, 999.0], [250.0, 3.0]])
     F = np.zeros_like(x)
@@ -349,7 +385,7 @@ def test_boundary_inset_pulls_vertices_just_inside_the_boundary(square_field):
     _call_by_name(boundary_force, {
         "x": x, "active_all": np.arange(2, dtype=np.int64), "values": fld.values, "ox": fld.ox,
         "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": 10.0, "F": F, "outside": np.zeros(2, np.bool_),
-        "block_depth": 0.0, "inset": 1.0})
+        "block_depth": 0.0, "inset": 1.0, "deep": np.zeros(1, np.bool_), "vert_elem": np.zeros(2, np.int32)})
     # pulled towards y = +1 (the inset boundary): magnitude k_b·(0.5 + 1.0), along +y
     np.testing.assert_allclose(F[0], [0.0, 15.0], atol=0.3)
     np.testing.assert_array_equal(F[1], 0.0)
