@@ -104,7 +104,10 @@ def test_distortion_p95_by_category(run):
 #: asked: their primaries alone leave channels (and ring and letter holes) that copies of
 #: that size cannot close, which the specks used to hide (issue 41 part 1, still open; see
 #: docs/quality.md). Guarded against getting worse; the promise itself is an expected failure.
-LOOSE_PRIMARIES = {"fast-spiky-thin": 0.52, "fast-rings-x10": 0.51, "fast-letters": 0.50}
+#: fast-letters' guard is 0.52 since the growth rate k_g = 0.04: its primaries alone pack
+#: closer (area 0.34 -> 0.38, their Q_s ratio 0.66 -> 0.63), leaving fewer pockets a
+#: floor-sized copy fits (18 -> 11 copies), so the whole output's ratio went 0.47 -> 0.50.
+LOOSE_PRIMARIES = {"fast-spiky-thin": 0.52, "fast-rings-x10": 0.51, "fast-letters": 0.52}
 
 
 @pytest.mark.slow

@@ -61,9 +61,12 @@ def test_exploding_positions_are_detected():
     sim = small_sim()
     original = sim.step
 
+    exploded = []
+
     def exploding_step():
         a = original()
-        if sim.state.iteration == 390:
+        if sim.state.iteration == 390 and not exploded:  # once: the replay after recovery is clean
+            exploded.append(True)
             sim.state.x[sim.state.active_all[:3]] += 1e9
         return a
 

@@ -159,7 +159,8 @@ def test_bend_points_and_streamline_curvature(tmp_path):
 
 @pytest.fixture(scope="module")
 def ring_packings(tmp_path_factory):
-    """A long ellipse packed along a circular flow, with and without flow_bend."""
+    """A long ellipse packed along a circular flow, with and without flow_bend, seeds 1 and 2
+    (a copy's bend also depends on its contacts: one seed's dozen copies can miss by chance)."""
     import dataclasses
 
     from repulsionpak import load_container, load_elements, pack
@@ -174,7 +175,8 @@ def ring_packings(tmp_path_factory):
     out = {}
     for bend in (False, True):
         els = [dataclasses.replace(x, controls=ElementControls(flow_bend=bend)) for x in e]
-        out[bend] = (els, pack(c, els, Params(seed=1, placement=PlacementParams(count=12)), flow=field))
+        out[bend] = (els, [pack(c, els, Params(seed=seed, placement=PlacementParams(count=12)), flow=field)
+                           for seed in (1, 2)])
     return field, out
 
 
@@ -184,15 +186,15 @@ def test_flow_bend_curves_copies_along_the_streamline(ring_packings):
 
     field, out = ring_packings
     turns = {}
-    for bend, (els, packing) in out.items():
-        m = curvature_match([p for p in packing.placed if p.kind == "primary"], els, field)
+    for bend, (els, packings) in out.items():
+        m = curvature_match([p for pk in packings for p in pk.placed if p.kind == "primary"], els, field)
         turns[bend] = np.degrees(m["art"] * m["length"]), np.degrees(m["stream"] * m["length"])
-        assert len(m["art"]) >= 10
+        assert len(m["art"]) >= 20
     art, stream = turns[True]
     cap = math.degrees(bend_cap(out[True][0][0], 0.0))
     target = np.clip(stream, -cap, cap)
     turning = np.abs(stream) >= 5
-    assert turning.sum() >= 8
+    assert turning.sum() >= 16
     assert np.mean(np.sign(art[turning]) == np.sign(stream[turning])) >= 0.9, (art, stream)
     rel = np.abs(art - target)[turning] / np.abs(target[turning])
     assert np.median(rel) <= 0.4, (art, target)
@@ -210,12 +212,13 @@ def test_flow_bend_keeps_the_packing_promises(ring_packings):
     from repulsionpak.types import ElementControls
 
     _, out = ring_packings
-    els, packing = out[True]
-    m = packing.evaluate(distortion=True)
-    assert m["overlap_area"] == 0.0 and m["n_outside"] == 0
-    assert 0.9 <= m["gap"]["median"] / packing.gap <= 1.1 and m["gap"]["p10"] / packing.gap >= 0.8
-    assert m["distortion"]["p95"] <= 0.08, m["distortion"]  # the ellipse is convex: the stricter promise
-    assert packing.verification.straightened == []
+    els, packings = out[True]
+    for packing in packings:
+        m = packing.evaluate(distortion=True)
+        assert m["overlap_area"] == 0.0 and m["n_outside"] == 0
+        assert 0.9 <= m["gap"]["median"] / packing.gap <= 1.1 and m["gap"]["p10"] / packing.gap >= 0.8
+        assert m["distortion"]["p95"] <= 0.08, m["distortion"]  # the ellipse is convex: the stricter promise
+        assert packing.verification.straightened == []
     bad = [dataclasses.replace(els[0], controls=ElementControls(flow="ignore", flow_bend=True))]
     with pytest.raises(ParameterError, match="flow_bend needs an element that follows the flow"):
         check_elements(bad)

@@ -137,8 +137,9 @@ def test_controller_moves_pins_removes_and_adds_between_iterations():
     cont = load_container(EX / "containers" / "circle.svg")
     elems = load_elements([EX / "elements" / "apple.svg", EX / "elements" / "fish.svg"])
     p = Params(gap=12.0, seed=3)
+    # the paper's growth rate: in 200 iterations the added copy grows ~1.2x, near its click point
     p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=5),
-                            sim=dataclasses.replace(p.sim, max_iterations=200, min_iterations=0),
+                            sim=dataclasses.replace(p.sim, max_iterations=200, min_iterations=0, k_growth=0.01),
                             secondary=dataclasses.replace(p.secondary, auto=False))
     ctl = LiveController(cont, 12.0, p.render)
     sent = []

@@ -84,7 +84,8 @@ def test_grow_takes_the_steps_that_fit_under_the_largest_size():
 
 
 def _fast(p: Params, fast=4, clearance=2.0, until=1.0) -> Params:
-    return replace(p, sim=replace(p.sim, fast_growth=fast, fast_growth_clearance=clearance,
+    """``p`` with fast growth, over the paper's growth rate (k_g = 0.01)."""
+    return replace(p, sim=replace(p.sim, k_growth=0.01, fast_growth=fast, fast_growth_clearance=clearance,
                                   fast_growth_until=until))
 
 

@@ -63,7 +63,8 @@ class PlacementParams:
         "(15 covers more than 12 on 48 of the 53 suite scenes, see docs/quality.md).")
     initial_fraction: float = _doc(
         0.075, "-", "Share of the container area the skins occupy at the start (paper: 5–10%). "
-        "0.22 packs the paper's heart denser and in fewer iterations (docs/benchmarks.md, growth), "
+        "0.22 packed the paper's heart denser and in fewer iterations at the paper's growth rate "
+        "(docs/algorithm.md), "
         "but its larger start leaves skins past the container's edge in the first frames and "
         "loosens some suite scenes, so it is not the default.")
     follow_room: bool = _doc(
@@ -125,15 +126,16 @@ class SimParams:
     soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")
     dt: float = _doc(0.1, "-", "Δt, explicit Euler time step (paper: 0.1).")
     velocity_cap: float = _doc(5.0, "× Δt", "Velocities are capped at velocity_cap·Δt (paper: 5).")
-    k_growth: float = _doc(0.01, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6).")
+    k_growth: float = _doc(0.04, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6; "
+                           "the paper: 0.01).")
     fast_growth: int = _doc(
         1, "× k_g", "An element with room grows this many times faster (beyond the paper): while "
         "no other skin and no container edge is within fast_growth_clearance of its skin, its growth "
         "counter n_M advances by this many steps per iteration, and its velocity cap follows; with a "
         "neighbour that close it grows at the paper's rate (1 = the paper's rule everywhere). "
-        "4 cuts the heart's primary iterations by a quarter, but the elements with room outgrow "
-        "those placed close together (size spread p90/p10 1.6 -> 2.2-2.6), so it is off by default "
-        "(docs/benchmarks.md, growth).")
+        "At the paper's k_growth (0.01), 4 cut the heart's primary iterations by a quarter, but the "
+        "elements with room outgrew those placed close together (size spread p90/p10 1.6 -> "
+        "2.2-2.6), so it is off by default (docs/algorithm.md).")
     fast_growth_clearance: float = _doc(
         0.5, "× gap", "The room an element needs around its skin to grow at the fast_growth rate.")
     fast_growth_until: float = _doc(
