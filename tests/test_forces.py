@@ -21,7 +21,7 @@ from repulsionpak.preprocess import build_template, outline_of
 from repulsionpak.sim.forces import (
     boundary_force,
     contact_query,
-    deep_elements,
+    _field_sample,
     edge_force,
     outside_distance,
     overlap_force,
@@ -68,10 +68,12 @@ def _call_by_name(fn, values: dict):
 def run_boundary(x, active, fld, k_b, F):
     """boundary_force, with the ``outside`` flags when the kernel has them (returned)."""
     outside = np.zeros(len(x), np.bool_)
+    moving = np.zeros(len(x), np.bool_)  # one element per vertex: the active ones move
+    moving[np.asarray(active, np.int64)] = True
     _call_by_name(boundary_force, {
-        "x": x, "active_all": np.asarray(active, np.int64), "values": fld.values, "ox": fld.ox,
-        "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": k_b, "F": F, "outside": outside, "block_depth": 0.0,
-        "inset": 0.0, "deep": np.zeros(1, np.bool_), "vert_elem": np.zeros(len(x), np.int32)})
+        "x": x, "elem_vstart": np.arange(len(x) + 1, dtype=np.int32), "moving": moving,
+        "values": fld.values, "ox": fld.ox, "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": k_b, "F": F,
+        "outside": outside, "block_depth": 0.0, "inset": 0.0})
     return outside
 
 
@@ -295,39 +297,33 @@ def test_container_field_is_a_signed_distance(square_field):
     assert f.values.min() < 0 < f.values.max()
 
 
-def test_deep_elements_skip_only_what_the_force_cannot_reach(square_field):
-    """Elements marked deep get no boundary force and no outside flag, exactly as the field
-    says: the skip changes no result (a ring of vertices per element, some deep inside the
-    square, some across its edge or within the reach of it)."""
+def test_elements_deep_inside_skip_the_field_and_nothing_changes(square_field):
+    """Whole elements deep inside the container are skipped (no field sample at their
+    vertices): forces and outside flags equal a vertex-by-vertex evaluation of Eq. 5 on
+    rings of vertices deep inside the square, across its edge, near it and outside."""
     rng = np.random.default_rng(3)
     centres = np.array([[500.0, 500.0], [30.0, 500.0], [500.0, 990.0], [200.0, 700.0], [1003.0, 40.0],
                         [60.0, 60.0]])
     radii = np.array([40.0, 35.0, 20.0, 100.0, 15.0, 25.0])
-    xs, vert_elem, vstart = [], [], [0]
-    for e, (c, r) in enumerate(zip(centres, radii)):
-        t = np.sort(rng.uniform(0, 2 * np.pi, 30))
-        xs.append(c + r * np.c_[np.cos(t), np.sin(t)] * rng.uniform(0.5, 1.0, (30, 1)))
-        vert_elem += [e] * 30
-        vstart.append(vstart[-1] + 30)
-    x = np.concatenate(xs)
+    t = np.sort(rng.uniform(0, 2 * np.pi, (len(centres), 30)), axis=1)
+    rings = centres[:, None] + radii[:, None, None] * np.stack([np.cos(t), np.sin(t)], -1) * rng.uniform(
+        0.5, 1.0, (len(centres), 30, 1))
+    x = np.ascontiguousarray(rings.reshape(-1, 2))
+    vstart = np.arange(0, len(x) + 1, 30, dtype=np.int32)
     f = square_field
-    active = np.arange(len(x), dtype=np.int64)
-    vert_elem = np.array(vert_elem, np.int32)
     for inset, block in [(0.0, 0.0), (12.0, 3.0), (40.0, 0.0)]:
-        deep = np.zeros(len(centres), np.bool_)
-        deep_elements(x, np.array(vstart, np.int32), np.ones(len(centres), np.bool_), f.values, f.ox, f.oy,
-                      1.0 / f.h, max(inset, -block, 0.0), deep)
-        got, want = np.zeros_like(x), np.zeros_like(x)
-        out_got, out_want = np.zeros(len(x), np.bool_), np.zeros(len(x), np.bool_)
-        boundary_force(x, active, f.values, f.ox, f.oy, 1.0 / f.h, 80.0, got, out_got, block, inset, deep,
-                       vert_elem)
-        boundary_force(x, active, f.values, f.ox, f.oy, 1.0 / f.h, 80.0, want, out_want, block, inset,
-                       np.zeros(len(centres), np.bool_), vert_elem)
-        np.testing.assert_array_equal(got, want)
-        np.testing.assert_array_equal(out_got, out_want)
-        assert deep[0] and (deep[3] or inset == 40.0)  # the central ones are skipped
-        assert not deep[1] and not deep[2] and not deep[4] and not deep[5]
-        assert (np.abs(want) > 0).any()  # the edge elements do get a force
+        got = np.zeros_like(x)
+        out = np.zeros(len(x), np.bool_)
+        boundary_force(x, vstart, np.ones(len(centres), np.bool_), f.values, f.ox, f.oy, 1.0 / f.h, 80.0, got,
+                       out, block, inset)
+        want = np.zeros_like(x)
+        for i, (px, py) in enumerate(x):
+            d, gx, gy = _field_sample(f.values, f.ox, f.oy, 1.0 / f.h, px, py)
+            assert out[i] == (d > block)
+            if d + inset > 0.0:
+                want[i] = -80.0 * (d + inset) * np.array([gx, gy]) / np.hypot(gx, gy)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+        assert (want[120:150, 0] < 0).any()  # the element across the right side is pushed back in
 
 
 def test_boundary_force_zero_inside(square_field):
@@ -383,9 +379,9 @@ def test_boundary_inset_pulls_vertices_just_inside_the_boundary(square_field):
     x = np.array([[50.0, -0.5], [50.0, 5.0]])  # 0.5 outside the y=0 side; well inside
     F = np.zeros_like(x)
     _call_by_name(boundary_force, {
-        "x": x, "active_all": np.arange(2, dtype=np.int64), "values": fld.values, "ox": fld.ox,
-        "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": 10.0, "F": F, "outside": np.zeros(2, np.bool_),
-        "block_depth": 0.0, "inset": 1.0, "deep": np.zeros(1, np.bool_), "vert_elem": np.zeros(2, np.int32)})
+        "x": x, "elem_vstart": np.arange(3, dtype=np.int32), "moving": np.ones(2, np.bool_),
+        "values": fld.values, "ox": fld.ox, "oy": fld.oy, "inv_h": 1.0 / fld.h, "k_b": 10.0, "F": F,
+        "outside": np.zeros(2, np.bool_), "block_depth": 0.0, "inset": 1.0})
     # pulled towards y = +1 (the inset boundary): magnitude k_b·(0.5 + 1.0), along +y
     np.testing.assert_allclose(F[0], [0.0, 15.0], atol=0.3)
     np.testing.assert_array_equal(F[1], 0.0)

@@ -378,61 +378,61 @@ def _field_sample(values, ox, oy, inv_h, px, py):
 DEEP_CELLS = 8.0
 
 
-@parallel_kernel
-def deep_elements(x, elem_vstart, moving, values, ox, oy, inv_h, reach, deep):
-    """``deep[e]``: every vertex of moving element ``e`` is farther inside the container
-    than ``reach`` by the field (its centroid's sample, less the element's radius about it
-    and :data:`DEEP_CELLS` cells of sampling error), so the boundary force cannot act on it
-    and none of its vertices is outside."""
-    for e in prange(elem_vstart.shape[0] - 1):
-        deep[e] = False
-        if not moving[e]:
-            continue
-        a = elem_vstart[e]
-        b = elem_vstart[e + 1]
-        cx = 0.0
-        cy = 0.0
-        for i in range(a, b):
-            cx += x[i, 0]
-            cy += x[i, 1]
-        cx /= b - a
-        cy /= b - a
-        r2 = 0.0
-        for i in range(a, b):
-            dx = x[i, 0] - cx
-            dy = x[i, 1] - cy
-            r2 = max(r2, dx * dx + dy * dy)
-        d, _, _ = _field_sample(values, ox, oy, inv_h, cx, cy)
-        deep[e] = d + np.sqrt(r2) + DEEP_CELLS / inv_h + reach < 0.0
+@njit(cache=True, inline="always")
+def _deep(x, a, b, values, ox, oy, inv_h, reach):
+    """Whether every vertex ``a:b`` is farther inside the container than ``reach`` by the
+    field: the sample at their centroid, less their radius about it and
+    :data:`DEEP_CELLS` cells of sampling error."""
+    cx = 0.0
+    cy = 0.0
+    for i in range(a, b):
+        cx += x[i, 0]
+        cy += x[i, 1]
+    cx /= b - a
+    cy /= b - a
+    r2 = 0.0
+    for i in range(a, b):
+        dx = x[i, 0] - cx
+        dy = x[i, 1] - cy
+        r2 = max(r2, dx * dx + dy * dy)
+    d, _, _ = _field_sample(values, ox, oy, inv_h, cx, cy)
+    return d + np.sqrt(r2) + DEEP_CELLS / inv_h + reach < 0.0
 
 
 @parallel_kernel
-def boundary_force(x, active_all, values, ox, oy, inv_h, k_b, F, outside, block_depth, inset, deep, vert_elem):
+def boundary_force(x, elem_vstart, moving, values, ox, oy, inv_h, k_b, F, outside, block_depth, inset):
     """Eq. 5: F_b = k_b (p_b − x) for a vertex outside the container, p_b the closest
-    boundary point, from the signed distance field: p_b − x = −sdf · ∇sdf/|∇sdf|.
+    boundary point, from the signed distance field: p_b − x = −sdf · ∇sdf/|∇sdf|, for
+    the vertices of the ``moving`` elements (``elem_vstart[e]:elem_vstart[e+1]``).
 
     ``inset`` moves the boundary the force acts on that far inside the container (0 is
     the paper's rule): skins then rest just inside the boundary instead of just outside,
     so the art never crosses it. ``outside[i]`` is set for vertices more than
     ``block_depth`` outside: they block their element's growth like an overlap does.
-    The vertices of ``deep`` elements (:func:`deep_elements`, with a reach of at least
-    ``inset`` and ``-block_depth``) are neither: their field samples are skipped, which on a
-    poster of a thousand elements is most of them."""
-    for k in prange(active_all.shape[0]):
-        i = active_all[k]
-        if deep[vert_elem[i]]:
-            outside[i] = False
+    An element deep inside the container (:func:`_deep`, reach max(inset, −block_depth,
+    0)) gets neither without sampling the field at its vertices: on a poster of a thousand
+    elements that is most of them."""
+    reach = max(inset, -block_depth, 0.0)
+    for e in prange(elem_vstart.shape[0] - 1):
+        if not moving[e]:
             continue
-        d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
-        outside[i] = d > block_depth
-        d += inset
-        if d <= 0.0:
+        a = elem_vstart[e]
+        b = elem_vstart[e + 1]
+        if _deep(x, a, b, values, ox, oy, inv_h, reach):
+            for i in range(a, b):
+                outside[i] = False
             continue
-        n = np.sqrt(gx * gx + gy * gy)
-        if n < 1e-12:
-            continue
-        F[i, 0] -= k_b * d * gx / n
-        F[i, 1] -= k_b * d * gy / n
+        for i in range(a, b):
+            d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
+            outside[i] = d > block_depth
+            d += inset
+            if d <= 0.0:
+                continue
+            n = np.sqrt(gx * gx + gy * gy)
+            if n < 1e-12:
+                continue
+            F[i, 0] -= k_b * d * gx / n
+            F[i, 1] -= k_b * d * gy / n
 
 
 @parallel_kernel

@@ -167,8 +167,7 @@ class State:
     corners near a moving mesh (``corner_active[:n_corner_active]``) and their candidate
     triangles (``corner_tris[corner_ptr[j]:corner_ptr[j+1]]``). *Per step*: ``outside``
     (N,) a vertex too far outside the container, ``blocking`` (N,) the contacts that stop
-    growth, ``areas`` (M,) skin areas, ``deep`` (M,) the elements too far inside the container
-    for the boundary force to reach. *Counters*: ``iteration``, ``area_history`` (the
+    growth, ``areas`` (M,) skin areas. *Counters*: ``iteration``, ``area_history`` (the
     moving meshes' area fraction per iteration, for the stopping rule), ``dt`` (halved by
     a divergence recovery), ``settle_left`` (iterations left in the settle phase, None
     before it), ``stopped_by``, ``allow_growth``.
@@ -196,7 +195,6 @@ class State:
     outside: np.ndarray | None = None
     blocking: np.ndarray | None = None
     areas: np.ndarray | None = None
-    deep: np.ndarray | None = None
     dt: float = 0.0
     settle_left: int | None = None
     stopped_by: str = "max_iterations"
@@ -222,7 +220,6 @@ class State:
         self.outside = np.zeros(N, np.bool_)
         self.blocking = np.zeros(N, np.bool_)
         self.areas = np.zeros(M)
-        self.deep = np.zeros(M, np.bool_)
         self.dt = float(dt)
         self.settle_left = None
         self.stopped_by = "max_iterations"

@@ -22,8 +22,8 @@ import numpy as np
 
 from ..params import SimParams
 from .controls import edge_force_stiff
-from .forces import (boundary_force, corner_force, deep_elements, edge_force, inversion_force,
-                     overlap_force, repulsion_force, shape_force)
+from .forces import (boundary_force, corner_force, edge_force, inversion_force, overlap_force,
+                     repulsion_force, shape_force)
 from .model import Model, State
 
 __all__ = ["Repulsion", "Edges", "ShapeMatching", "Boundary", "Overlap", "Inversion", "Corners",
@@ -84,13 +84,8 @@ class Boundary:
 
     def __call__(self, model: Model, state: State, forces: np.ndarray) -> None:
         f = model.field
-        inset = self.inset * model.gap + model.inset_extra
-        block = self.block * model.gap
-        deep = state.deep
-        deep_elements(state.x, model.elem_vstart, state.moving, f.values, f.ox, f.oy, 1.0 / f.h,
-                      max(inset, -block, 0.0), deep)
-        boundary_force(state.x, state.active_all, f.values, f.ox, f.oy, 1.0 / f.h, self.k, forces,
-                       state.outside, block, inset, deep, model.vert_elem)
+        boundary_force(state.x, model.elem_vstart, state.moving, f.values, f.ox, f.oy, 1.0 / f.h, self.k,
+                       forces, state.outside, self.block * model.gap, self.inset * model.gap + model.inset_extra)
 
 
 @dataclass(frozen=True)
