@@ -19,6 +19,11 @@ Notes
 -----
 numba's private cache API (``numba.core.caching.Cache``): when it lacks what is used here,
 :func:`install` changes nothing and kernels load as before.
+
+Loading a kernel still imports the modules of the numba implementations it calls (their
+environments): ``np.empty`` brings ``numba.np.arrayobj`` (~20 ms), ``ndarray.sum``
+``numba.np.arraymath`` and with it ``scipy.linalg`` (~0.2 s), so the kernels total by a
+loop (``tests/test_kernels.py`` checks that a warm run imports neither).
 """
 
 from __future__ import annotations
