@@ -14,8 +14,8 @@ import types as _types
 
 
 def _quiet_interrupt_while_importing() -> None:
-    """The ``repulsionpak`` command imports this package (numpy, numba, shapely: about half a
-    second) before its ``main()`` can catch Ctrl-C; an interrupt in that window ends the
+    """The ``repulsionpak`` command imports this package and its command line (typer)
+    before its ``main()`` can catch Ctrl-C; an interrupt in that window ends the
     command with one line, as later ones do, instead of a traceback (exit status 130 as
     before: Python re-raises SIGINT after reporting it). Only in the command's process."""
     import os
