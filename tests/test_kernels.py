@@ -140,9 +140,16 @@ def test_parallel_cached_wants_every_recorded_kernel(monkeypatch):
     assert kernels.parallel_cached() == bool(missing.signatures)  # compiled in this process counts
 
 
-def _pack(tmp: Path, cache: Path) -> subprocess.CompletedProcess:
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT / "src"))
-    cmd = [sys.executable, "-m", "repulsionpak.cli", "pack", str(EXAMPLES / "containers" / "circle.svg"),
+#: runs the command, then prints the modules of numba's compiler it imported (see below)
+_REPORT_MODULES = ("import atexit, runpy, sys; atexit.register(lambda: print(sorted(m for m in sys.modules "
+                   "if m in ('numba.np.arraymath', 'scipy.linalg')))); "
+                   "runpy.run_module('repulsionpak.cli', run_name='__main__', alter_sys=True)")
+
+
+def _pack(tmp: Path, cache: Path, report_modules: bool = False, **env_extra) -> subprocess.CompletedProcess:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(ROOT / "src"), **env_extra)
+    entry = ["-c", _REPORT_MODULES] if report_modules else ["-m", "repulsionpak.cli"]
+    cmd = [sys.executable, *entry, "pack", str(EXAMPLES / "containers" / "circle.svg"),
            str(EXAMPLES / "elements" / "apple.svg"), "-o", str(tmp / "o.svg"), "--seed", "1",
            "--count", "3", "--max-iterations", "60"]
     return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=900)
@@ -150,7 +157,8 @@ def _pack(tmp: Path, cache: Path) -> subprocess.CompletedProcess:
 
 def test_cli_says_once_that_it_compiles_on_a_cold_cache_only(tmp_path):
     """An empty numba cache: the message appears once on stderr (nothing on stdout);
-    with the cache filled by that run it does not appear again."""
+    with the cache filled by that run it does not appear again, and a run then imports
+    none of numba's compiler modules."""
     cache = tmp_path / "numba-cache"
     msg = "compiling the simulation kernels, first run only"
     first = _pack(tmp_path, cache)
@@ -162,3 +170,9 @@ def test_cli_says_once_that_it_compiles_on_a_cold_cache_only(tmp_path):
     assert any(cache.rglob("*.nbi"))
     if len(os.sched_getaffinity(0)) > 1:  # a spare core: the two-thread builds compile meanwhile
         assert second.stderr.count("two-thread simulation kernels in the background") == 1
+    # a warm run loads its kernels without numba's compiler (repulsionpak._jit.loading), and
+    # no kernel calls a numba implementation from numba.np.arraymath (ndarray.sum ...), whose
+    # import, with scipy.linalg's, took 0.2 s of every run
+    third = _pack(tmp_path, cache, report_modules=True, REPULSIONPAK_NO_WARMUP="1")
+    assert third.returncode == 0, third.stderr
+    assert third.stdout.strip().splitlines()[-1] == "[]", third.stdout

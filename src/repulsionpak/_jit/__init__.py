@@ -10,5 +10,7 @@
   :class:`~repulsionpak._jit.warmup.Workload` the package gives it
   (:data:`repulsionpak.warmup.WORKLOAD`);
 * :mod:`~repulsionpak._jit.prebuilt`: installing the cache entries compiled when the
-  package was built (:mod:`repulsionpak.kernel_cache` builds them).
+  package was built (:mod:`repulsionpak.kernel_cache` builds them);
+* :mod:`~repulsionpak._jit.loading`: loading cached kernels without numba's compiler
+  set-up.
 """

@@ -32,6 +32,7 @@ import sys
 from pathlib import Path
 
 from .kernels import Kernel
+from .loading import install as lean_loading
 
 __all__ = ["PREBUILT", "export", "install", "cache_files"]
 
@@ -104,11 +105,16 @@ def _magic_tuple():
 def install(source: Path = PREBUILT) -> int:
     """Copy the shipped cache entries (see the module docstring) that numba's cache lacks
     for this machine into it; once per process. Returns the number of entries copied
-    (0 without shipped kernels, or when the cache has them all)."""
+    (0 without shipped kernels, or when the cache has them all).
+
+    Also loads this package's kernels the lean way from now on
+    (:func:`repulsionpak._jit.loading.install`): callers run this before a packing's or a
+    measure's first kernel, which is when both must be in place."""
     global _installed
     if _installed:
         return 0
     _installed = True
+    lean_loading()
     try:
         manifest = json.loads((Path(source) / _MANIFEST).read_text(encoding="utf-8"))
     except (OSError, ValueError):

@@ -180,8 +180,9 @@ def warm_up_parallel(workload: Workload) -> None:
     """Compile (or load) the parallel builds of the simulation kernels
     (:mod:`repulsionpak._jit.kernels`), in the order a run first calls them, for the same
     argument types as the serial ones. Runs use them, on every core, once all are cached."""
+    calls = specialisations(workload)  # imports the kernels' modules: they register in KERNELS
     builds = {id(k.serial): k for k in KERNELS}
-    for dispatcher, sig in specialisations(workload):
+    for dispatcher, sig in calls:
         k = builds.get(id(dispatcher))
         if k is not None and _claim(_name(dispatcher) + "__parallel"):
             k.parallel.compile(sig)

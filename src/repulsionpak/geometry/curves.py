@@ -64,7 +64,10 @@ def _flatten(order, ctrl, tol):
             bound = 0.0
         if bound > 0:
             counts[k] = max(1, min(4096, int(math.ceil(math.sqrt(bound / (8.0 * tol))))))
-    out = np.empty((1 + counts.sum(), 2))
+    total = 1  # a loop, not counts.sum(): loading a kernel that calls it imports scipy (0.2 s)
+    for k in range(n):
+        total += counts[k]
+    out = np.empty((total, 2))
     out[0, 0], out[0, 1] = ctrl[0, 0, 0], ctrl[0, 0, 1]  # scalars: a row assignment compiles slowly
     j = 1
     for k in range(n):

@@ -1,0 +1,86 @@
+"""Loading the package's kernels from numba's disk cache without numba's compiler set-up.
+
+Before it loads a cached kernel, numba "refreshes" its compiler: it imports every module
+of typing and lowering implementations it has (``numba.np.arraymath`` among them, which
+imports ``scipy.linalg`` to look for BLAS; ``numba.typed``, ``numba.np.random``, the cffi
+support ...) and installs their registries. A compiler needs them; machine code read
+from the cache does not: it is linked against the C symbols numba installs when its CPU
+target is created (its helper library, the Python C API, libm), the runtime's (NRT) and,
+for a parallel kernel, the threading layer's (its cache entry starts the layer when
+loaded). That refresh took 0.3 s of a warm-cache run's 0.5 s of kernel loading (heart
+scene), and every later load took ~5 ms.
+
+:func:`install` makes numba load this package's kernels with only the set-up machine
+code needs (:func:`_runtime_ready`); a kernel that has to be compiled still gets the full
+refresh (numba's compiler does it before compiling), and so does every other package's
+numba function.
+
+Notes
+-----
+numba's private cache API (``numba.core.caching.Cache``): when it lacks what is used here,
+:func:`install` changes nothing and kernels load as before.
+
+Loading a kernel still imports the modules of the numba implementations it calls (their
+environments): ``np.empty`` brings ``numba.np.arrayobj`` (~20 ms), ``ndarray.sum``
+``numba.np.arraymath`` and with it ``scipy.linalg`` (~0.2 s), so the kernels total by a
+loop (``tests/test_kernels.py`` checks that a warm run imports neither).
+"""
+
+from __future__ import annotations
+
+__all__ = ["install", "installed"]
+
+#: functions defined in modules under this prefix load without the refresh
+_PACKAGE = __name__.split(".")[0] + "."
+_original = None
+
+
+def _runtime_ready(target_context) -> None:
+    """What machine code from the cache needs besides the CPU target: numba's runtime
+    (NRT) initialised, and the hash secret's symbols (installed when ``numba.cpython.hashing``
+    is imported: string hashing in a kernel refers to them)."""
+    from numba.core.runtime import rtsys
+    import numba.cpython.hashing  # noqa: F401  (its symbols, see above)
+
+    rtsys.initialize(target_context)
+
+
+def _load_overload(self, sig, target_context):
+    """``numba.core.caching.Cache.load_overload``, without the registry refresh for this
+    package's kernels (see the module docstring)."""
+    if not getattr(getattr(self, "_py_func", None), "__module__", "").startswith(_PACKAGE):
+        return _original(self, sig, target_context)
+    _runtime_ready(target_context)
+    with self._guard_against_spurious_io_errors():
+        return self._load_overload(sig, target_context)
+
+
+def install() -> bool:
+    """Make numba load this package's cached kernels without its compiler's set-up; once
+    per process, before the first kernel is called.
+
+    Returns
+    -------
+    bool
+        Whether the lean loading is in place (False where numba's cache lacks the private
+        methods it relies on: kernels then load as numba does by default).
+    """
+    global _original
+    if _original is not None:
+        return True
+    try:
+        from numba.core.caching import Cache
+        from numba.core.runtime import rtsys  # noqa: F401
+    except ImportError:
+        return False
+    needed = ("load_overload", "_load_overload", "_guard_against_spurious_io_errors")
+    if not all(callable(getattr(Cache, name, None)) for name in needed):
+        return False
+    _original = Cache.load_overload
+    Cache.load_overload = _load_overload
+    return True
+
+
+def installed() -> bool:
+    """Whether :func:`install` put the lean loading in place."""
+    return _original is not None
