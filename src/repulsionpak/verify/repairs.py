@@ -29,7 +29,7 @@ import shapely
 from ..art_area import _polygonal
 from ..render.placed import refined, similarity_matrix
 from ..types import PlacedArt
-from .checks import Verification, _check, _near_pairs, _nearest, _shrink_centre, distortion
+from .checks import Rough, Verification, _check, _near_pairs, _nearest, _pair_distances, _shrink_centre, distortion
 
 __all__ = ["scaled_art", "similar_copy", "straighten", "verify_and_repair"]
 
@@ -112,7 +112,7 @@ REACH_MAX_SCALE = 2.0
 
 
 def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
-             max_scale, tol, rounds, inner=None, fixed=None, reach=0.0):
+             max_scale, tol, rounds, inner=None, fixed=None, reach=0.0, memo=None):
     """Grow every element about its centroid into the room around it, never closer than
     ``target`` to another element nor ``margin`` to the edge, and no bigger than
     ``max_scale`` of its size — or than the size at which its outermost point has moved
@@ -120,7 +120,9 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
     elements: see :func:`verify_and_repair`): each round, an element with slack s (half the spare
     distance to its nearest neighbour, or the spare distance to the edge) grows by
     1 + s/R, R its largest radius, so none of its points moves further than s (all grow at
-    once, so a pair never closes more than its spare distance)."""
+    once, so a pair never closes more than its spare distance). ``memo``: pair distances
+    of unchanged outlines (:func:`~repulsionpak.verify.checks._pair_distances`): the
+    elements that stopped growing keep theirs."""
     n = len(geoms)
     idx = [i for i in range(n) if alive[i]]
     if not idx:
@@ -150,7 +152,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
         keep = a != b
         pairs = np.unique(np.sort(np.stack([a[keep], b[keep]], axis=1), axis=1), axis=0)
         if len(pairs):  # each pair measured once, for whichever of the two may grow
-            d = 0.5 * (shapely.distance(arr[pairs[:, 0]], arr[pairs[:, 1]]) - target)
+            d = 0.5 * (_pair_distances(arr[pairs[:, 0]], arr[pairs[:, 1]], memo) - target)
             np.minimum.at(slack, pairs[:, 0], d)
             np.minimum.at(slack, pairs[:, 1], d)
         grow = {}
@@ -427,21 +429,26 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 keep_helpful(moved, need, False)
     if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
-                 w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach)
+                 w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach, memo=memo)
         if gather > grow_to:
             _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, grow_to + 2 * eps,
                     gather + 2 * eps, w_margin, tol, fixed=fixed, max_turn=max_turn)
-    # final verification, exact, on what is returned
+    # final verification, exact, on what is returned; the rounds' outlines (each within
+    # eps of its exact one, scaled as it is) tell which pairs need no exact measure
+    rough = Rough(geoms, eps * scale, memo)
     geoms = [transform(exact[i], i) for i in range(n)]
+    final: dict = {}  # a second check after drops measures no pair again
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
-                                                 exact_edges=True, fixed=fixed, rank=rank)
+                                                 exact_edges=True, fixed=fixed, rank=rank, memo=final,
+                                                 rough=rough)
     if repair:  # anything still violating after the rounds is dropped (never a pinned copy)
         for i in np.flatnonzero(need > 0):
             if fixed is None or not fixed[i]:
                 alive[i] = False
         if (need > 0).any():
             need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin,
-                                                         tol, exact_edges=True, fixed=fixed, rank=rank)
+                                                         tol, exact_edges=True, fixed=fixed, rank=rank,
+                                                         memo=final, rough=rough)
     dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not exact[i].is_empty]
     for i, src in dropped:
         if placed[i].kind == "primary":
