@@ -57,11 +57,9 @@ def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
     return dataclasses.replace(placed, paths=paths, stroke_scale=placed.stroke_scale * scale, frame=frame)
 
 
-def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
-    """The undeformed art ``rest`` moved, turned and scaled onto ``placed`` (least squares
-    over their corresponding vertices, or the meshes' similarity ``frame`` when both carry
-    one — rendered curves have no vertex correspondence): what the element would look like
-    unbent."""
+def _similarity(rest: PlacedArt, placed: PlacedArt) -> tuple[np.ndarray, dict]:
+    """The similarity (3, 3) of :func:`similar_copy`, and the copy's fields it sets
+    besides its paths (its ``frame``, when both carry one)."""
     extra = {}
     if placed.frame is not None and rest.frame is not None:
         m = np.asarray(placed.frame, dtype=float) @ np.linalg.inv(np.asarray(rest.frame, dtype=float))
@@ -70,10 +68,24 @@ def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
         src = np.concatenate([p for a in rest.paths for p in a.subpaths])
         cur = np.concatenate([p for a in placed.paths for p in a.subpaths])
         m = similarity_matrix(src, cur)
+    return m, extra
+
+
+def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
+    """The undeformed art ``rest`` moved, turned and scaled onto ``placed`` (least squares
+    over their corresponding vertices, or the meshes' similarity ``frame`` when both carry
+    one — rendered curves have no vertex correspondence): what the element would look like
+    unbent."""
+    m, extra = _similarity(rest, placed)
     rot, b = m[:2, :2], m[:2, 2]
     paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
     k = float(np.sqrt(abs(np.linalg.det(rot))))
     return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k, deformation=0.0, **extra)
+
+
+#: a distortion this close to its limit is measured on the similar copy's own art
+#: (:func:`straighten`), not on its rest art moved
+DECIDE_EXACTLY = 1e-4
 
 
 def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarray
@@ -82,12 +94,25 @@ def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarra
     similar copy, over its area) exceeds ``limits[i]`` is replaced by that copy (the
     repair that follows makes room for it). Returns (art, distortion of each element as
     it is returned, indices replaced). A copy's curves are flattened as the placed art's
-    were (:func:`refined` at its tolerance), so that the repair measures what is written."""
+    were (:func:`refined` at its tolerance), so that the repair measures what is written.
+
+    Notes
+    -----
+    The similar copy's art is its rest art (``rest[i].art``, measured once for the copies
+    that share a rest object) moved by the similarity: the art of the moved paths up to
+    rounding. A distortion within :data:`DECIDE_EXACTLY` of its limit is measured again
+    on the moved paths' own art, so the choice is the one that art gives."""
     out, dist, replaced = [], np.zeros(len(placed)), []
     for i, (p, r) in enumerate(zip(placed, rest)):
-        copy = similar_copy(r, p)
-        d = distortion(p.art, copy.art)
+        m, _ = _similarity(r, p)
+        moved = shapely.affinity.affine_transform(r.art, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
+        d = distortion(p.art, moved)
+        copy = None
+        if abs(d - limits[i]) <= DECIDE_EXACTLY:
+            copy = similar_copy(r, p)
+            d = distortion(p.art, copy.art)
         if d > limits[i]:
+            copy = similar_copy(r, p) if copy is None else copy
             out.append(dataclasses.replace(copy, paths=tuple(refined(a, p.tolerance) for a in copy.paths)))
             replaced.append(i)
             d = 0.0
