@@ -43,8 +43,11 @@ def _polygonal(geom) -> shapely.Geometry:
 
 
 def _signed_area(pts: np.ndarray) -> float:
+    """The shoelace area of the closed ring ``pts`` (K, 2): positive when counter-clockwise
+    (y up)."""
     x, y = pts[:, 0], pts[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    # (the next point of each, as np.roll(·, -1) gives it, without its overhead)
+    return 0.5 * float(np.dot(x, np.concatenate((y[1:], y[:1]))) - np.dot(np.concatenate((x[1:], x[:1])), y))
 
 
 def _subpath_polygon(pts: np.ndarray, method: str) -> shapely.Geometry:

@@ -157,6 +157,25 @@ def _place(geom0, scale: float, angle: float, at: np.ndarray):
     return shapely.affinity.affine_transform(geom0, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
 
 
+def _place_all(geoms0: Sequence, scales: Sequence[float], angles: Sequence[float], at: np.ndarray) -> np.ndarray:
+    """``_place(geoms0[j], scales[j], angles[j], at)`` of each j, as an array: one
+    coordinate transform for all (the same arithmetic, so the same coordinates)."""
+    geoms = np.empty(len(geoms0), dtype=object)
+    geoms[:] = list(geoms0)
+    if not len(geoms):
+        return geoms
+    cs = [(math.cos(a) * sc, math.sin(a) * sc) for a, sc in zip(angles, scales)]  # as _matrix
+    n = shapely.get_num_coordinates(geoms)
+    c = np.repeat([q[0] for q in cs], n)
+    s = np.repeat([q[1] for q in cs], n)
+
+    def move(xy):  # shapely.affinity.affine_transform's arithmetic, per coordinate
+        x, y = xy.T
+        return np.stack([c * x + -s * y + at[0], s * x + c * y + at[1]]).T
+
+    return shapely.transform(geoms, move)
+
+
 def _written(art: ArtPath, m: np.ndarray, tol: float) -> ArtPath:
     """``art`` under the similarity ``m``, as the writer will write it (:func:`refined`)."""
     return refined(art.transformed(lambda p: np.asarray(p) @ m[:2, :2].T + m[:2, 2]), tol)
@@ -198,8 +217,8 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
     if r < min_radius:
         return None
     shapely.prepare(part)
-    best = None
     axis = _long_axis(part)
+    picks, angles = [], []
     for t in range(trials):
         k = int(rng.choice(len(library.elements), p=library.weights))
         angle = _angle(library.controls[k], rng)
@@ -209,20 +228,30 @@ def _fit_copy(part, library: HoleLibrary, gap: float, rng: np.random.Generator, 
             angle = axis - library.axes[k] + math.pi * (t % 2)
         if budget is not None:
             budget.take(library.points[k])
-        lo = r / library.radii[k]  # fits: inside the inscribed circle
-        g0 = library.geoms[k]
-        if not part.contains(_place(g0, lo, angle, at)):
-            continue
-        hi = 3.0 * lo
-        for _ in range(12):  # grow until it touches the free part's edge
-            mid = 0.5 * (lo + hi)
-            if part.contains(_place(g0, mid, angle, at)):
-                lo = mid
+        picks.append(k)
+        angles.append(angle)
+    # every pick at once: fits inside the inscribed circle, then grows until it touches
+    # the free part's edge (bisection of its scale)
+    g0 = [library.geoms[k] for k in picks]
+    lo = [r / library.radii[k] for k in picks]
+    fits = shapely.contains(part, _place_all(g0, lo, angles, at))
+    live = [j for j in range(len(picks)) if fits[j]]
+    hi = [3.0 * x for x in lo]
+    for _ in range(12):
+        if not live:
+            break
+        mid = [0.5 * (lo[j] + hi[j]) for j in live]
+        inside = shapely.contains(part, _place_all([g0[j] for j in live], mid, [angles[j] for j in live], at))
+        for j, m, ok in zip(live, mid, inside):
+            if ok:
+                lo[j] = m
             else:
-                hi = mid
-        area = lo * lo * g0.area
+                hi[j] = m
+    best = None
+    for j in live:
+        area = lo[j] * lo[j] * g0[j].area
         if best is None or area > best[0]:
-            best = (area, lo, k, angle)
+            best = (area, lo[j], picks[j], angles[j])
     if best is None or best[0] < min_area:
         return None
     _, s, k, angle = best

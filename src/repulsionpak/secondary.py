@@ -81,30 +81,37 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
 
 
 def pocket_axes(pockets: Pockets) -> np.ndarray:
-    """The long axis (radians, in container coordinates) of the pocket around each seed.
+    """The long axis (radians, in container coordinates) of the pocket around each seed
+    (:func:`pocket_axis` of each)."""
+    if not len(pockets.iy):
+        return np.zeros(0)
+    gy, gx = np.gradient(pockets.dist)
+    return np.array([pocket_axis(pockets, k, (gy, gx)) for k in range(len(pockets.iy))])
+
+
+def pocket_axis(pockets: Pockets, k: int, gradient: tuple[np.ndarray, np.ndarray] | None = None) -> float:
+    """The long axis (radians, in container coordinates) of the pocket around seed ``k``.
 
     Within twice the seed's distance, the gradient of the distance transform points away
     from the walls of the pocket: in a sliver between two elements those gradients are
     (anti)parallel, across the sliver. The pocket runs along the eigenvector of the
     smallest eigenvalue of their structure tensor Σ ∇d ∇dᵀ. In a round pocket the
     tensor is isotropic and the axis is arbitrary, which is harmless: nothing there
-    favours one orientation.
+    favours one orientation. ``gradient``: ``np.gradient(pockets.dist)``, when known.
     """
     dist = pockets.dist
-    gy, gx = np.gradient(dist)
+    gy, gx = np.gradient(dist) if gradient is None else gradient
     ny, nx = dist.shape
-    out = np.zeros(len(pockets.iy))
-    for k, (cy, cx) in enumerate(zip(pockets.iy, pockets.ix)):
-        r = max(2.0, 2.0 * float(pockets.distance[k]) / pockets.h)
-        y0, y1 = max(0, int(cy - r)), min(ny, int(cy + r) + 1)
-        x0, x1 = max(0, int(cx - r)), min(nx, int(cx + r) + 1)
-        yy, xx = np.ogrid[y0:y1, x0:x1]
-        w = ((yy - cy) ** 2 + (xx - cx) ** 2 < r * r) & (dist[y0:y1, x0:x1] > 0)
-        ax, ay = gx[y0:y1, x0:x1][w], gy[y0:y1, x0:x1][w]
-        jxx, jyy, jxy = float(ax @ ax), float(ay @ ay), float(ax @ ay)
-        # the largest eigenvector is at 0.5·atan2(2jxy, jxx − jyy); the pocket runs ⟂ to it
-        out[k] = 0.5 * np.arctan2(2.0 * jxy, jxx - jyy) + 0.5 * np.pi
-    return out
+    cy, cx = pockets.iy[k], pockets.ix[k]
+    r = max(2.0, 2.0 * float(pockets.distance[k]) / pockets.h)
+    y0, y1 = max(0, int(cy - r)), min(ny, int(cy + r) + 1)
+    x0, x1 = max(0, int(cx - r)), min(nx, int(cx + r) + 1)
+    yy, xx = np.ogrid[y0:y1, x0:x1]
+    w = ((yy - cy) ** 2 + (xx - cx) ** 2 < r * r) & (dist[y0:y1, x0:x1] > 0)
+    ax, ay = gx[y0:y1, x0:x1][w], gy[y0:y1, x0:x1][w]
+    jxx, jyy, jxy = float(ax @ ax), float(ay @ ay), float(ax @ ay)
+    # the largest eigenvector is at 0.5·atan2(2jxy, jxx − jyy); the pocket runs ⟂ to it
+    return float(0.5 * np.arctan2(2.0 * jxy, jxx - jyy) + 0.5 * np.pi)
 
 
 def art_size(geom) -> float:
@@ -187,44 +194,25 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
         cand = order[(np.arange(len(seeds))[:, None] + np.arange(k)[None, :]) % len(outlines)]
     else:
         cand = assign[:, None]
-    angles, scales, assign = _fit_to_pockets(pockets, outlines, cand, ctrls if controlled else None,
-                                             p.preprocess.skin_offset * gap, p.placement.rotate, rng)
-    if min_size > 0:  # no specks: a pocket too small for a copy of the floor's size stays empty
-        # a copy may grow past its fit (to sim.max_size, where its neighbours leave room):
-        # one fitted that far below the floor may still end above it; those that do not
-        # are dropped after the verification (pack.py)
-        size = np.sqrt([outlines[int(i)].area for i in assign]) * scales * p.sim.max_size
-        keep = size >= min_size
-        seeds, angles, scales, assign = seeds[keep], angles[keep], scales[keep], assign[keep]
-        if len(seeds) == 0:
-            packing.stopped_by["secondary"] = "no_pockets"
-            return 0
+    fits = _PocketFits(pockets, outlines, cand, ctrls if controlled else None,
+                       p.preprocess.skin_offset * gap, p.placement.rotate, rng)
     # one template per element and size class (factor SIZE_STEP): every copy's skin is
     # built for about its own final size, so it keeps about half a gap around its art
     # however small or large its pocket is
-    templates: list = []
-    key_index: dict[tuple[int, int], int] = {}
-    tindex = np.zeros(len(seeds), np.int64)
-    shrink = np.zeros(len(seeds))
     m0 = packing.model
     # the phase simulates at most as many vertices as the primary phase did (the deepest
-    # pockets first): with one detailed primary, 50 copies of it cost many times its run
+    # pockets first): with one detailed primary, 50 copies of it cost many times its run;
+    # the pockets are fitted in that order until the copies reach it
     v_prim = sum(int(m0.elem_vstart[e + 1] - m0.elem_vstart[e]) for e in range(m0.n_elements)
                  if m0.kind[e] == "primary")
-    room = max(v_prim, MIN_WORK_VERTICES)
-    used = 0
-    for k, (i, sc) in enumerate(zip(assign, scales)):
-        b = int(np.round(np.log(sc) / np.log(SIZE_STEP)))
-        if (int(i), b) not in key_index:
-            key_index[(int(i), b)] = len(templates)
-            templates.append(build_template(outlines[int(i)], SIZE_STEP ** b, gap, p.preprocess))
-        tindex[k] = key_index[(int(i), b)]
-        shrink[k] = sp.initial_fraction * sc / SIZE_STEP ** b  # starts at a share of its fit
-        used += len(templates[tindex[k]].verts)
-        if used > room and k > 0:  # this copy would take the phase past the primaries' size
-            seeds, angles, scales, assign = seeds[:k], angles[:k], scales[:k], assign[:k]
-            tindex, shrink = tindex[:k], shrink[:k]
-            break
+    chosen, templates, tindex, shrink = _copies_within(fits, outlines, max(v_prim, MIN_WORK_VERTICES),
+                                                        gap, p, min_size)
+    if not chosen:  # no specks: a pocket too small for a copy of the floor's size stays empty
+        packing.stopped_by["secondary"] = "no_pockets"
+        return 0
+    seeds = seeds[chosen]
+    angles = np.array([fits(k)[0] for k in chosen])
+    assign = np.array([fits(k)[2] for k in chosen], dtype=cand.dtype)
     base_index = len(packing.templates)
     placement = Placement(tindex + base_index, seeds, angles, shrink)
     all_templates = list(packing.templates) + templates
@@ -285,6 +273,95 @@ ANGLE_TRIES = 6
 _STEPS = np.geomspace(0.5, 4.0, 37)
 
 
+def _copies_within(fits: "_PocketFits", outlines, room: int, gap: float, p, min_size: float
+                   ) -> tuple[list[int], list, np.ndarray, np.ndarray]:
+    """The pockets that get a copy, in seed order, and the copies' templates.
+
+    A pocket whose fitted copy stays below ``min_size`` (:func:`art_size` at its nominal
+    scale × ``sim.max_size``: a copy may grow past its fit where its neighbours leave
+    room; those that end below the floor are dropped after the verification) gets none.
+    The copies' templates (one per element and size class) are built as they come, until
+    the copies' mesh vertices pass ``room`` (the first copy always fits). Returns (the
+    pockets chosen, the new templates, each copy's template index among them, each
+    copy's start shrink)."""
+    sp = p.secondary
+    templates: list = []
+    key_index: dict[tuple[int, int], int] = {}
+    chosen, tindex, shrink = [], [], []
+    used = 0
+    for k in range(fits.n):
+        _, sc, i = fits(k)
+        if min_size > 0 and not np.sqrt(outlines[i].area) * sc * p.sim.max_size >= min_size:
+            continue
+        b = int(np.round(np.log(sc) / np.log(SIZE_STEP)))
+        if (i, b) not in key_index:
+            key_index[(i, b)] = len(templates)
+            templates.append(build_template(outlines[i], SIZE_STEP ** b, gap, p.preprocess))
+        t = key_index[(i, b)]
+        used += len(templates[t].verts)
+        if used > room and chosen:  # this copy would take the phase past the primaries' size
+            break
+        chosen.append(k)
+        tindex.append(t)
+        shrink.append(sp.initial_fraction * sc / SIZE_STEP ** b)  # starts at a share of its fit
+    return chosen, templates, np.asarray(tindex, np.int64), np.asarray(shrink, dtype=float)
+
+
+class _PocketFits:
+    """Each pocket's copy (:func:`_fit_to_pockets`), fitted when first asked for.
+
+    The random start angles of every pocket are drawn when it is made (the generator
+    ends where fitting them all would leave it); ``fits(k)`` is pocket k's
+    (angle, scale, element)."""
+
+    def __init__(self, pockets: Pockets, outlines, candidates: np.ndarray, ctrls, offset: float,
+                 rotate: bool, rng: np.random.Generator):
+        self.pockets, self.candidates, self.offset, self.rotate = pockets, candidates, offset, rotate
+        self.n = n = len(candidates)
+        self.seeds = pockets.seeds
+        used = np.unique(candidates)
+        self.samples = {int(i): outline_samples(outlines[int(i)]) for i in used}
+        self.radius = {i: float(np.sqrt((smp ** 2).sum(axis=1).max())) for i, smp in self.samples.items()}
+        self.art = {int(i): float(outlines[int(i)].geometry.area) for i in used}
+        angles = rng.uniform(0.0, 2.0 * np.pi, (n, ANGLE_TRIES)) if rotate else np.zeros((n, 1))
+        self.axes = None
+        if ctrls is not None:
+            angles = initial_angles(ctrls, candidates[:, 0], angles[:, 0], rng)[:, None]
+        elif rotate:  # and the pocket's long axis, both ways (:meth:`_angles`)
+            self.axes = np.gradient(pockets.dist)
+        self.angles = angles
+        self.done: dict[int, tuple[float, float, int]] = {}
+
+    def _angles(self, k: int) -> np.ndarray:
+        if self.axes is None:
+            return self.angles[k]
+        axis = pocket_axis(self.pockets, k, self.axes)
+        return np.concatenate([self.angles[k], [axis, axis + np.pi]])
+
+    def __call__(self, k: int) -> tuple[float, float, int]:
+        if k not in self.done:
+            self.done[k] = self._fit(k)
+        return self.done[k]
+
+    def _fit(self, k: int) -> tuple[float, float, int]:
+        pockets, offset = self.pockets, self.offset
+        angles = self._angles(k)
+        best_area, out = -1.0, (0.0, 0.0, int(self.candidates[k, 0]))
+        for i in map(int, self.candidates[k]):
+            # the inscribed-circle fit: the circumscribed skin radius equals the distance
+            s_round = max(pockets.distance[k] - offset, 0.5 * pockets.distance[k]) / max(self.radius[i], 1e-300)
+            best = (-1.0, 0.0)
+            for a, sc in zip(angles, fit_scales(pockets, self.seeds[k], self.samples[i], angles, offset,
+                                                s_round, _STEPS)):
+                if sc > best[0] * (1.0 + 1e-9):
+                    best = (float(sc), float(a))
+            sc = max(best[0], s_round)
+            if self.art[i] * sc * sc > best_area * (1.0 + 1e-9):
+                best_area = self.art[i] * sc * sc
+                out = (best[1], sc, i)
+        return out
+
+
 def _fit_to_pockets(pockets: Pockets, outlines, candidates: np.ndarray, ctrls, offset: float, rotate: bool,
                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Element, start angle and nominal scale (file → container units) of each pocket's copy.
@@ -301,35 +378,7 @@ def _fit_to_pockets(pockets: Pockets, outlines, candidates: np.ndarray, ctrls, o
     angles their controls give (:func:`repulsionpak.controls.initial_angles`).
     Returns (angles, scales, chosen elements), each (n,).
     """
-    n = len(candidates)
-    assign = candidates[:, 0]
-    axes = pocket_axes(pockets)
-    used = np.unique(candidates)
-    samples = {int(i): outline_samples(outlines[int(i)]) for i in used}
-    radius = {i: float(np.sqrt((smp ** 2).sum(axis=1).max())) for i, smp in samples.items()}
-    art = {int(i): float(outlines[int(i)].geometry.area) for i in used}
-    if rotate:
-        angles = rng.uniform(0.0, 2.0 * np.pi, (n, ANGLE_TRIES))
-    else:
-        angles = np.zeros((n, 1))
-    if ctrls is not None:
-        angles = initial_angles(ctrls, assign, angles[:, 0], rng)[:, None]
-    elif rotate:
-        angles = np.column_stack([angles, axes, axes + np.pi])
-    seeds = pockets.seeds
-    out_a, out_s, out_i = np.zeros(n), np.zeros(n), assign.copy()
-    for k in range(n):
-        best_area = -1.0
-        for i in map(int, candidates[k]):
-            # the inscribed-circle fit: the circumscribed skin radius equals the distance
-            s_round = max(pockets.distance[k] - offset, 0.5 * pockets.distance[k]) / max(radius[i], 1e-300)
-            best = (-1.0, 0.0)
-            for a, sc in zip(angles[k], fit_scales(pockets, seeds[k], samples[i], angles[k], offset,
-                                                   s_round, _STEPS)):
-                if sc > best[0] * (1.0 + 1e-9):
-                    best = (float(sc), float(a))
-            sc = max(best[0], s_round)
-            if art[i] * sc * sc > best_area * (1.0 + 1e-9):
-                best_area = art[i] * sc * sc
-                out_s[k], out_a[k], out_i[k] = sc, best[1], i
-    return out_a, out_s, out_i
+    fits = _PocketFits(pockets, outlines, candidates, ctrls, offset, rotate, rng)
+    out = [fits(k) for k in range(fits.n)]
+    return (np.array([o[0] for o in out]), np.array([o[1] for o in out]),
+            np.array([o[2] for o in out], dtype=candidates.dtype))

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
@@ -66,9 +67,9 @@ class _Search:
     numba overlap kernel (:mod:`repulsionpak.geometry.overlap`, ~20× cheaper than a GEOS
     overlay per evaluation); rows the kernel cannot decide go to GEOS."""
 
-    def __init__(self, a: shapely.Geometry, b: shapely.Geometry):
+    def __init__(self, a: shapely.Geometry, b: shapely.Geometry, ra=None):
         self.a, self.b = a, b
-        self.ra = rings_of(a)
+        self.ra = rings_of(a) if ra is None else ra  # (given: a's, made once)
         self.gb = OverlapGrid(rings_of(b))
         self.area_a, self.area_b = self.ra.area, self.gb.rings.area
 
@@ -84,6 +85,36 @@ class _Search:
         """:func:`_nelder_mead` on this objective, in compiled code when it can be."""
         res = nelder_mead_sym(self.ra, self.gb, p, v, _NM_SIZE, _NM_TOL, _NM_EVALS)
         return _nelder_mead(self, p, v) if res is None else res
+
+
+#: the fit's search runs on unit-area outlines simplified to this
+_SIMPLIFY = 1e-3
+
+
+@dataclass(frozen=True, eq=False)
+class _Shape:
+    """A source as :func:`distortion` reads it, made once for all its copies: polygonal
+    (``geom``), moved to its centroid and scaled to unit area (``unit``, scale ``size``),
+    simplified (``simple``), and the rings of both (``unit_rings``, ``simple_rings``;
+    None where ``simple`` is empty or invalid, which the fit does not use)."""
+
+    geom: shapely.Geometry
+    unit: shapely.Geometry
+    size: float
+    simple: shapely.Geometry
+    unit_rings: object
+    simple_rings: object
+
+    @staticmethod
+    def of(geom) -> "_Shape | None":
+        """The shape of ``geom``; None when it has no area."""
+        a = _polygonal(geom)
+        if a.is_empty or not a.area > 0:
+            return None
+        an, sa = _normalised(a)
+        a_s = shapely.simplify(an, _SIMPLIFY)
+        usable = not a_s.is_empty and a_s.is_valid
+        return _Shape(a, an, sa, a_s, rings_of(an), rings_of(a_s) if usable else None)
 
 
 def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
@@ -117,22 +148,28 @@ def distortion(source, copy, *, coarse: int = 48, fit_translation: bool = True,
 
     Returns ``None`` when either shape has no area.
     """
-    a = _polygonal(source)
+    return _distortion(_Shape.of(source), copy, coarse=coarse, fit_translation=fit_translation,
+                       return_fit=return_fit, angle=angle)
+
+
+def _distortion(src: _Shape | None, copy, *, coarse: int = 48, fit_translation: bool = True,
+                return_fit: bool = False, angle: float | None = None):
+    """:func:`distortion` of the source ``src`` (:meth:`_Shape.of`, None: no area)."""
     b = _polygonal(copy)
-    if a.is_empty or b.is_empty or not a.area > 0 or not b.area > 0:
+    if src is None or b.is_empty or not b.area > 0:
         return (None, None) if return_fit else None
     if coarse < 8:
         raise ParameterError(f"coarse must be at least 8 angles, got {coarse}")
-    an, sa = _normalised(a)
+    an, sa = src.unit, src.size
     bn, sb = _normalised(b)
     # the search runs on outlines simplified to a thousandth of the size (far fewer
     # vertices for finely sampled curves, the optimum hardly moves); the value returned
     # is that of the exact outlines under the transform found
-    tol = 1e-3
-    a_s, b_s = shapely.simplify(an, tol), shapely.simplify(bn, tol)
-    if a_s.is_empty or not a_s.is_valid or b_s.is_empty or not b_s.is_valid:
-        a_s, b_s = an, bn
-    search = _Search(a_s, b_s)
+    b_s = shapely.simplify(bn, _SIMPLIFY)
+    if src.simple_rings is None or b_s.is_empty or not b_s.is_valid:
+        search = _Search(an, bn, src.unit_rings)
+    else:
+        search = _Search(src.simple, b_s, src.simple_rings)
     step = 2 * math.pi / coarse
     best_p, best_v = None, np.inf
     known = angle is not None and math.isfinite(angle)
@@ -250,12 +287,13 @@ def distortions(art_geoms: Sequence, names: Sequence[str],
         raise ParameterError(f"{len(art_geoms)} elements but {len(angles)} angles")
     if int(workers) < 1:
         raise ParameterError(f"workers must be at least 1, got {workers!r}")
-    prepared = {k: _polygonal(g) for k, g in sources.items()}
+    prepared = {k: _Shape.of(g) for k, g in sources.items()}  # each source once, not per copy
 
     def one(i: int) -> float | None:
-        src = prepared.get(names[i])
+        if names[i] not in prepared:
+            return None
         a = None if angles is None else angles[i]
-        return None if src is None else distortion(src, art_geoms[i], angle=a, **kw)
+        return _distortion(prepared[names[i]], art_geoms[i], angle=a, **kw)
 
     if int(workers) == 1 or len(names) < 2:
         return [one(i) for i in range(len(names))]

@@ -82,45 +82,64 @@ def _stroke_path(art: ArtPath):
     return MPath(np.concatenate(verts), np.concatenate(codes).astype(MPath.code_type))
 
 
-def _draw_art(ax, art: ArtPath, stroke_scale: float, pt_per_unit: float) -> None:
+def _art_patches(art: ArtPath, stroke_scale: float, pt_per_unit: float) -> list:
+    """The matplotlib patches that paint ``art`` (its fill and its stroke, in its paint
+    order), not yet added to any axes."""
     from matplotlib.colors import to_rgba
     from matplotlib.patches import PathPatch
 
     st = art.style
+    out = []
 
     def fill():
         if st.fill is not None and st.opacity * st.fill_opacity > 0:
             fp = _fill_path(art)
             if fp is not None:
-                ax.add_artist(  # not add_patch: the limits are set, no data-limit update
-                    PathPatch(
-                        fp,
-                        facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity),
-                        edgecolor="none",
-                        linewidth=0,
-                    )
-                )
+                out.append(PathPatch(fp, facecolor=to_rgba(st.fill, st.opacity * st.fill_opacity),
+                                     edgecolor="none", linewidth=0))
 
     def stroke():
         width = st.stroke_width * stroke_scale * pt_per_unit
         if st.stroke is not None and st.opacity * st.stroke_opacity > 0 and width > 0:
             sp = _stroke_path(art)
             if sp is not None:
-                ax.add_artist(  # not add_patch: the limits are set, no data-limit update
-                    PathPatch(
-                        sp,
-                        facecolor="none",
-                        edgecolor=to_rgba(st.stroke, st.opacity * st.stroke_opacity),
-                        linewidth=width,
-                        capstyle=_CAPS.get(st.stroke_linecap, "butt"),
-                        joinstyle=_JOINS.get(st.stroke_linejoin, "miter"),
-                        linestyle=_dashes(st, stroke_scale * pt_per_unit, width),
-                    )
-                )
+                out.append(PathPatch(
+                    sp,
+                    facecolor="none",
+                    edgecolor=to_rgba(st.stroke, st.opacity * st.stroke_opacity),
+                    linewidth=width,
+                    capstyle=_CAPS.get(st.stroke_linecap, "butt"),
+                    joinstyle=_JOINS.get(st.stroke_linejoin, "miter"),
+                    linestyle=_dashes(st, stroke_scale * pt_per_unit, width),
+                ))
 
     order = st.paint_order.split() if st.paint_order != "normal" else ["fill", "stroke"]
     for part in order:  # paint-order: "stroke fill markers" draws the stroke first
         {"fill": fill, "stroke": stroke}.get(part, lambda: None)()
+    return out
+
+
+def _add_patches(ax, patches: list) -> None:
+    """Draw ``patches`` on ``ax`` in their order, as each would be drawn added to it alone
+    (``ax.add_artist``: the axes' data transform, clipped to the axes), through one artist
+    of the axes: adding thousands of artists to an axes costs more than drawing them."""
+    if not patches:
+        return
+    from matplotlib.artist import Artist
+    from matplotlib.transforms import Bbox, TransformedBbox
+
+    class _InOrder(Artist):
+        zorder = patches[0].get_zorder()  # where the patches would have been sorted
+
+        def draw(self, renderer):
+            for p in patches:
+                p.draw(renderer)
+
+    clip = TransformedBbox(Bbox.unit(), ax.patch.get_transform())  # what add_artist clips to
+    for p in patches:
+        p.set_transform(ax.transData)
+        p.set_clip_box(clip)
+    ax.add_artist(_InOrder())
 
 
 def _dashes(st, pt_per_unit: float, width: float):
@@ -227,8 +246,7 @@ def png_bytes(
     )  # data and pixel aspect agree, so the axes keep the whole figure
 
     if container_paint == "as-drawn" and container.paths:
-        for art in container.paths:
-            _draw_art(ax, art, 1.0, pt_per_unit)
+        _add_patches(ax, [q for art in container.paths for q in _art_patches(art, 1.0, pt_per_unit)])
     elif container_paint != "none":  # the outline (also as-drawn's, for a container without shapes)
         from matplotlib.patches import PathPatch
         from matplotlib.path import Path as MPath
@@ -254,9 +272,8 @@ def png_bytes(
                             joinstyle="round",
                         )
                     )
-    for pa in placed:
-        for art in pa.paths:
-            _draw_art(ax, art, pa.stroke_scale, pt_per_unit)
+    _add_patches(ax, [q for pa in placed for art in pa.paths
+                      for q in _art_patches(art, pa.stroke_scale, pt_per_unit)])
 
     buf = io.BytesIO()
     canvas.print_png(buf, metadata={"Software": "repulsionpak"})

@@ -77,10 +77,17 @@ def rest_art(templates: Sequence[Template], model: Model, elements: Sequence[int
     Returns
     -------
     list of PlacedArt
-        One per copy, in the order of ``elements``.
+        One per copy, in the order of ``elements``; copies of one template and kind share
+        one object (a PlacedArt is never changed in place).
     """
-    return [rest_copy(templates[model.template_index[e]], model.kind[e])
-            for e in (range(model.n_elements) if elements is None else elements)]
+    made: dict[tuple[int, str], PlacedArt] = {}
+    out = []
+    for e in range(model.n_elements) if elements is None else elements:
+        key = (int(model.template_index[e]), str(model.kind[e]))
+        if key not in made:
+            made[key] = rest_copy(templates[key[0]], model.kind[e])
+        out.append(made[key])
+    return out
 
 
 def skin_polygons(model: Model, state: State, frame: SimFrame) -> list[np.ndarray]:

@@ -140,8 +140,32 @@ def _pair_distances(ga: np.ndarray, gb: np.ndarray, memo: dict | None) -> np.nda
     return d
 
 
+@dataclass(frozen=True)
+class Rough:
+    """Outlines ``geoms`` that each lie within ``err[i]`` of the outline they stand for
+    (Hausdorff distance of the regions: every point of either is within ``err[i]`` of the
+    other), with a memo of their pair distances (:func:`_pair_distances`): a lower bound
+    of the distance of two exact outlines, cheaper to measure. Indices are the elements'."""
+
+    geoms: list
+    err: np.ndarray
+    memo: dict | None = None
+
+    def maybe_within(self, i: np.ndarray, j: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs (``i[k]``, ``j[k]``) whose exact outlines may be within ``reach``:
+        their rough distance less twice their error bounds (a margin for rounding) is not
+        beyond it."""
+        if not len(i):
+            return i, j
+        g = np.empty(len(self.geoms), dtype=object)
+        g[:] = self.geoms
+        d = _pair_distances(g[i], g[j], self.memo)
+        keep = ~(d - 2.0 * (self.err[i] + self.err[j]) > reach)
+        return i[keep], j[keep]
+
+
 def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
-           fixed=None, rank=None, contacts=None, weak=None, memo=None):
+           fixed=None, rank=None, contacts=None, weak=None, memo=None, rough=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
@@ -160,7 +184,10 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     close to, distance to gain, measured: True for a shortest line between art a gap
     apart or art and edge, False for an overlap or art outside, whose point and direction
     are estimates), from which :func:`_shrink_centre` predicts the shrink about other
-    points. ``memo`` (a dict): pair distances kept between calls (:func:`_pair_distances`)."""
+    points. ``memo`` (a dict): pair distances kept between calls (:func:`_pair_distances`).
+    ``rough`` (:class:`Rough`): cheaper outlines within a known distance of ``geoms``;
+    pairs whose rough distance shows them farther apart than ``min_gap`` are not measured
+    on ``geoms`` (the result is the same: only pairs closer than ``min_gap`` count)."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
@@ -187,6 +214,9 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         a, b = _near_pairs(arr, np.arange(len(arr)), min_gap)
         keep = a < b
         a, b = a[keep], b[keep]
+        if rough is not None:
+            a, b = rough.maybe_within(idx[a], idx[b], min_gap)
+            a, b = np.searchsorted(idx, a), np.searchsorted(idx, b)
         d = _pair_distances(arr[a], arr[b], memo)
         close = d <= min_gap  # what a dwithin query would have found
         a, b, d = a[close], b[close], d[close]

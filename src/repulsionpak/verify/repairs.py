@@ -29,7 +29,7 @@ import shapely
 from ..art_area import _polygonal
 from ..render.placed import refined, similarity_matrix
 from ..types import PlacedArt
-from .checks import Verification, _check, _near_pairs, _nearest, _shrink_centre, distortion
+from .checks import Rough, Verification, _check, _near_pairs, _nearest, _pair_distances, _shrink_centre, distortion
 
 __all__ = ["scaled_art", "similar_copy", "straighten", "verify_and_repair"]
 
@@ -57,11 +57,9 @@ def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
     return dataclasses.replace(placed, paths=paths, stroke_scale=placed.stroke_scale * scale, frame=frame)
 
 
-def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
-    """The undeformed art ``rest`` moved, turned and scaled onto ``placed`` (least squares
-    over their corresponding vertices, or the meshes' similarity ``frame`` when both carry
-    one — rendered curves have no vertex correspondence): what the element would look like
-    unbent."""
+def _similarity(rest: PlacedArt, placed: PlacedArt) -> tuple[np.ndarray, dict]:
+    """The similarity (3, 3) of :func:`similar_copy`, and the copy's fields it sets
+    besides its paths (its ``frame``, when both carry one)."""
     extra = {}
     if placed.frame is not None and rest.frame is not None:
         m = np.asarray(placed.frame, dtype=float) @ np.linalg.inv(np.asarray(rest.frame, dtype=float))
@@ -70,10 +68,24 @@ def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
         src = np.concatenate([p for a in rest.paths for p in a.subpaths])
         cur = np.concatenate([p for a in placed.paths for p in a.subpaths])
         m = similarity_matrix(src, cur)
+    return m, extra
+
+
+def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
+    """The undeformed art ``rest`` moved, turned and scaled onto ``placed`` (least squares
+    over their corresponding vertices, or the meshes' similarity ``frame`` when both carry
+    one — rendered curves have no vertex correspondence): what the element would look like
+    unbent."""
+    m, extra = _similarity(rest, placed)
     rot, b = m[:2, :2], m[:2, 2]
     paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
     k = float(np.sqrt(abs(np.linalg.det(rot))))
     return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k, deformation=0.0, **extra)
+
+
+#: a distortion this close to its limit is measured on the similar copy's own art
+#: (:func:`straighten`), not on its rest art moved
+DECIDE_EXACTLY = 1e-4
 
 
 def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarray
@@ -82,12 +94,25 @@ def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarra
     similar copy, over its area) exceeds ``limits[i]`` is replaced by that copy (the
     repair that follows makes room for it). Returns (art, distortion of each element as
     it is returned, indices replaced). A copy's curves are flattened as the placed art's
-    were (:func:`refined` at its tolerance), so that the repair measures what is written."""
+    were (:func:`refined` at its tolerance), so that the repair measures what is written.
+
+    Notes
+    -----
+    The similar copy's art is its rest art (``rest[i].art``, measured once for the copies
+    that share a rest object) moved by the similarity: the art of the moved paths up to
+    rounding. A distortion within :data:`DECIDE_EXACTLY` of its limit is measured again
+    on the moved paths' own art, so the choice is the one that art gives."""
     out, dist, replaced = [], np.zeros(len(placed)), []
     for i, (p, r) in enumerate(zip(placed, rest)):
-        copy = similar_copy(r, p)
-        d = distortion(p.art, copy.art)
+        m, _ = _similarity(r, p)
+        moved = shapely.affinity.affine_transform(r.art, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
+        d = distortion(p.art, moved)
+        copy = None
+        if abs(d - limits[i]) <= DECIDE_EXACTLY:
+            copy = similar_copy(r, p)
+            d = distortion(p.art, copy.art)
         if d > limits[i]:
+            copy = similar_copy(r, p) if copy is None else copy
             out.append(dataclasses.replace(copy, paths=tuple(refined(a, p.tolerance) for a in copy.paths)))
             replaced.append(i)
             d = 0.0
@@ -112,7 +137,7 @@ REACH_MAX_SCALE = 2.0
 
 
 def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
-             max_scale, tol, rounds, inner=None, fixed=None, reach=0.0):
+             max_scale, tol, rounds, inner=None, fixed=None, reach=0.0, memo=None):
     """Grow every element about its centroid into the room around it, never closer than
     ``target`` to another element nor ``margin`` to the edge, and no bigger than
     ``max_scale`` of its size — or than the size at which its outermost point has moved
@@ -120,7 +145,9 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
     elements: see :func:`verify_and_repair`): each round, an element with slack s (half the spare
     distance to its nearest neighbour, or the spare distance to the edge) grows by
     1 + s/R, R its largest radius, so none of its points moves further than s (all grow at
-    once, so a pair never closes more than its spare distance)."""
+    once, so a pair never closes more than its spare distance). ``memo``: pair distances
+    of unchanged outlines (:func:`~repulsionpak.verify.checks._pair_distances`): the
+    elements that stopped growing keep theirs."""
     n = len(geoms)
     idx = [i for i in range(n) if alive[i]]
     if not idx:
@@ -150,7 +177,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
         keep = a != b
         pairs = np.unique(np.sort(np.stack([a[keep], b[keep]], axis=1), axis=1), axis=0)
         if len(pairs):  # each pair measured once, for whichever of the two may grow
-            d = 0.5 * (shapely.distance(arr[pairs[:, 0]], arr[pairs[:, 1]]) - target)
+            d = 0.5 * (_pair_distances(arr[pairs[:, 0]], arr[pairs[:, 1]], memo) - target)
             np.minimum.at(slack, pairs[:, 0], d)
             np.minimum.at(slack, pairs[:, 1], d)
         grow = {}
@@ -427,21 +454,26 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 keep_helpful(moved, need, False)
     if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
-                 w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach)
+                 w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach, memo=memo)
         if gather > grow_to:
             _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, grow_to + 2 * eps,
                     gather + 2 * eps, w_margin, tol, fixed=fixed, max_turn=max_turn)
-    # final verification, exact, on what is returned
+    # final verification, exact, on what is returned; the rounds' outlines (each within
+    # eps of its exact one, scaled as it is) tell which pairs need no exact measure
+    rough = Rough(geoms, eps * scale, memo)
     geoms = [transform(exact[i], i) for i in range(n)]
+    final: dict = {}  # a second check after drops measures no pair again
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
-                                                 exact_edges=True, fixed=fixed, rank=rank)
+                                                 exact_edges=True, fixed=fixed, rank=rank, memo=final,
+                                                 rough=rough)
     if repair:  # anything still violating after the rounds is dropped (never a pinned copy)
         for i in np.flatnonzero(need > 0):
             if fixed is None or not fixed[i]:
                 alive[i] = False
         if (need > 0).any():
             need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin,
-                                                         tol, exact_edges=True, fixed=fixed, rank=rank)
+                                                         tol, exact_edges=True, fixed=fixed, rank=rank,
+                                                         memo=final, rough=rough)
     dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not exact[i].is_empty]
     for i, src in dropped:
         if placed[i].kind == "primary":
