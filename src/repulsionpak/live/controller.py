@@ -388,7 +388,7 @@ class LiveController:
         for e in np.flatnonzero(~moving[:m0]):
             sim.set_moving(int(e), False)
         sim.refresh_growth()
-        sim._good = st.copy()  # noqa: SLF001  (recovery restores to a state of this size)
+        sim.mark_good()  # recovery restores to a state of this size
         self._bind(sim, sim.phase)
 
     def _error(self, message: str) -> None:

@@ -231,7 +231,7 @@ class StudioController(LiveController):
             for e in np.flatnonzero(~moving):
                 sim.set_moving(int(e), False)
             sim.refresh_growth()
-            sim._good = sim.state.copy()  # noqa: SLF001  (recovery restores to a state of this model)
+            sim.mark_good()  # recovery restores to a state of this model
             sim.state.area_history.clear()  # the stopping rule measures the new room from now
         self.publish("json", self.scene())
         self._publish_frame(force=True)
