@@ -6,6 +6,7 @@ import numpy as np
 from numba import njit, prange
 
 from .._jit.kernels import parallel_kernel
+from .forces import _field_sample
 
 
 @parallel_kernel
@@ -157,7 +158,6 @@ def growth_steps(x, elem_vstart, elem_nskin, moving, nb_count, nb_d2, values, ox
     """
     n_fast = 0
     clear2 = clear * clear
-    ny, nx = values.shape
     for e in range(steps.shape[0]):
         steps[e] = 1
         if not moving[e] or fast <= 1 or growth[e] >= until[e]:
@@ -170,17 +170,7 @@ def growth_steps(x, elem_vstart, elem_nskin, moving, nb_count, nb_d2, values, ox
                     break
             if not room:
                 break
-            fx = (x[i, 0] - ox) * inv_h
-            fy = (x[i, 1] - oy) * inv_h
-            if fx < 0.0 or fy < 0.0 or fx >= nx - 1 or fy >= ny - 1:
-                room = False
-                break
-            ii = int(fx)
-            jj = int(fy)
-            tx = fx - ii
-            ty = fy - jj
-            d = ((values[jj, ii] * (1 - tx) + values[jj, ii + 1] * tx) * (1 - ty)
-                 + (values[jj + 1, ii] * (1 - tx) + values[jj + 1, ii + 1] * tx) * ty)
+            d, _, _ = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
             if d > -clear:
                 room = False
                 break

@@ -226,6 +226,11 @@ class Simulator:
         up with its rest lengths)."""
         m, st, p = self.model, self.state, self.params
         fast = p.fast_growth if st.allow_growth else 1
+        if fast <= 1:  # every element at the paper's rate: one step each (the default)
+            if self.n_fast:
+                self.grow_steps[:] = 1
+                self.n_fast = 0
+            return self._vmax_dt
         f = m.field
         self.n_fast = growth_steps(st.x, m.elem_vstart, m.elem_nskin, st.moving, st.nb_count, st.nb_d2,
                                    f.values, f.ox, f.oy, 1.0 / f.h, p.fast_growth_clearance * m.gap,
