@@ -18,6 +18,15 @@ from playwright.sync_api import sync_playwright
 from repulsionpak.studio import Session, StudioServer
 
 
+def _drag(page, x0: float, y0: float, dx: float, rise: float, steps: int) -> None:
+    """Press at (x0, y0) and drag up and to the right, ``steps`` moves of (dx, -rise) px."""
+    page.mouse.move(x0, y0)
+    page.mouse.down()
+    for k in range(1, steps + 1):
+        page.mouse.move(x0 + dx * k, y0 - rise * k)
+    page.mouse.up()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path(__file__).parent / "images" / "studio.png")
@@ -45,22 +54,12 @@ def main() -> None:
             page.fill("#brush-size", "90")
             page.dispatch_event("#brush-size", "input")
             box = page.locator("#stage").bounding_box()
-            x0, y0 = box["x"] + box["width"] * 0.66, box["y"] + box["height"] * 0.25
-            page.mouse.move(x0, y0)
-            page.mouse.down()
-            for k in range(1, 13):
-                page.mouse.move(x0 + 12 * k, y0 - 6 * k)
-            page.mouse.up()
+            _drag(page, box["x"] + box["width"] * 0.66, box["y"] + box["height"] * 0.25, 12, 6, 12)
             page.wait_for_function("window.repulsionpakStudio.state.painted && window.repulsionpakStudio.busy === 0")
             page.click("#brush")
             # a flow guide across the heart, left to right and rising
             page.click("#guide")
-            x0, y0 = box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.75
-            page.mouse.move(x0, y0)
-            page.mouse.down()
-            for k in range(1, 21):
-                page.mouse.move(x0 + 18 * k, y0 - 9 * k)
-            page.mouse.up()
+            _drag(page, box["x"] + box["width"] * 0.3, box["y"] + box["height"] * 0.75, 18, 9, 20)
             page.wait_for_function("window.repulsionpakStudio.state.guides.length === 1 && "
                                    "window.repulsionpakStudio.busy === 0")
             page.click("#guide")

@@ -1,5 +1,6 @@
 """What the live view's and the studio's tests share: finding Debian's Chromium for
-Playwright, waiting on a condition, and the studio's session and server fixtures.
+Playwright, waiting on a condition, the studio's session and server fixtures, and its
+project files.
 
 Test modules import the fixtures by name (``from browser_support import server, session``),
 so pytest finds them there.
@@ -7,9 +8,11 @@ so pytest finds them there.
 
 from __future__ import annotations
 
+import io
 import os
 import shutil
 import time
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -49,6 +52,12 @@ def finish(session, timeout: float = 240.0) -> None:
     """Wait for a studio session's run to end, and check it ended without an error."""
     wait(lambda: session._thread is not None and not session._thread.is_alive(), timeout)  # noqa: SLF001
     assert session.error is None, session.error
+
+
+def unpacked_project(session, folder: Path) -> Path:
+    """The studio session's project (:meth:`Session.project_zip`) extracted into ``folder``."""
+    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(folder)
+    return folder
 
 
 def paused_apples(session):

@@ -5,6 +5,22 @@ the library), so that folder goes on ``sys.path`` for the tests that build their
 import sys
 from pathlib import Path
 
+import pytest
+
 _BENCHMARKS = str(Path(__file__).resolve().parents[1] / "benchmarks")
 if _BENCHMARKS not in sys.path:
     sys.path.append(_BENCHMARKS)
+
+
+@pytest.fixture(scope="module")
+def one_numba_thread():
+    """numba kernels on one thread for a test module (``pytestmark =
+    pytest.mark.usefixtures("one_numba_thread")``): the machine is small and shared, and
+    numba's OpenMP threads spinning against other processes make tiny kernels ~50x
+    slower. Results do not depend on it."""
+    import numba
+
+    old = numba.get_num_threads()
+    numba.set_num_threads(1)
+    yield
+    numba.set_num_threads(old)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import inspect
 
-import numba
 import numpy as np
 import pytest
 import shapely
@@ -41,14 +40,7 @@ def no_neighbours(n):
     return np.zeros(n, np.int64), np.zeros((n, 1)), np.zeros((n, 1, 2))
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_numba_thread():
-    """The machine is small and shared: numba's OpenMP threads spin against other
-    processes and make tiny kernels ~50x slower. Results do not depend on it."""
-    old = numba.get_num_threads()
-    numba.set_num_threads(1)
-    yield
-    numba.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 def _has_param(fn, name: str) -> bool:

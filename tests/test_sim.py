@@ -10,7 +10,6 @@ import importlib
 import math
 from dataclasses import replace
 
-import numba
 import numpy as np
 import pytest
 import shapely
@@ -35,14 +34,7 @@ SIDE = 200.0
 GAP = 4.0
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_numba_thread():
-    """The machine is small and shared: numba's OpenMP threads spin against other
-    processes and make the tiny kernels ~50x slower. Results do not depend on it."""
-    old = numba.get_num_threads()
-    numba.set_num_threads(1)
-    yield
-    numba.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 def element(name: str, ring) -> Element:
@@ -316,11 +308,11 @@ def test_load_config(tmp_path):
         load_config(typo)
 
 
-def _mesh_lag(headroom: float, at: int = 400) -> list[float]:
-    """Skin area of each of two large discs after ``at`` iterations over what its growth
-    asks for (placed skin area × growth factor²); 1 = the mesh keeps up with its growth."""
-    p = scene_params(count=2, max_iterations=at, settle=0)
-    p = replace(p, sim=replace(p.sim, growth_headroom=headroom))
+def mesh_lag(p: Params, at: int, select=None, every: int = 25) -> list[float]:
+    """Skin area at iteration ``at`` over what its growth asks for (placed skin area ×
+    growth factor²) of each of the two large discs of :func:`library` packed with ``p``
+    (snapshots every ``every`` iterations); 1 = the mesh keeps up with its growth.
+    ``select(state, at)``, if given, picks the elements measured ((M,) bool)."""
     got: list[float] = []
 
     def snap(s):
@@ -328,10 +320,17 @@ def _mesh_lag(headroom: float, at: int = 400) -> list[float]:
             m, sim = s.model, s.sim
             placed = np.zeros(m.n_elements)
             skin_areas(m.x_rest, m.elem_vstart, m.elem_nskin, sim.state.moving, placed)
-            got.extend(sim.state.areas / (placed * sim.state.growth ** 2))  # sim.state.areas: this step's skins
+            ratio = sim.state.areas / (placed * sim.state.growth ** 2)  # this step's skins
+            got.extend(ratio if select is None else ratio[select(sim.state, at)])
 
-    pack(CONTAINER, library()[2:], p, on_snapshot=snap)
+    pack(CONTAINER, library()[2:], p, on_snapshot=snap, snapshot_every=every)
     return got
+
+
+def _mesh_lag(headroom: float, at: int = 400) -> list[float]:
+    """:func:`mesh_lag` of the discs growing at the paper's rate, with ``growth_headroom``."""
+    p = scene_params(count=2, max_iterations=at, settle=0)
+    return mesh_lag(replace(p, sim=replace(p.sim, growth_headroom=headroom)), at)
 
 
 def test_large_meshes_keep_up_with_their_growth():

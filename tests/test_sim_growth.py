@@ -9,22 +9,16 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numba
 import numpy as np
 import pytest
 
 from repulsionpak.pack import pack
 from repulsionpak.params import Params
-from repulsionpak.sim.integrate import grow, growth_steps, skin_areas
-from test_sim import CONTAINER, library, scene_params
+from repulsionpak.sim.integrate import grow, growth_steps
+from test_sim import CONTAINER, library, mesh_lag, scene_params
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_numba_thread():
-    old = numba.get_num_threads()
-    numba.set_num_threads(1)
-    yield
-    numba.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 def _square_field(side=100.0, h=1.0):
@@ -137,23 +131,13 @@ def test_fast_growth_is_deterministic_and_faster():
 
 
 def _fast_lag(headroom: float, at: int = 50) -> list[float]:
-    """Skin area over what its growth asks (placed skin area × growth factor²) at
-    iteration ``at`` of each of two large discs that grew fast until then."""
+    """:func:`test_sim.mesh_lag` at iteration ``at`` of the two large discs that grew fast
+    until then (placed at 5 % cover, ``growth_headroom`` as given)."""
     p = _fast(scene_params(count=2, max_iterations=at, settle=0), clearance=0.5)
     p = replace(p, placement=replace(p.placement, initial_fraction=0.05),
                 sim=replace(p.sim, growth_headroom=headroom))
-    got: list[float] = []
-
-    def snap(s):
-        if s.phase == "primary" and s.iteration == at and not got:
-            m, sim = s.model, s.sim
-            placed = np.zeros(m.n_elements)
-            skin_areas(m.x_rest, m.elem_vstart, m.elem_nskin, sim.state.moving, placed)
-            fast = sim.state.n_grow >= 2 * at  # took fast steps for most of the run
-            got.extend((sim.state.areas / (placed * sim.state.growth ** 2))[fast])
-
-    pack(CONTAINER, library()[2:], p, on_snapshot=snap, snapshot_every=5)
-    return got
+    # the elements that took fast steps for most of the run
+    return mesh_lag(p, at, select=lambda state, at: state.n_grow >= 2 * at, every=5)
 
 
 def test_fast_growing_meshes_keep_up_with_their_growth():

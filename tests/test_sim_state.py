@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 
-import numba
 import numpy as np
 import pytest
 from shapely.geometry import Polygon
@@ -20,12 +19,7 @@ from repulsionpak.sim.terms import Boundary, Corners, Edges, Inversion, Overlap,
 from repulsionpak.types import ArtPath, Element, Style
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _one_numba_thread():
-    old = numba.get_num_threads()
-    numba.set_num_threads(1)
-    yield
-    numba.set_num_threads(old)
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 def _square() -> Element:

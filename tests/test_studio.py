@@ -7,12 +7,10 @@ skipped cleanly without it or without Playwright).
 from __future__ import annotations
 
 import asyncio
-import io
 import json
 import math
 import os
 import time
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +26,7 @@ from repulsionpak.studio.document import Document, History  # noqa: E402
 from repulsionpak.studio.region import Stroke, painted_region, region_svg  # noqa: E402
 from repulsionpak.studio.uploads import MAX_FILE_BYTES  # noqa: E402
 from repulsionpak.studio.settings import DEFAULTS, coerce, command_line, run_settings  # noqa: E402
-from browser_support import paused_apples, playwright_chromium, finish, page_state, wait  # noqa: E402
+from browser_support import paused_apples, playwright_chromium, finish, page_state, unpacked_project, wait  # noqa: E402
 from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
@@ -179,7 +177,7 @@ def test_export_equals_what_pack_writes_and_the_project_reopens(session, tmp_pat
     assert 'class="element secondary" data-source="star.svg"' in svg.decode()
     # the project: the files, the settings and the command that makes the same bytes
     proj = tmp_path / "proj"
-    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    unpacked_project(session, proj)
     cmd = session.command()
     assert cmd == ("repulsionpak pack circle.svg elements/apple.svg elements/fish.svg -o packing.svg "
                    "--secondary secondary/star.svg --gap 12 --seed 1 --count 8")
@@ -224,7 +222,7 @@ def test_weights_go_through_an_element_manifest(session, tmp_path):
     text = svg.decode()
     assert text.count('data-source="apple.svg"') == 6 and 'data-source="fish.svg"' not in text
     proj = tmp_path / "proj"
-    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    unpacked_project(session, proj)
     assert 'file = "elements/fish.svg"\nweight = 0' in (proj / "elements.toml").read_text()
     from typer.testing import CliRunner
 

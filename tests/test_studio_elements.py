@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import io
 import os
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +18,7 @@ import repulsionpak  # noqa: E402
 from repulsionpak.errors import ParameterError  # noqa: E402
 from repulsionpak.flow.align import copy_rotations  # noqa: E402
 from repulsionpak.studio import Session  # noqa: E402
-from browser_support import paused_apples, playwright_chromium, finish, page_state, wait  # noqa: E402
+from browser_support import paused_apples, playwright_chromium, finish, page_state, unpacked_project, wait  # noqa: E402
 from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
@@ -70,7 +69,7 @@ def test_an_elements_own_rotation_reaches_the_command_the_run_and_the_project(se
     assert d.max() < 3.0, fish
     assert np.ptp(apple) > 20.0, apple  # free: the apples did turn
     proj = tmp_path / "proj"
-    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    unpacked_project(session, proj)
     manifest = (proj / "elements.toml").read_text()
     assert 'file = "elements/fish.svg"\nrotation = "fixed"\nangle = 30' in manifest
     assert 'file = "elements/apple.svg"\nstiffness = 0.5' in manifest
@@ -320,7 +319,7 @@ def test_guides_reach_the_command_the_run_and_the_project(session, tmp_path):
     finish(session)
     svg = session.export("svg")
     proj = tmp_path / "proj"
-    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    unpacked_project(session, proj)
     _cli_in(proj, session.command())
     assert (proj / "packing.svg").read_bytes() == svg
     container, placed, _ = repulsionpak.read_packing_svg(proj / "packing.svg")
@@ -494,7 +493,7 @@ def test_an_elements_own_flow_keys(session, tmp_path):
     session.start()
     finish(session)
     proj = tmp_path / "proj"
-    zipfile.ZipFile(io.BytesIO(session.project_zip())).extractall(proj)
+    unpacked_project(session, proj)
     manifest = (proj / "elements.toml").read_text()
     assert 'file = "elements/fish.svg"\nflow = "ignore"\nrotation = "fixed"\nangle = 90' in manifest
     assert 'file = "elements/leaf.svg"\naxis = 0' in manifest
