@@ -27,7 +27,7 @@ from .sim.phase import bend_limits, neighbour_cell
 from .sim.runner import Simulator, Snapshot
 from .sizing import UNEVEN_SHARE, is_even, narrow_share, plan_sizes
 from .types import Container, Element, PlacedArt
-from .verify import straighten, verify_and_repair
+from .verify import dent, straighten, verify_and_repair
 
 
 #: the automatic pocket fill's cap on its copies is 10 per primary, and at least this
@@ -328,7 +328,16 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
                            for ti in packing.model.template_index]) * v.straighten
         limits[limits <= 0] = np.inf
         limits = straighten_limits(packing.model, limits)
-        placed, _, straightened = straighten(placed, rest_art(packing.templates, packing.model), limits)
+        rest = rest_art(packing.templates, packing.model)
+        placed, _, straightened = straighten(placed, rest, limits)
+        if v.dent > 0:  # contacts of a limb or a back are bent away, not shrunk away
+            m = packing.model
+            frozen = np.zeros(m.n_elements, bool)  # pinned and rigid copies keep their shape
+            for mask in (m.rigid, m.pinned):
+                if mask is not None:
+                    frozen |= mask
+            placed, _ = dent(placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
+                             rounds=v.dent, radius=v.dent_radius, frozen=frozen, rest=rest, limits=limits)
     # a stop asked for during the verification ends its repair rounds; one asked for
     # during the simulation does not (the partial packing is repaired in full)
     stop_repair = None if should_stop is None or should_stop() else should_stop

@@ -303,6 +303,14 @@ class VerifyParams:
         1.1, "× gap", "After the growth, an element farther than this from its nearest neighbour "
         "moves towards it until they are grow_to apart (a band of copies limited by its width "
         "otherwise ends with every gap a little wide); 0: off.")
+    dent: int = _doc(
+        8, "rounds", "Before any element is moved or shrunk, elements closer than min_gap to a "
+        "neighbour or than the margin to the edge are bent away from the contact by a smooth "
+        "local bump, in this many rounds of measuring and bending (0: off; the repair then "
+        "shrinks whole elements for what are mostly contacts of one limb).")
+    dent_radius: float = _doc(
+        2.0, "× gap", "The width (Gaussian ρ) of a dent: the art within about two radii of the "
+        "contact bends with it.")
     straighten: float = _doc(
         0.75, "× sim.bend_limit", "An element whose art ends up distorted beyond this multiple of "
         "its bend limit (symmetric difference with its best rotated, scaled copy, over its "

@@ -8,9 +8,11 @@ unbent copy first.
 
 * :mod:`.checks` – measuring what holds (:class:`Verification`, the per-element needs).
 * :mod:`.repairs` – the repairs: move, shrink, drop, grow, gather, straighten.
+* :mod:`.dents` – the repair by local bending, before any move or shrink.
 """
 
 from .checks import Verification
+from .dents import dent
 from .repairs import scaled_art, similar_copy, straighten, verify_and_repair
 
-__all__ = ["Verification", "scaled_art", "similar_copy", "straighten", "verify_and_repair"]
+__all__ = ["Verification", "dent", "scaled_art", "similar_copy", "straighten", "verify_and_repair"]

@@ -1,0 +1,112 @@
+"""The repair by local bending (repulsionpak.verify.dents), on geometry built by hand: a
+contact bent away clears the gap floor and the margin where shrinking would cost the
+whole element, the art away from the contact stays put, frozen copies keep their shape,
+and curves stay what is written."""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+from repulsionpak.types import ArtPath, PlacedArt, Style
+from repulsionpak.verify import dent, verify_and_repair
+
+CONTAINER = shapely.box(0, 0, 200, 100)
+GAP = 2.0
+
+
+def poly(pts, source="p.svg", **kw):
+    return PlacedArt(source, "primary", (ArtPath((np.asarray(pts, dtype=float),), (True,), Style()),), **kw)
+
+
+def bar_with_tip(x0, y0, length=60.0, width=16.0, tip=3.0):
+    """A bar along x with a short tip sticking out of its right end's middle."""
+    x1 = x0 + length
+    return poly([[x0, y0], [x1, y0], [x1, y0 + 6], [x1 + tip, y0 + 7], [x1 + tip, y0 + 9], [x1, y0 + 10],
+                 [x1, y0 + width], [x0, y0 + width]])
+
+
+def square(x, y, side=30.0):
+    return poly([[x, y], [x + side, y], [x + side, y + side], [x, y + side]])
+
+
+def test_a_tip_too_close_is_bent_away_and_the_rest_stays():
+    a = bar_with_tip(20, 40)  # tip ends at x = 83
+    b = square(84.0, 33.0)  # 1.0 from the tip: half the gap floor of 1.8
+    out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP)
+    d = shapely.distance(out[0].art, out[1].art)
+    assert d >= 0.9 * GAP
+    assert res.violations[0] == 1  # (later rounds chase the 6 % slack above the floor)
+    assert set(res.dented) == {0, 1}
+    # far from the contact nothing moved: the bar's left end and the square's right side
+    assert np.allclose(out[0].paths[0].subpaths[0][[0, -1]], a.paths[0].subpaths[0][[0, -1]], atol=1e-6)
+    assert np.allclose(out[1].paths[0].subpaths[0][[1, 2]], b.paths[0].subpaths[0][[1, 2]], atol=1e-6)
+    # and the area kept is nearly all: shrinking the bar about its centre by the half of
+    # 0.9 it clears would have cost ~2.8 % of it
+    assert out[0].art.area > 0.99 * a.art.area and out[1].art.area > 0.995 * b.art.area
+
+
+def test_dents_before_the_repair_keep_more_area_than_shrinking():
+    # jammed between the container's sides (margin 1): no move clears the contact
+    a = bar_with_tip(1.1, 40)  # tip ends at x = 64.1
+    b = poly([[65.1, 20], [198.9, 20], [198.9, 80], [65.1, 80]])
+    shrunk, v0 = verify_and_repair([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP, grow_to=0.0)
+    bent, _ = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP)
+    repaired, v1 = verify_and_repair(bent, CONTAINER, GAP, 1.0, 0.9 * GAP, grow_to=0.0)
+    assert v0.ok and v1.ok
+    assert min(v0.shrunk.values()) < 0.99  # without the dents something shrank
+    assert all(s >= 0.999 for s in v1.shrunk.values())  # with them nothing had to
+    assert sum(p.art.area for p in repaired) > sum(p.art.area for p in shrunk) + 10.0
+
+
+def test_an_element_too_near_the_edge_is_bent_inside_the_margin():
+    a = poly([[10, 0.5], [60, 0.5], [60, 30], [10, 30]])  # 0.5 from the top edge, margin 1
+    (out,), res = dent([a], CONTAINER, GAP, 1.0, 0.9 * GAP)
+    assert shapely.distance(out.art, CONTAINER.boundary) >= 1.0
+    assert res.dented == (0,)
+
+
+def test_a_frozen_copy_keeps_its_shape_and_the_other_gives_way_alone():
+    a = bar_with_tip(20, 40)
+    b = square(84.0, 33.0)
+    out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP, frozen=np.array([False, True]))
+    assert out[1] is b
+    assert shapely.distance(out[0].art, out[1].art) >= 0.9 * GAP
+    assert res.dented == (0,)
+
+
+def test_a_dent_beyond_the_shape_limit_is_undone():
+    a, b = bar_with_tip(20, 40), square(84.0, 33.0)
+    out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP, rest=[a, b], limits=np.array([1e-6, np.inf]))
+    assert out[0] is a and res.reverted == (0,)
+    assert out[1] is not b  # unlimited: keeps its dent
+
+
+def test_off_or_nothing_to_do_returns_the_same_objects():
+    a, b = bar_with_tip(20, 40), square(120.0, 33.0)
+    out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP)
+    assert out[0] is a and out[1] is b and res.dented == ()
+    a, b = bar_with_tip(20, 40), square(84.0, 33.0)
+    out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP, rounds=0)
+    assert out[0] is a and out[1] is b
+
+
+def test_bent_curves_are_flattened_as_they_are_written(tmp_path):
+    from repulsionpak.geometry.curves import flatten_subpath
+    from repulsionpak.io import load_element
+    from repulsionpak.render.placed import FLATTEN_SHARE, refined
+
+    f = tmp_path / "disc.svg"
+    f.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                 '<circle cx="50" cy="50" r="50"/></svg>')
+    el = load_element(f)
+    tol = 1e-3
+    disc = PlacedArt(str(f), "primary", tuple(refined(a.transformed(lambda p: np.asarray(p) * 0.4 + [10.0, 10.0]), tol)
+                                              for a in el.paths), tolerance=tol)  # r = 20 about (30, 30)
+    wall = poly([[51.0, 0.0], [80, 0], [80, 60], [51.0, 60]])  # 1.0 from the disc
+    out, _ = dent([disc, wall], CONTAINER, GAP, 0.5, 0.9 * GAP)
+    bent = out[0].paths[0]
+    assert shapely.distance(out[0].art, out[1].art) >= 0.9 * GAP
+    exact = shapely.LinearRing(flatten_subpath(bent.source.curves[0], 1e-6))
+    p = bent.subpaths[0]
+    assert shapely.distance(exact, shapely.points(p)).max() <= FLATTEN_SHARE * tol * 1.01
