@@ -110,3 +110,35 @@ def test_bent_curves_are_flattened_as_they_are_written(tmp_path):
     exact = shapely.LinearRing(flatten_subpath(bent.source.curves[0], 1e-6))
     p = bent.subpaths[0]
     assert shapely.distance(exact, shapely.points(p)).max() <= FLATTEN_SHARE * tol * 1.01
+
+
+def test_an_overlap_is_parted_along_the_line_between_the_two_arts():
+    a = bar_with_tip(20, 40)  # tip from x = 80 to 83
+    b = square(82.0, 33.0)  # the tip 1.0 deep in the square
+    out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP)
+    assert shapely.intersection(a.art, b.art).area > 0.5
+    assert shapely.distance(out[0].art, out[1].art) >= 0.9 * GAP
+    # parted along x (the arts' line), not sideways: the tip is still level with its bar
+    tip = out[0].paths[0].subpaths[0][3:5]
+    assert np.allclose(tip[:, 1], [47.0, 49.0], atol=0.05)
+
+
+def test_bending_keeps_smooth_joins_smooth(tmp_path):
+    from repulsionpak.io import load_element
+    from repulsionpak.render.placed import refined
+
+    f = tmp_path / "disc.svg"
+    f.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                 '<circle cx="50" cy="50" r="50"/></svg>')
+    el = load_element(f)
+    disc = PlacedArt(str(f), "primary", tuple(refined(a.transformed(lambda p: np.asarray(p) * 0.4 + [10.0, 10.0]), 1e-3)
+                                              for a in el.paths), tolerance=1e-3)
+    wall = poly([[50.5, 0.0], [80, 0], [80, 60], [50.5, 60]])  # 0.5 from the disc: a deep dent
+    (bent, _), _ = dent([disc, wall], CONTAINER, GAP, 0.5, 0.9 * GAP, frozen=np.array([False, True]))
+    c = bent.paths[0].source.curves[0]
+    assert not np.allclose(c.ctrl, disc.paths[0].source.curves[0].ctrl)
+    for k in range(len(c.order)):  # every join of the circle's arcs stays tangent-continuous
+        j = (k + 1) % len(c.order)
+        u = c.ctrl[k, int(c.order[k])] - c.ctrl[k, int(c.order[k]) - 1]
+        v = c.ctrl[j, 1] - c.ctrl[j, 0]
+        assert abs(u[0] * v[1] - u[1] * v[0]) <= 1e-3 * np.hypot(*u) * np.hypot(*v)

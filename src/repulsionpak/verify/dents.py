@@ -45,9 +45,9 @@ OVERSHOOT = 1.1
 class DentResult:
     """What :func:`dent` did.
 
-    ``violations[r]``: pairs too close plus elements too near the edge found in round r;
-    ``dented``: indices of the elements returned bent; ``reverted``: those whose dents
-    were undone because they bent the element beyond its shape limit."""
+    ``violations[r]``: pairs too close plus elements too near the edge found in round r
+    (of the last run of the rounds); ``dented``: indices of the elements returned bent;
+    ``reverted``: those kept unbent because the dents bent them beyond their shape limit."""
 
     violations: tuple[int, ...]
     dented: tuple[int, ...]
@@ -65,6 +65,45 @@ def _bumped(points: np.ndarray, bumps: list[tuple[np.ndarray, np.ndarray]], two_
     return out.reshape(pts.shape)
 
 
+def _jacobians(points: np.ndarray, bumps: list, two_rho2: float) -> np.ndarray:
+    """(n, 2, 2) Jacobian of the bump map at ``points`` (n, 2)."""
+    jac = np.zeros((len(points), 2, 2))
+    jac[:, 0, 0] = jac[:, 1, 1] = 1.0
+    for c, v in bumps:
+        d = points - c
+        w = np.exp(-(d ** 2).sum(axis=1) / two_rho2)
+        grad = (-2.0 / two_rho2) * w[:, None] * d  # ∇w
+        jac += v[None, :, None] * grad[:, None, :]
+    return jac
+
+
+def _bent_curve(c: CurveSubpath, bumps: list, two_rho2: float) -> CurveSubpath:
+    """``c`` under the bump map, smooth joins kept smooth: the end points move with the
+    map, each handle with the map's tangent (affine) approximation at its own end point,
+    so a handle pair in line across a join stays in line. A quadratic's one handle takes
+    the mean of its two ends' estimates."""
+    ctrl = c.ctrl
+    n = len(c.order)
+    idx = np.arange(n)
+    start = ctrl[:, 0]
+    end = ctrl[idx, c.order]
+    ends = np.concatenate([start, end])
+    moved = _bumped(ends, bumps, two_rho2)
+    jac = _jacobians(ends, bumps, two_rho2)
+    f0, f1, j0, j1 = moved[:n], moved[n:], jac[:n], jac[n:]
+    out = np.empty_like(ctrl)
+    out[:, 0] = f0
+    for k in range(n):
+        o = c.order[k]
+        if o == 3:
+            out[k, 1] = f0[k] + j0[k] @ (ctrl[k, 1] - start[k])
+            out[k, 2] = f1[k] + j1[k] @ (ctrl[k, 2] - end[k])
+        elif o == 2:
+            out[k, 1] = 0.5 * (f0[k] + j0[k] @ (ctrl[k, 1] - start[k]) + f1[k] + j1[k] @ (ctrl[k, 1] - end[k]))
+        out[k, o:] = f1[k]  # the end point and its copies
+    return CurveSubpath(c.order, out, c.closed)
+
+
 def _bent(placed: PlacedArt, bumps: list, two_rho2: float) -> PlacedArt:
     """``placed`` with its art moved by ``bumps``: curves through their control points,
     then flattened at the copy's tolerance (:func:`~repulsionpak.render.placed.refined`);
@@ -73,7 +112,7 @@ def _bent(placed: PlacedArt, bumps: list, two_rho2: float) -> PlacedArt:
     for a in placed.paths:
         src = a.source
         if src is not None and src.curves and placed.tolerance is not None:
-            curves = tuple(CurveSubpath(c.order, _bumped(c.ctrl, bumps, two_rho2), c.closed) for c in src.curves)
+            curves = tuple(_bent_curve(c, bumps, two_rho2) for c in src.curves)
             paths.append(refined(ArtPath(a.subpaths, a.closed, a.style,
                                          source=dataclasses.replace(src, curves=curves)), placed.tolerance))
         else:
@@ -82,9 +121,25 @@ def _bent(placed: PlacedArt, bumps: list, two_rho2: float) -> PlacedArt:
     return dataclasses.replace(placed, paths=tuple(paths))
 
 
-def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: float, bumps: dict) -> int:
-    """Bumps that part the pairs of ``geoms`` closer than ``target`` (but not touching:
-    overlaps are the moves' to resolve); returns the number of pairs too close."""
+def _part(bumps: dict, frozen: np.ndarray, i: int, j: int, pi, pj, u: np.ndarray, need: float,
+          push: float) -> None:
+    """Bumps moving ``i`` at ``pi`` along ``u`` and ``j`` at ``pj`` against it, ``need`` in
+    all: half each, or all of it on one when the other may not bend."""
+    share_i = 0.0 if frozen[i] else (1.0 if frozen[j] else 0.5)
+    for k, p, sign, share in ((i, pi, 1.0, share_i), (j, pj, -1.0, 1.0 - share_i)):
+        if share > 0.0:
+            bumps.setdefault(int(k), []).append((p, sign * u * min(share * need, push)))
+
+
+def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: float, reach: float,
+                bumps: dict) -> int:
+    """Bumps that part the pairs of ``geoms`` closer than ``target``; returns the number of
+    pairs too close.
+
+    Apart, a pair parts along the line between its closest points. Overlapping (a limb
+    pressed into a neighbour), it parts at the centroid of the overlap, along the line
+    between the centroids of the two arts within ``reach`` of it, by the overlap's depth
+    along that line plus ``target``."""
     tree = shapely.STRtree(geoms)
     a, b = tree.query(geoms, predicate="dwithin", distance=target)
     keep = a < b
@@ -93,17 +148,30 @@ def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: floa
         return 0
     d = shapely.distance(geoms[a], geoms[b])
     close = d < target
-    bad = close & (d > 1e-9) & ~(frozen[a] & frozen[b])
-    if bad.any():
-        ends = shapely.get_coordinates(shapely.shortest_line(geoms[a[bad]], geoms[b[bad]])).reshape(-1, 2, 2)
-        for i, j, dd, (pi, pj) in zip(a[bad], b[bad], d[bad], ends):
-            u = (pi - pj) / dd
-            need = OVERSHOOT * (target - dd)
-            # each gives way half, or all of it when the other may not bend
-            share_i = 0.0 if frozen[i] else (1.0 if frozen[j] else 0.5)
-            for k, p, sign, share in ((i, pi, 1.0, share_i), (j, pj, -1.0, 1.0 - share_i)):
-                if share > 0.0:
-                    bumps.setdefault(int(k), []).append((p, sign * u * min(share * need, push)))
+    todo = close & ~(frozen[a] & frozen[b])
+    apart = todo & (d > 1e-9)
+    if apart.any():
+        ends = shapely.get_coordinates(shapely.shortest_line(geoms[a[apart]], geoms[b[apart]])).reshape(-1, 2, 2)
+        for i, j, dd, (pi, pj) in zip(a[apart], b[apart], d[apart], ends):
+            _part(bumps, frozen, i, j, pi, pj, (pi - pj) / dd, OVERSHOOT * (target - dd), push)
+    over = todo & (d <= 1e-9)
+    if over.any():
+        ia, ib = a[over], b[over]
+        lens = shapely.intersection(geoms[ia], geoms[ib])
+        centre = shapely.centroid(lens)
+        disc = shapely.buffer(centre, reach)
+        ca = shapely.get_coordinates(shapely.centroid(shapely.intersection(geoms[ia], disc)))
+        cb = shapely.get_coordinates(shapely.centroid(shapely.intersection(geoms[ib], disc)))
+        cc = shapely.get_coordinates(centre)
+        for k, (i, j) in enumerate(zip(ia, ib)):
+            u = ca[k] - cb[k]
+            n = float(np.hypot(*u))
+            if lens[k].is_empty or n <= 1e-12:
+                continue
+            u /= n
+            pts = shapely.get_coordinates(lens[k]) @ u
+            depth = float(pts.max() - pts.min()) if len(pts) else 0.0
+            _part(bumps, frozen, i, j, cc[k], cc[k], u, OVERSHOOT * (depth + target), push)
     return int(close.sum())
 
 
@@ -157,8 +225,9 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
         Elements that must not bend (pinned and rigid copies).
     rest, limits : optional
         Each element's undeformed art and shape limit, as for
-        :func:`~repulsionpak.verify.straighten`: an element bent beyond its limit gets
-        its art back unbent by the dents.
+        :func:`~repulsionpak.verify.straighten`: an element the dents bend beyond its
+        limit gets its art back, and the rounds run once more with it frozen, so that
+        its neighbours give way alone.
 
     Returns
     -------
@@ -167,14 +236,33 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
     result : DentResult
     """
     n = len(placed)
-    out = list(placed)
     if n == 0 or rounds <= 0:
-        return out, DentResult((), (), ())
+        return list(placed), DentResult((), (), ())
     frozen = np.zeros(n, bool) if frozen is None else np.asarray(frozen, bool)
     target = min_gap * (1.0 + slack)
     inner = shapely.buffer(region, -(margin * (1.0 + slack) + 0.01 * gap))
     shapely.prepare(inner)
-    two_rho2 = 2.0 * (radius * gap) ** 2
+    args = (target, inner, rounds, radius * gap, push * gap, budget * gap)
+    out, counts = _rounds(placed, frozen, *args)
+    over = _over_limit(placed, out, rest, limits)
+    if over:  # again with those unbent: their neighbours give way alone
+        frozen = frozen.copy()
+        frozen[over] = True
+        out, counts = _rounds(placed, frozen, *args)
+        over2 = _over_limit(placed, out, rest, limits)
+        for i in over2:
+            out[i] = placed[i]
+        over = sorted(set(over) | set(over2))
+    dented = tuple(i for i in range(n) if out[i] is not placed[i])
+    return out, DentResult(tuple(counts), dented, tuple(over))
+
+
+def _rounds(placed, frozen, target, inner, rounds, rho, push, budget):
+    """The rounds of :func:`dent` (lengths in container units); returns (art, violations
+    found in each round)."""
+    n = len(placed)
+    out = list(placed)
+    two_rho2 = 2.0 * rho ** 2
     used = np.zeros(n)  # how far each element's contact points have been moved in all
     spent = np.zeros(n, bool)
     counts = []
@@ -182,28 +270,32 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
         geoms = np.array([p.art for p in out], dtype=object)
         bumps: dict[int, list] = {}
         blocked = frozen | spent
-        found = _pair_bumps(geoms, target, blocked, push * gap, bumps) + _edge_bumps(geoms, inner, blocked,
-                                                                                    push * gap, bumps)
+        found = (_pair_bumps(geoms, target, blocked, push, 2.0 * rho, bumps)
+                 + _edge_bumps(geoms, inner, blocked, push, bumps))
         counts.append(found)
         if not bumps:
             break
         for i, bl in bumps.items():
             moved = sum(float(np.hypot(*v)) for _, v in bl)
-            if used[i] + moved > budget * gap:
+            if used[i] + moved > budget:
                 spent[i] = True
                 continue
             used[i] += moved
             out[i] = _bent(out[i], bl, two_rho2)
-    dented = [i for i in range(n) if out[i] is not placed[i]]
-    reverted = []
-    if rest is not None and limits is not None:
-        for i in dented:
-            if not np.isfinite(limits[i]):
-                continue
-            m, _ = _similarity(rest[i], placed[i])
-            moved = shapely.affinity.affine_transform(
-                rest[i].art, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
-            if distortion(out[i].art, moved) > limits[i]:
-                out[i] = placed[i]
-                reverted.append(i)
-    return out, DentResult(tuple(counts), tuple(i for i in dented if i not in set(reverted)), tuple(reverted))
+    return out, counts
+
+
+def _over_limit(placed, out, rest, limits) -> list[int]:
+    """The elements that ``out`` bends beyond their shape ``limits`` (measured as
+    :func:`~repulsionpak.verify.straighten` does, against ``rest`` moved onto ``placed``)."""
+    if rest is None or limits is None:
+        return []
+    over = []
+    for i, (p, q) in enumerate(zip(placed, out)):
+        if q is p or not np.isfinite(limits[i]):
+            continue
+        m, _ = _similarity(rest[i], p)
+        moved = shapely.affinity.affine_transform(rest[i].art, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
+        if distortion(q.art, moved) > limits[i]:
+            over.append(i)
+    return over
