@@ -247,6 +247,13 @@ def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_po
     step = min(spacing / 4, tolerance)
     m = max(int(np.ceil(perimeter / step)), 4 * min_points)
     t = np.linspace(0.0, perimeter, m, endpoint=False)
+    # the ring's corners are candidates too: sampled only around, a corner became two
+    # samples a fraction of a step apart on either side of it (an edge 0.05 spacings long
+    # beside one a whole spacing long: a triangle on it kept an angle below the mesh's bound)
+    corner = _corners(ring, CORNER_TURN)
+    if len(corner):
+        t = np.union1d(t, cum[corner])
+        t = t[t < perimeter]
     dense = np.column_stack([np.interp(t, cum, closed[:, 0]), np.interp(t, cum, closed[:, 1])])
     arc = np.concatenate([t, [perimeter]])
     closed_dense = np.vstack([dense, dense[:1]])
@@ -256,6 +263,18 @@ def resample_adaptive(ring: np.ndarray, spacing: float, tolerance: float, min_po
     if len(out) < min_points:
         return resample_closed(ring, perimeter / min_points, min_points)
     return out
+
+
+#: a ring vertex turning by more than this (radians) is a corner :func:`resample_adaptive` may sample
+CORNER_TURN = np.radians(30.0)
+
+
+def _corners(ring: np.ndarray, turn: float) -> np.ndarray:
+    """Indices of the vertices of the closed ``ring`` where it turns by more than ``turn``."""
+    a = ring - np.roll(ring, 1, axis=0)
+    b = np.roll(ring, -1, axis=0) - ring
+    ang = np.abs(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0], (a * b).sum(axis=1)))
+    return np.flatnonzero(ang > turn)
 
 
 def _balance_seam(pts: np.ndarray, arc: np.ndarray, keep: np.ndarray, tolerance: float,
