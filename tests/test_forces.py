@@ -1062,7 +1062,10 @@ def test_bend_limit_leaves_the_dented_vertices_where_their_neighbour_pushed_them
 
 def test_skin_anchors_stand_a_skin_width_inside_the_ring(template):
     """Every skin vertex is bound to the nearest point of its art: at rest that point lies
-    the skin offset (0.6 gap; the template's gap is 2) inward along the ring's normal."""
+    the skin offset (``preprocess.skin_offset`` gaps; the template's gap is 2) inward
+    along the ring's normal."""
+    from repulsionpak.params import PreprocessParams
+
     model, _ = two_square_model(template, (30, 30), (60, 60), shrink=0.5)
     skin = model.is_skin
     assert (model.anchor_tri[skin] >= 0).all() and (model.anchor_tri[~skin] == -1).all()
@@ -1070,7 +1073,7 @@ def test_skin_anchors_stand_a_skin_width_inside_the_ring(template):
     assert (model.tri_elem[model.anchor_tri[skin]] == model.vert_elem[skin]).all()
     w = model.anchor_w[skin]
     sides = w > 0.5 * np.median(w)  # the corners' normals lean: a smaller depth there
-    assert np.median(w) == pytest.approx(0.6 * 2.0 * 0.5, rel=0.05)  # × the placement's shrink
+    assert np.median(w) == pytest.approx(PreprocessParams().skin_offset * 2.0 * 0.5, rel=0.05)  # × the placement's shrink
     assert sides.mean() > 0.6
 
 
