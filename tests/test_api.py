@@ -8,6 +8,7 @@ Small scenes from the shipped examples (a few hundred iterations each).
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -164,3 +165,20 @@ def test_pack_without_report_fits_no_distortion(tmp_path, monkeypatch):
     skip = ("seconds", "distortion", "scp_ratio_primary")
     assert {k: v for k, v in bare.items() if k not in skip} == {k: v for k, v in full.items() if k not in skip}
 
+
+def test_command_collects_the_youngest_garbage_less_often(monkeypatch):
+    """The console entry point raises the youngest generation's collection threshold (the
+    library leaves the host's collector alone)."""
+    import gc
+
+    from repulsionpak import cli
+
+    before = gc.get_threshold()
+    monkeypatch.setattr(sys, "argv", ["repulsionpak", "--help"])
+    try:
+        with pytest.raises(SystemExit):
+            cli.main()
+        assert gc.get_threshold() == (cli.GC_THRESHOLD, *before[1:])
+    finally:
+        gc.set_threshold(*before)
+        gc.unfreeze()  # (main freezes what is alive when it ends)
