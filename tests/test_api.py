@@ -8,6 +8,7 @@ Small scenes from the shipped examples (a few hundred iterations each).
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -139,3 +140,45 @@ def test_pack_refuses_what_is_not_an_input():
         rp.pack(42, [APPLE])
     with pytest.raises(ParameterError, match="list of Element"):
         rp.pack(CIRCLE, [APPLE, rp.load_elements([FISH])[0]])
+
+
+def test_pack_without_report_fits_no_distortion(tmp_path, monkeypatch):
+    """``repulsionpak pack`` without ``--report`` does not fit the copies to their sources
+    (the summary line does not show it); its dict is the report's but for the distortion
+    and the primaries' Q_s ratio, and the SVG is the same bytes."""
+    from repulsionpak.cli import run_pack
+    from repulsionpak.measure import evaluation
+
+    container, elements, _, _, _ = SCENES["default-gap-count"]
+    fits = []
+    real = evaluation.distortions
+    monkeypatch.setattr(evaluation, "distortions", lambda *a, **k: fits.append(1) or real(*a, **k))
+    kw = dict(seed=3, count=4, max_iterations=120, progress=False)
+    bare = run_pack(Path(container), [Path(e) for e in elements], tmp_path / "bare.svg", **kw)
+    assert fits == []
+    full = run_pack(Path(container), [Path(e) for e in elements], tmp_path / "full.svg",
+                    report=tmp_path / "full.json", **kw)
+    assert fits == [1]
+    assert (tmp_path / "bare.svg").read_bytes() == (tmp_path / "full.svg").read_bytes()
+    assert bare["distortion"]["median"] is None and full["distortion"]["median"] is not None
+    assert bare["scp_ratio_primary"] is None
+    skip = ("seconds", "distortion", "scp_ratio_primary")
+    assert {k: v for k, v in bare.items() if k not in skip} == {k: v for k, v in full.items() if k not in skip}
+
+
+def test_command_collects_the_youngest_garbage_less_often(monkeypatch):
+    """The console entry point raises the youngest generation's collection threshold (the
+    library leaves the host's collector alone)."""
+    import gc
+
+    from repulsionpak import cli
+
+    before = gc.get_threshold()
+    monkeypatch.setattr(sys, "argv", ["repulsionpak", "--help"])
+    try:
+        with pytest.raises(SystemExit):
+            cli.main()
+        assert gc.get_threshold() == (cli.GC_THRESHOLD, *before[1:])
+    finally:
+        gc.set_threshold(*before)
+        gc.unfreeze()  # (main freezes what is alive when it ends)

@@ -296,3 +296,19 @@ def test_cli_writes_pdf_for_a_pdf_output(tmp_path):
                                    "--max-iterations", "200", "--seed", "1", "-q"])
     assert res.exit_code == 0, res.output
     assert out.read_bytes().startswith(b"%PDF")
+
+
+def test_svg_escaping_is_the_standard_librarys():
+    """The SVG writer's ``escape`` and ``quoteattr`` give what ``xml.sax.saxutils``'s give
+    (written out there to spare every run the import of ``urllib.request``)."""
+    import itertools
+    from xml.sax import saxutils
+
+    from repulsionpak.render import svg
+
+    alphabet = ["a", "&", "<", ">", '"', "'", "\n", "\r", "\t", "é", " ", "&amp;"]
+    for n in range(4):
+        for chars in itertools.product(alphabet, repeat=n):
+            s = "".join(chars)
+            assert svg.escape(s) == saxutils.escape(s)
+            assert svg.quoteattr(s) == saxutils.quoteattr(s)

@@ -206,7 +206,8 @@ class Packing:
                         sources=[*self.elements, *self.secondary] if distortion else None,
                         workers=fit_workers() if distortion else 1)
 
-    def report(self, seconds: dict | None = None, not_written=(), movie: dict | None = None) -> dict:
+    def report(self, seconds: dict | None = None, not_written=(), movie: dict | None = None,
+               distortion: bool = True) -> dict:
         """The ``--report`` dict of ``repulsionpak pack``.
 
         Parameters
@@ -217,15 +218,24 @@ class Packing:
             Outputs a stop left out (their names; the report then says so).
         movie : dict, optional
             The movie's entry, when one was written.
+        distortion : bool
+            False: from the measures without the distortion fit (:meth:`metrics`), its
+            entries and ``scp_ratio_primary`` None; every other entry is the same.
 
         Returns
         -------
         dict
             See :func:`repulsionpak.report.report_dict`.
+
+        Notes
+        -----
+        ``repulsionpak pack`` without ``--report`` only needs the counts, the area, the
+        gaps and the checks for its summary line: ``distortion=False`` spares it a second
+        measurement of the art with the fits and the primaries' SCP raster.
         """
         from .report import report_dict
 
-        return report_dict(self, self.metrics(distortion=True), seconds=seconds, not_written=not_written,
+        return report_dict(self, self.metrics(distortion=distortion), seconds=seconds, not_written=not_written,
                            movie=movie)
 
     # ------------------------------------------------------------------ files

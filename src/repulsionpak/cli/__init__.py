@@ -386,12 +386,37 @@ def _no_collection_at_exit() -> None:
     gc.freeze()
 
 
+#: the youngest generation's collection threshold of the command's process (Python's is 700)
+GC_THRESHOLD = 10_000
+
+
+def _fewer_collections() -> None:
+    """Collect the youngest generation of garbage every :data:`GC_THRESHOLD` allocations
+    of container objects instead of Python's 700 (the older generations' thresholds stay).
+
+    Notes
+    -----
+    Importing numba and loading the kernels allocates hundreds of thousands of objects
+    that live as long as the process, and the library's stages allocate many short-lived
+    ones (geometries, tuples, dicts) that reference counting frees without the collector.
+    With the default threshold a heart run collected ~270 times, 0.3 CPU s, mostly
+    walking objects that were never garbage; with this one ~20 times, 0.05 s. Cycles
+    are still collected, a little later. For the console entry point alone, like
+    :func:`_no_collection_at_exit`: a library leaves the host's collector alone.
+    """
+    import gc
+
+    _, g1, g2 = gc.get_threshold()
+    gc.set_threshold(GC_THRESHOLD, g1, g2)
+
+
 def main() -> None:
     """Console entry point: one line per warning or error, the documented exit codes."""
     import warnings
 
     from typer._click.exceptions import ClickException, UsageError  # noqa: PLC0415
 
+    _fewer_collections()
     warnings.showwarning = _show_warning
     try:
         rv = app(standalone_mode=False)

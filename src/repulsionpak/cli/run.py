@@ -132,7 +132,9 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
              controls=None, live: dict | None = None, container_paint: str | None = None,
              flow: Path | None = None) -> dict:
-    """Everything ``repulsionpak pack`` does; returns the report dict. An ``output`` ending
+    """Everything ``repulsionpak pack`` does; returns the report dict (without a ``report``
+    file, its distortion entries and ``scp_ratio_primary`` are None: the fit is measured
+    only to be written, :meth:`~repulsionpak.Packing.report`). An ``output`` ending
     in ``.pdf`` is written as a vector PDF instead of SVG; ``pdf`` adds a PDF beside it;
     ``movie`` (.gif or .mp4) the simulation as an animation, a frame every ``movie_every``
     iterations (default: adapted to the run's length), ``movie_size`` pixels along the
@@ -311,7 +313,9 @@ def _write_outputs(packing, late, viewer, t_start, output, report, png, pdf, rec
     movie_entry = None if movie_info is None else {
         "file": movie_info.path, "frames": movie_info.frames, "fps": movie_info.fps,
         "seconds": movie_info.seconds, "bytes": movie_info.bytes, "every": movie_info.stride}
-    rep = packing.report(seconds=seconds, not_written=not_written, movie=movie_entry)
+    # without a report file the summary line needs no distortion fit (measured only for the file)
+    rep = packing.report(seconds=seconds, not_written=not_written, movie=movie_entry,
+                         distortion=report is not None)
     if report is not None:
         _write_json_atomic(report, rep)
     return rep

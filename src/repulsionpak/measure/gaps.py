@@ -12,6 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 import shapely
 
+from ..geometry.pairwise import distances
 from .coverage import _as_geoms
 
 __all__ = ["gap_statistics"]
@@ -59,7 +60,7 @@ def _nearest_distances(geoms: np.ndarray) -> np.ndarray:
             row[left] = True
             once = (i < t) | ~row[t]
             i, t = i[once], t[once]
-            d = shapely.distance(geoms[i], geoms[t])
+            d = distances(geoms[i], geoms[t])
             np.minimum.at(dist, i, d)
             mirror = row[t]
             np.minimum.at(dist, t[mirror], d[mirror])

@@ -24,6 +24,7 @@ import numpy as np
 import shapely
 from shapely.ops import polylabel
 
+from ..geometry.pairwise import distances
 from ..geometry.robust import overlay
 
 __all__ = ["Verification", "distortion"]
@@ -123,7 +124,7 @@ def _pair_distances(ga: np.ndarray, gb: np.ndarray, memo: dict | None) -> np.nda
     keep their distances). ``memo`` maps ``(id(a), id(b))`` to ``(a, b, distance)``: it
     holds the geometries, so their ids are not reused while it lives."""
     if memo is None or not len(ga):
-        return shapely.distance(ga, gb) if len(ga) else np.zeros(0)
+        return distances(ga, gb) if len(ga) else np.zeros(0)
     d = np.empty(len(ga))
     todo = []
     for k, (a, b) in enumerate(zip(ga, gb)):
@@ -134,7 +135,7 @@ def _pair_distances(ga: np.ndarray, gb: np.ndarray, memo: dict | None) -> np.nda
             todo.append(k)
     if todo:
         todo = np.asarray(todo)
-        d[todo] = shapely.distance(ga[todo], gb[todo])
+        d[todo] = distances(ga[todo], gb[todo])
         for k in todo.tolist():
             memo[(id(ga[k]), id(gb[k]))] = (ga[k], gb[k], float(d[k]))
     return d
