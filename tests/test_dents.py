@@ -142,3 +142,16 @@ def test_bending_keeps_smooth_joins_smooth(tmp_path):
         u = c.ctrl[k, int(c.order[k])] - c.ctrl[k, int(c.order[k]) - 1]
         v = c.ctrl[j, 1] - c.ctrl[j, 0]
         assert abs(u[0] * v[1] - u[1] * v[0]) <= 1e-3 * np.hypot(*u) * np.hypot(*v)
+
+
+def test_arts_a_hair_apart_count_as_touching_without_breaking_the_overlap_parting():
+    """Two arts 1e-10 apart (closer than the distance test's 1e-9, yet not intersecting)
+    among real overlaps: their empty overlap must not shift the others' points."""
+    a = bar_with_tip(20, 40)
+    b = square(82.0, 33.0)  # overlaps a's tip
+    c = square(20.0, 56.0 + 1e-10, side=20.0)  # a hair below a's bottom edge (y = 56)
+    d = square(120.0, 20.0)
+    e = square(151.0, 20.0, side=20.0)  # 1.0 from d: apart, too close
+    out, res = dent([a, b, c, d, e], CONTAINER, GAP, 1.0, 0.9 * GAP)
+    assert shapely.distance(out[0].art, out[1].art) >= 0.9 * GAP
+    assert shapely.distance(out[3].art, out[4].art) >= 0.9 * GAP

@@ -121,6 +121,15 @@ def _bent(placed: PlacedArt, bumps: list, two_rho2: float) -> PlacedArt:
     return dataclasses.replace(placed, paths=tuple(paths))
 
 
+def _xy(points: np.ndarray) -> np.ndarray:
+    """(n, 2) coordinates of an array of points, NaN for an empty one (``get_coordinates``
+    would skip it and shift the rest)."""
+    out = np.full((len(points), 2), np.nan)
+    full = ~shapely.is_empty(points)
+    out[full] = shapely.get_coordinates(points[full])
+    return out
+
+
 def _part(bumps: dict, frozen: np.ndarray, i: int, j: int, pi, pj, u: np.ndarray, need: float,
           push: float) -> None:
     """Bumps moving ``i`` at ``pi`` along ``u`` and ``j`` at ``pj`` against it, ``need`` in
@@ -160,13 +169,13 @@ def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: floa
         lens = shapely.intersection(geoms[ia], geoms[ib])
         centre = shapely.centroid(lens)
         disc = shapely.buffer(centre, reach)
-        ca = shapely.get_coordinates(shapely.centroid(shapely.intersection(geoms[ia], disc)))
-        cb = shapely.get_coordinates(shapely.centroid(shapely.intersection(geoms[ib], disc)))
-        cc = shapely.get_coordinates(centre)
+        ca = _xy(shapely.centroid(shapely.intersection(geoms[ia], disc)))
+        cb = _xy(shapely.centroid(shapely.intersection(geoms[ib], disc)))
+        cc = _xy(centre)
         for k, (i, j) in enumerate(zip(ia, ib)):
             u = ca[k] - cb[k]
-            n = float(np.hypot(*u))
-            if lens[k].is_empty or n <= 1e-12:
+            n = float(np.hypot(*u))  # NaN where a part was empty (arts closer than 1e-9, apart)
+            if not n > 1e-12:
                 continue
             u /= n
             pts = shapely.get_coordinates(lens[k]) @ u
