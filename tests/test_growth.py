@@ -1,10 +1,11 @@
-"""Growth beside one-sided contacts (sim.integrate.confined_contacts, sim.one_sided_growth)."""
+"""Growth beside one-sided contacts (sim.integrate.confined_contacts, sim.one_sided_growth) and
+shallow overlaps (sim.integrate.deep_contacts, sim.contact_depth)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from repulsionpak.sim.integrate import confined_contacts, grow
+from repulsionpak.sim.integrate import confined_contacts, deep_contacts, grow
 
 
 def _ring(n=16, r=1.0, c=(0.0, 0.0)):
@@ -53,3 +54,24 @@ def test_grow_follows_the_blocking_vertices():
              np.ones(1, np.bool_), n_grow, growth, 0.001, True, np.array([2.0]))
     assert g == 0 and n_grow[0] == 1
 
+
+
+def test_only_overlaps_deeper_than_the_depth_block_growth():
+    inside = np.array([True, True, True, False])
+    nb_count = np.array([2, 1, 0, 1], np.int64)
+    nb_d2 = np.array([[0.04, 0.25], [0.36, 0.0], [0.0, 0.0], [0.0, 0.0]])  # depths 0.2 (nearest), 0.6, none
+    out = np.zeros(4, np.bool_)
+    deep_contacts(inside, nb_count, nb_d2, 0.3 ** 2, out)
+    assert out.tolist() == [False, True, True, False]  # no way out known: deep
+    deep_contacts(inside, nb_count, nb_d2, 0.0, out)
+    assert out.tolist() == inside.tolist()  # depth 0: the paper's rule
+
+
+def test_contact_depth_must_not_be_negative():
+    import pytest
+
+    from repulsionpak.errors import ParameterError
+    from repulsionpak.params import Params
+
+    with pytest.raises(ParameterError, match="contact_depth"):
+        Params().with_(sim__contact_depth=-0.1).validate()

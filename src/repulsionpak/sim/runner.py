@@ -25,7 +25,7 @@ from .contacts import find_contacts, follow_contacts
 from .controls import apply_controls
 from .forces import corner_candidates, mark_corners_near, project_inside
 from .grid import Grid, bin_points
-from .integrate import (confined_contacts, count_inside, euler_step, grow, growth_speed_caps, growth_steps,
+from .integrate import (confined_contacts, count_inside, deep_contacts, euler_step, grow, growth_speed_caps, growth_steps,
                         skin_areas, window_change)
 from .model import Model, State
 from .selfintersect import relax_self_intersections
@@ -212,8 +212,11 @@ class Simulator:
         another mesh, or too far outside the container) counts one more step of growth."""
         m, st, p = self.model, self.state, self.params
         blocking = st.inside
+        if p.contact_depth > 0.0 and st.allow_growth:  # shallow overlaps do not stop growth
+            deep_contacts(st.inside, st.nb_count, st.nb_d2, (p.contact_depth * m.gap) ** 2, st.blocking)
+            blocking = st.blocking
         if p.one_sided_growth > 0.0 and st.allow_growth:  # contacts from one side do not stop growth
-            confined_contacts(st.x, st.inside, m.elem_vstart, m.elem_nskin, st.moving, p.one_sided_growth,
+            confined_contacts(st.x, blocking, m.elem_vstart, m.elem_nskin, st.moving, p.one_sided_growth,
                               st.blocking)
             blocking = st.blocking
         grow(blocking, st.outside, m.elem_vstart, m.elem_nskin, st.moving, st.n_grow,
