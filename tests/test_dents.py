@@ -155,3 +155,9 @@ def test_arts_a_hair_apart_count_as_touching_without_breaking_the_overlap_partin
     out, res = dent([a, b, c, d, e], CONTAINER, GAP, 1.0, 0.9 * GAP)
     assert shapely.distance(out[0].art, out[1].art) >= 0.9 * GAP
     assert shapely.distance(out[3].art, out[4].art) >= 0.9 * GAP
+
+
+def test_a_container_narrower_than_twice_the_margin_bends_nothing_at_its_edge():
+    a = poly([[10, 1.0], [60, 1.0], [60, 2.0], [10, 2.0]])
+    (out,), res = dent([a], shapely.box(0, 0, 200, 3), GAP, 2.0, 0.9 * GAP)
+    assert out is a and res.dented == ()

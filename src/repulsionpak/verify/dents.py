@@ -187,6 +187,8 @@ def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: floa
 def _edge_bumps(geoms: np.ndarray, inner, frozen: np.ndarray, push: float, bumps: dict) -> int:
     """Bumps that take the art of each element back inside ``inner`` (the container less
     the margin) at its deepest point outside it; returns the number of elements out."""
+    if inner.is_empty:  # a container narrower than twice the margin: nothing to bend into
+        return 0
     out = np.flatnonzero(~shapely.within(geoms, inner))
     for i in out:
         if frozen[i]:
@@ -196,7 +198,7 @@ def _edge_bumps(geoms: np.ndarray, inner, frozen: np.ndarray, push: float, bumps
             continue
         depth = shapely.distance(pts, inner)
         k = int(np.argmax(depth))
-        if depth[k] <= 1e-9:
+        if not depth[k] > 1e-9:
             continue
         p, q = shapely.get_coordinates(shapely.shortest_line(pts[k], inner))
         bumps.setdefault(int(i), []).append((p, (q - p) / depth[k] * min(OVERSHOOT * depth[k], push)))
