@@ -329,7 +329,7 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
         limits[limits <= 0] = np.inf
         limits = straighten_limits(packing.model, limits)
         rest = rest_art(packing.templates, packing.model)
-        placed, _, straightened = straighten(placed, rest, limits)
+        placed, distortions, straightened = straighten(placed, rest, limits)
         if v.dent > 0:  # contacts of a limb or a back are bent away, not shrunk away
             m = packing.model
             frozen = np.zeros(m.n_elements, bool)  # pinned and rigid copies keep their shape
@@ -337,7 +337,8 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
                 if mask is not None:
                     frozen |= mask
             placed, _ = dent(placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
-                             rounds=v.dent, radius=v.dent_radius, frozen=frozen, rest=rest, limits=limits)
+                             rounds=v.dent, radius=v.dent_radius, frozen=frozen, rest=rest, limits=limits,
+                             distortions=distortions)
     # a stop asked for during the verification ends its repair rounds; one asked for
     # during the simulation does not (the partial packing is repaired in full)
     stop_repair = None if should_stop is None or should_stop() else should_stop

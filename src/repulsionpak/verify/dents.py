@@ -46,7 +46,8 @@ class DentResult:
     """What :func:`dent` did.
 
     ``violations[r]``: pairs too close plus elements too near the edge found in round r
-    (of the last run of the rounds); ``dented``: indices of the elements returned bent;
+    (after the first, among the elements the round before bent; then the rounds that go
+    on from the elements unbent for their shape limit); ``dented``: indices of the elements returned bent;
     ``reverted``: those kept unbent because the dents bent them beyond their shape limit."""
 
     violations: tuple[int, ...]
@@ -77,42 +78,50 @@ def _jacobians(points: np.ndarray, bumps: list, two_rho2: float) -> np.ndarray:
     return jac
 
 
-def _bent_curve(c: CurveSubpath, bumps: list, two_rho2: float) -> CurveSubpath:
-    """``c`` under the bump map, smooth joins kept smooth: the end points move with the
-    map, each handle with the map's tangent (affine) approximation at its own end point,
-    so a handle pair in line across a join stays in line. A quadratic's one handle takes
-    the mean of its two ends' estimates."""
-    ctrl = c.ctrl
-    n = len(c.order)
-    idx = np.arange(n)
+def _bent_curves(curves: list[CurveSubpath], bumps: list, two_rho2: float) -> list[CurveSubpath]:
+    """``curves`` under the bump map, smooth joins kept smooth: the end points move with
+    the map, each handle with the map's tangent (affine) approximation at its own end
+    point, so a handle pair in line across a join stays in line. A quadratic's one handle
+    takes the mean of its two ends' estimates. (All of an element's curves at once.)"""
+    order = np.concatenate([c.order for c in curves]).astype(np.int64)
+    ctrl = np.concatenate([c.ctrl for c in curves])
+    n = len(order)
     start = ctrl[:, 0]
-    end = ctrl[idx, c.order]
+    end = ctrl[np.arange(n), order]
     ends = np.concatenate([start, end])
     moved = _bumped(ends, bumps, two_rho2)
     jac = _jacobians(ends, bumps, two_rho2)
     f0, f1, j0, j1 = moved[:n], moved[n:], jac[:n], jac[n:]
+    h0 = f0 + np.einsum("nij,nj->ni", j0, ctrl[:, 1] - start)  # first handle, from the start
     out = np.empty_like(ctrl)
     out[:, 0] = f0
-    for k in range(n):
-        o = c.order[k]
-        if o == 3:
-            out[k, 1] = f0[k] + j0[k] @ (ctrl[k, 1] - start[k])
-            out[k, 2] = f1[k] + j1[k] @ (ctrl[k, 2] - end[k])
-        elif o == 2:
-            out[k, 1] = 0.5 * (f0[k] + j0[k] @ (ctrl[k, 1] - start[k]) + f1[k] + j1[k] @ (ctrl[k, 1] - end[k]))
-        out[k, o:] = f1[k]  # the end point and its copies
-    return CurveSubpath(c.order, out, c.closed)
+    out[:, 1] = h0
+    cubic, quad = order == 3, order == 2
+    out[cubic, 2] = f1[cubic] + np.einsum("nij,nj->ni", j1[cubic], ctrl[cubic, 2] - end[cubic])
+    out[quad, 1] = 0.5 * (h0[quad] + f1[quad] + np.einsum("nij,nj->ni", j1[quad], ctrl[quad, 1] - end[quad]))
+    tail = np.arange(4)[None, :] >= order[:, None]  # the end point and its copies
+    out[tail] = np.broadcast_to(f1[:, None, :], ctrl.shape)[tail]
+    bent, k = [], 0
+    for c in curves:
+        m = len(c.order)
+        bent.append(CurveSubpath(c.order, out[k:k + m], c.closed))
+        k += m
+    return bent
 
 
 def _bent(placed: PlacedArt, bumps: list, two_rho2: float) -> PlacedArt:
     """``placed`` with its art moved by ``bumps``: curves through their control points,
     then flattened at the copy's tolerance (:func:`~repulsionpak.render.placed.refined`);
     art without curves through its points."""
+    curved = [a.source is not None and bool(a.source.curves) and placed.tolerance is not None
+              for a in placed.paths]
+    every = [c for a, cv in zip(placed.paths, curved) if cv for c in a.source.curves]
+    bent = iter(_bent_curves(every, bumps, two_rho2) if every else ())
     paths = []
-    for a in placed.paths:
+    for a, cv in zip(placed.paths, curved):
         src = a.source
-        if src is not None and src.curves and placed.tolerance is not None:
-            curves = tuple(_bent_curve(c, bumps, two_rho2) for c in src.curves)
+        if cv:
+            curves = tuple(next(bent) for _ in src.curves)
             paths.append(refined(ArtPath(a.subpaths, a.closed, a.style,
                                          source=dataclasses.replace(src, curves=curves)), placed.tolerance))
         else:
@@ -140,21 +149,24 @@ def _part(bumps: dict, frozen: np.ndarray, i: int, j: int, pi, pj, u: np.ndarray
             bumps.setdefault(int(k), []).append((p, sign * u * min(share * need, push)))
 
 
-def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: float, reach: float,
-                bumps: dict) -> int:
-    """Bumps that part the pairs of ``geoms`` closer than ``target``; returns the number of
-    pairs too close.
+def _pair_bumps(geoms: np.ndarray, exact: np.ndarray, target: float, frozen: np.ndarray, push: float,
+                reach: float, bumps: dict, which: np.ndarray) -> int:
+    """Bumps that part the pairs of ``geoms`` (simplified outlines: their overlaps are
+    taken on the ``exact`` ones) closer than ``target`` of which one is in ``which``;
+    returns the number of such pairs too close.
 
     Apart, a pair parts along the line between its closest points. Overlapping (a limb
     pressed into a neighbour), it parts at the centroid of the overlap, along the line
     between the centroids of the two arts within ``reach`` of it, by the overlap's depth
     along that line plus ``target``."""
     tree = shapely.STRtree(geoms)
-    a, b = tree.query(geoms, predicate="dwithin", distance=target)
-    keep = a < b
-    a, b = a[keep], b[keep]
-    if len(a) == 0:
+    q, b = tree.query(geoms[which], predicate="dwithin", distance=target)
+    a = which[q]
+    keep = a != b
+    if not keep.any():
         return 0
+    pairs = np.unique(np.sort(np.column_stack([a[keep], b[keep]]), axis=1), axis=0)
+    a, b = pairs[:, 0], pairs[:, 1]
     d = shapely.distance(geoms[a], geoms[b])
     close = d < target
     todo = close & ~(frozen[a] & frozen[b])
@@ -166,11 +178,11 @@ def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: floa
     over = todo & (d <= 1e-9)
     if over.any():
         ia, ib = a[over], b[over]
-        lens = shapely.intersection(geoms[ia], geoms[ib])
+        lens = shapely.intersection(exact[ia], exact[ib])
         centre = shapely.centroid(lens)
         disc = shapely.buffer(centre, reach)
-        ca = _xy(shapely.centroid(shapely.intersection(geoms[ia], disc)))
-        cb = _xy(shapely.centroid(shapely.intersection(geoms[ib], disc)))
+        ca = _xy(shapely.centroid(shapely.intersection(exact[ia], disc)))
+        cb = _xy(shapely.centroid(shapely.intersection(exact[ib], disc)))
         cc = _xy(centre)
         for k, (i, j) in enumerate(zip(ia, ib)):
             u = ca[k] - cb[k]
@@ -184,16 +196,18 @@ def _pair_bumps(geoms: np.ndarray, target: float, frozen: np.ndarray, push: floa
     return int(close.sum())
 
 
-def _edge_bumps(geoms: np.ndarray, inner, frozen: np.ndarray, push: float, bumps: dict) -> int:
-    """Bumps that take the art of each element back inside ``inner`` (the container less
-    the margin) at its deepest point outside it; returns the number of elements out."""
+def _edge_bumps(geoms: np.ndarray, exact: np.ndarray, inner, frozen: np.ndarray, push: float, bumps: dict,
+                which: np.ndarray) -> int:
+    """Bumps that take the art of each element of ``which`` back inside ``inner`` (the
+    container less the margin) at its deepest point outside it; returns the number of
+    elements out."""
     if inner.is_empty:  # a container narrower than twice the margin: nothing to bend into
         return 0
-    out = np.flatnonzero(~shapely.within(geoms, inner))
+    out = which[~shapely.within(geoms[which], inner)]
     for i in out:
         if frozen[i]:
             continue
-        pts = shapely.points(shapely.get_coordinates(shapely.difference(geoms[i], inner)))
+        pts = shapely.points(shapely.get_coordinates(shapely.difference(exact[i], inner)))
         if len(pts) == 0:
             continue
         depth = shapely.distance(pts, inner)
@@ -208,7 +222,8 @@ def _edge_bumps(geoms: np.ndarray, inner, frozen: np.ndarray, push: float, bumps
 def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float, *,
          rounds: int = 8, radius: float = 2.0, push: float = 0.5, budget: float = 3.0,
          slack: float = 0.06, frozen: np.ndarray | None = None, rest: list[PlacedArt] | None = None,
-         limits: np.ndarray | None = None) -> tuple[list[PlacedArt], DentResult]:
+         limits: np.ndarray | None = None, distortions: np.ndarray | None = None
+         ) -> tuple[list[PlacedArt], DentResult]:
     """Bend the art of elements that are too close to a neighbour or to the container's
     edge away from the contact.
 
@@ -237,29 +252,48 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
     rest, limits : optional
         Each element's undeformed art and shape limit, as for
         :func:`~repulsionpak.verify.straighten`: an element the dents bend beyond its
-        limit gets its art back, and the rounds run once more with it frozen, so that
-        its neighbours give way alone.
+        limit gets its art back, and the rounds go on from it, frozen, so that its
+        neighbours give way alone.
+    distortions : (n,) array, optional
+        Each element's distortion as it comes (:func:`~repulsionpak.verify.straighten`
+        returns them): with ``limits``, an element stops bending once the area its bumps
+        sweep (about 4|v|ρ each) would take it past its limit, and its neighbours give
+        way alone, so that few elements are bent past it and unbent.
 
     Returns
     -------
     art : list of PlacedArt
         The art, bent where it helped.
     result : DentResult
+
+    Notes
+    -----
+    The rounds measure distances on outlines simplified within 1 % of the gap
+    (Douglas–Peucker, and that much more asked of every distance): on exact outlines of
+    detailed art the distance queries were most of the cost. Overlaps and the parts
+    outside the margin are taken on the exact outlines.
     """
     n = len(placed)
     if n == 0 or rounds <= 0:
         return list(placed), DentResult((), (), ())
     frozen = np.zeros(n, bool) if frozen is None else np.asarray(frozen, bool)
-    target = min_gap * (1.0 + slack)
-    inner = shapely.buffer(region, -(margin * (1.0 + slack) + 0.01 * gap))
+    eps = 0.01 * gap
+    target = min_gap * (1.0 + slack) + eps
+    inner = shapely.buffer(region, -(margin * (1.0 + slack) + 0.01 * gap + eps))
     shapely.prepare(inner)
-    args = (target, inner, rounds, radius * gap, push * gap, budget * gap)
-    out, counts = _rounds(placed, frozen, *args)
+    room = np.full(n, np.inf)  # the distortion each element may still take
+    if limits is not None and distortions is not None:
+        room = np.asarray(limits, float) - np.asarray(distortions, float)
+    args = (target, inner, rounds, radius * gap, push * gap, budget * gap, eps, room)
+    out, counts = _rounds(list(placed), np.arange(n), frozen, *args)
     over = _over_limit(placed, out, rest, limits)
-    if over:  # again with those unbent: their neighbours give way alone
+    if over:  # those unbent and frozen, the rounds go on from them: their neighbours give way alone
         frozen = frozen.copy()
         frozen[over] = True
-        out, counts = _rounds(placed, frozen, *args)
+        for i in over:
+            out[i] = placed[i]
+        out, more = _rounds(out, np.array(over), frozen, *args)
+        counts += more
         over2 = _over_limit(placed, out, rest, limits)
         for i in over2:
             out[i] = placed[i]
@@ -268,31 +302,47 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
     return out, DentResult(tuple(counts), dented, tuple(over))
 
 
-def _rounds(placed, frozen, target, inner, rounds, rho, push, budget):
-    """The rounds of :func:`dent` (lengths in container units); returns (art, violations
-    found in each round)."""
-    n = len(placed)
-    out = list(placed)
+#: the area a bump of vector v sweeps, in units of |v|·ρ: √(2π) ≈ 2.5 along one side of
+#: the outline, up to twice that across a thin part (both sides move); the estimate that
+#: stops an element's bending before its shape limit
+SWEEP = 1.0
+
+
+def _rounds(out, which, frozen, target, inner, rounds, rho, push, budget, eps, room):
+    """The rounds of :func:`dent` on the art ``out`` (changed in place), measuring the
+    elements ``which`` first, then those each round bends (lengths in container units);
+    returns (art, violations found in each round)."""
+    n = len(out)
     two_rho2 = 2.0 * rho ** 2
     used = np.zeros(n)  # how far each element's contact points have been moved in all
+    swept = np.zeros(n)  # the distortion its bumps are estimated to add
     spent = np.zeros(n, bool)
     counts = []
+    exact = np.array([p.art for p in out], dtype=object)
+    geoms = shapely.simplify(exact, eps, preserve_topology=False)  # for distances only
     for _ in range(rounds):
-        geoms = np.array([p.art for p in out], dtype=object)
         bumps: dict[int, list] = {}
         blocked = frozen | spent
-        found = (_pair_bumps(geoms, target, blocked, push, 2.0 * rho, bumps)
-                 + _edge_bumps(geoms, inner, blocked, push, bumps))
+        found = (_pair_bumps(geoms, exact, target, blocked, push, 2.0 * rho, bumps, which)
+                 + _edge_bumps(geoms, exact, inner, blocked, push, bumps, which))
         counts.append(found)
-        if not bumps:
-            break
+        bent = []
         for i, bl in bumps.items():
             moved = sum(float(np.hypot(*v)) for _, v in bl)
-            if used[i] + moved > budget:
+            area = out[i].art.area
+            add = SWEEP * moved * rho / area if area > 0 else np.inf
+            if used[i] + moved > budget or swept[i] + add > room[i]:
                 spent[i] = True
                 continue
             used[i] += moved
+            swept[i] += add
             out[i] = _bent(out[i], bl, two_rho2)
+            exact[i] = out[i].art
+            geoms[i] = shapely.simplify(exact[i], eps, preserve_topology=False)
+            bent.append(i)
+        if not bent:  # what is still too close is between elements that may not bend further
+            break
+        which = np.array(sorted(bent))
     return out, counts
 
 
