@@ -415,12 +415,12 @@ def run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2,
                   np.asarray(seg_a, np.int64), np.asarray(seg_b, np.int64), nxt, prv)
     chunk_first, chunk_count, sa, sb, snext, sprev = chunks
     sox, soy, sinv, sgx, sgy = g.segs.params
-    tox, toy, tinv, tgx, tgy = g.tris.params
+    tox, toy, tinv, tgx, tgy = g.cover.params
     _call_by_name(contact_query, {
         "x": x, "active": np.asarray(active, np.int64), "vert_elem": vert_elem,
         "seg_xy": g.segs.xy, "seg_elem": g.segs.elem, "seg_start": g.segs.start,
         "seg_order": g.segs.order, "sox": sox, "soy": soy, "sinv": sinv, "sgx": sgx, "sgy": sgy,
-        "tri_xy": g.tris.xy, "tri_elem": g.tris.elem, "tri_start": g.tris.start,
+        "tri_xy": g.cover.xy, "tri_elem": g.cover.elem, "tri_start": g.cover.start,
         "tox": tox, "toy": toy, "tinv": tinv, "tgx": tgx, "tgy": tgy,
         "inside": inside, "nb_count": nb_count, "nb_elem": nb_elem, "nb_d2": nb_d2,
         "nb_q": nb_q, "nb_seg": nb_seg, "chunk_first": chunk_first, "chunk_count": chunk_count,

@@ -33,10 +33,10 @@ def find_contacts(model: Model, state: State, grid: Grid) -> None:
         The meshes; the contact arrays of ``state`` are overwritten for its
         ``active_skin`` vertices (a vertex inside a mesh keeps the side it entered by).
     grid
-        Cell lists rebuilt on ``state.x``: skin chunks (``grid.segs``) and triangles
-        (``grid.tris``).
+        Cell lists rebuilt on ``state.x``: skin chunks (``grid.segs``) and the triangle
+        cover (``grid.cover``).
     """
-    s, st, segs, tris = model.skin, state, grid.segs, grid.tris
+    s, st, segs, tris = model.skin, state, grid.segs, grid.cover
     contact_query(st.x, st.active_skin, model.vert_elem,
                   segs.xy, segs.elem, segs.start, segs.order, *segs.params,
                   tris.xy, tris.elem, tris.start, *tris.params,

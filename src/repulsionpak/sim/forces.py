@@ -100,8 +100,9 @@ def contact_query(x, active, vert_elem,
                   inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
     """For each vertex in ``active`` (skin vertices of moving elements):
 
-    * ``inside[i]``: the vertex lies in a triangle of another element (3×3 window of the
-      triangle cells);
+    * ``inside[i]``: the vertex lies in a triangle of another element (those of its cell
+      of the triangle cover, :class:`~repulsionpak.sim.grid.TriangleCover`: ``tri_xy``,
+      ``tri_elem``, ``tri_start`` and the grid ``tox``...``tgy``);
     * ``nb_q[i, :nb_count[i]]``: the closest point on the skin of each other element
       having skin in the 3×3 window of the segment cells (``nb_elem``, ``nb_d2`` and the
       segment id ``nb_seg`` alongside). At most ``nb_q.shape[1]`` neighbours are kept
@@ -123,21 +124,15 @@ def contact_query(x, active, vert_elem,
         old_elem = nb_elem[i, :n_old].copy()
         old_seg = nb_seg[i, :n_old].copy()
         cx, cy = cell_of(px, py, tox, toy, tinv, tgx, tgy)
+        c = cy * tgx + cx
         hit = False
-        for yy in range(max(cy - 1, 0), min(cy + 2, tgy)):
-            if hit:
+        for m in range(tri_start[c], tri_start[c + 1]):
+            if tri_elem[m] == e:
+                continue
+            if _inside_triangle(px, py, tri_xy[m, 0], tri_xy[m, 1], tri_xy[m, 2],
+                                tri_xy[m, 3], tri_xy[m, 4], tri_xy[m, 5]):
+                hit = True
                 break
-            for xx in range(max(cx - 1, 0), min(cx + 2, tgx)):
-                if hit:
-                    break
-                c = yy * tgx + xx
-                for m in range(tri_start[c], tri_start[c + 1]):
-                    if tri_elem[m] == e:
-                        continue
-                    if _inside_triangle(px, py, tri_xy[m, 0], tri_xy[m, 1], tri_xy[m, 2],
-                                        tri_xy[m, 3], tri_xy[m, 4], tri_xy[m, 5]):
-                        hit = True
-                        break
         inside[i] = hit
         cnt = 0
         cx, cy = cell_of(px, py, sox, soy, sinv, sgx, sgy)
