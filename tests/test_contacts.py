@@ -1,11 +1,15 @@
 """The contact phase's data structures against plain references: the triangle cover of
-the full query (:mod:`repulsionpak.sim.contacts`, :mod:`repulsionpak.sim.grid`)."""
+the full query, the packed skin rings and per-segment triangle lists of the cheap walk
+(:mod:`repulsionpak.sim.contacts`, :mod:`repulsionpak.sim.grid`)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from repulsionpak.sim.contacts import contact_topology
+from repulsionpak.sim.forces import (_inside_triangle, _walk_ring, _walk_skin, contact_update, ring_table,
+                                     segment_triangles)
 from repulsionpak.sim.grid import TriangleCover, cell_of
 
 pytestmark = pytest.mark.usefixtures("one_numba_thread")
@@ -101,3 +105,81 @@ def test_full_query_inside_is_the_point_in_mesh_test_over_all_triangles(jammed):
     finally:  # (the module's other tests start from the jammed state)
         x[:] = keep
         sim.update_contacts(True)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 7, 40])
+def test_packed_ring_walk_is_the_skin_walk(n):
+    rng = np.random.default_rng(n)
+    t = np.sort(rng.uniform(0, 2 * np.pi, n))
+    r = rng.uniform(0.5, 1.5, n)
+    x = np.stack([r * np.cos(t), r * np.sin(t)], axis=1)
+    seg_a = np.arange(n, dtype=np.int64)
+    seg_b = (seg_a + 1) % n
+    seg_next = seg_b.copy()
+    seg_prev = (seg_a - 1) % n
+    ring = ring_table(seg_a, seg_b, seg_next, seg_prev)
+    for _ in range(300):
+        px, py = rng.uniform(-2, 2, 2)
+        s = int(rng.integers(n))
+        hops = int(rng.choice([1, 2, 16, 64]))
+        assert _walk_ring(x, ring, s, px, py, hops) == _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px,
+                                                                     py, hops)
+
+
+def test_segment_triangles_are_those_at_either_end_once(jammed):
+    _, model, _ = jammed
+    s = model.skin
+    ptr, corners = segment_triangles(s.seg_a, s.seg_b, model.vtri_ptr, model.vtri, model.tris)
+    vt = [set(model.vtri[model.vtri_ptr[v]:model.vtri_ptr[v + 1]].tolist()) for v in range(model.n_vertices)]
+    for k in range(len(s.seg_a)):
+        want = sorted(tuple(model.tris[t]) for t in vt[s.seg_a[k]] | vt[s.seg_b[k]])
+        got = sorted(tuple(c) for c in corners[ptr[k]:ptr[k + 1]])
+        assert got == want
+
+
+def _reference_update(x, active, seg_a, seg_b, seg_next, seg_prev, tris, vtri_ptr, vtri, tri_ptr, near2, far2,
+                      inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
+    """The cheap contact update as first written: separate ring arrays, the triangles at
+    each end of the closest segment through the vertex → triangle lists."""
+    for i in active:
+        px, py = x[i]
+        was_inside = inside[i]
+        hit = False
+        for j in range(nb_count[i]):
+            if nb_d2[i, j] > far2:
+                continue
+            best, qx, qy, s = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, nb_seg[i, j], px, py, 16)
+            nb_seg[i, j], nb_d2[i, j], nb_q[i, j] = s, best, (qx, qy)
+            if hit or (best >= near2 and not was_inside):
+                continue
+            for v in (seg_a[s], seg_b[s]):
+                ts = vtri[vtri_ptr[v]:vtri_ptr[v + 1]]
+                if _inside_all((px, py), x[tris[ts]]).any():
+                    hit = True
+                    break
+        if was_inside and not hit and nb_count[i] > 0:
+            f = nb_elem[i, int(np.argmin(nb_d2[i, :nb_count[i]]))]
+            hit = bool(_inside_all((px, py), x[tris[tri_ptr[f]:tri_ptr[f + 1]]]).any())
+        inside[i] = hit
+
+
+def test_contact_update_gives_the_arrays_of_the_first_version(jammed):
+    """From a full query on a jammed state, a few steps' motion later: the same contact
+    arrays, bit for bit, as the update through the separate ring and triangle lists."""
+    sim, model, state = jammed
+    sim.update_contacts(True)
+    rng = np.random.default_rng(2)
+    x = state.x + rng.normal(0.0, 0.05 * model.gap, state.x.shape)
+    names = ["inside", "nb_count", "nb_elem", "nb_d2", "nb_q", "nb_seg"]
+    ref = [getattr(state, n).copy() for n in names]
+    s = model.skin
+    _reference_update(x, state.active_skin, s.seg_a, s.seg_b, s.seg_next, s.seg_prev, model.tris, model.vtri_ptr,
+                      model.vtri, model.tri_ptr, sim.near2, np.inf, *ref)
+    topo = contact_topology(model)
+    out = [getattr(state, n).copy() for n in names]
+    contact_update(x, state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri, model.tris, model.tri_ptr,
+                   sim.near2, np.inf, *out)
+    for name, a, b in zip(names, ref, out):
+        np.testing.assert_array_equal(a, b, err_msg=name)
+    assert ref[0][state.active_skin].any()
+    assert contact_topology(model) is topo  # built once per model

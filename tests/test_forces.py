@@ -743,6 +743,7 @@ def test_grow_stops_at_the_nominal_size_cap():
 def test_contact_update_tracks_the_full_query(template):
     """Between full queries the walked closest points and inside flags match what a full
     query would find, for small motions."""
+    from repulsionpak.sim.contacts import contact_topology
     from repulsionpak.sim.forces import contact_update
 
     model, state = two_square_model(template, (40, 40), (50, 47), angle1=0.4)
@@ -761,8 +762,9 @@ def test_contact_update_tracks_the_full_query(template):
     inside, cnt, elem, d2, q, seg = full(x)
     rng = np.random.default_rng(0)
     x2 = x + rng.normal(scale=0.05, size=x.shape)
-    contact_update(x2, sim.state.active_skin, model.vert_elem, model.skin.seg_a, model.skin.seg_b, model.skin.seg_next, model.skin.seg_prev,
-                   model.tris, model.vtri_ptr, model.vtri, model.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
+    topo = contact_topology(model)
+    contact_update(x2, sim.state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri,
+                   model.tris, model.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
     inside_f, cnt_f, elem_f, d2_f, q_f, _ = full(x2)
     skin = sim.state.active_skin
     np.testing.assert_array_equal(inside[skin], inside_f[skin])
