@@ -26,6 +26,7 @@ from repulsionpak.sim.forces import (
     overlap_force,
     repulsion_force,
     _walk_skin,
+    ring_table,
 )
 from repulsionpak.sim.grid import Grid
 from repulsionpak.sim.integrate import euler_step, grow, skin_areas
@@ -424,7 +425,7 @@ def run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2,
         "tox": tox, "toy": toy, "tinv": tinv, "tgx": tgx, "tgy": tgy,
         "inside": inside, "nb_count": nb_count, "nb_elem": nb_elem, "nb_d2": nb_d2,
         "nb_q": nb_q, "nb_seg": nb_seg, "chunk_first": chunk_first, "chunk_count": chunk_count,
-        "seg_a": sa, "seg_b": sb, "seg_next": snext, "seg_prev": sprev})
+        "ring": ring_table(sa, sb, snext, sprev)})
 
 
 def query(x, vert_elem, seg_a, seg_b, tris, tri_elem, active, cell=20.0, tri_cell=15.0,

@@ -30,17 +30,18 @@ __all__ = ["ContactTopology", "contact_topology", "find_contacts", "follow_conta
 
 
 class ContactTopology(NamedTuple):
-    """What :func:`follow_contacts` walks and tests, derived once per model from its skin
-    rings and triangles.
+    """What the contact kernels walk along and test against, derived once per model from
+    its skin rings and triangles.
 
     Attributes
     ----------
     ring
         (S, 4) int64: each skin segment's ends, next and previous segment
-        (:func:`~repulsionpak.sim.forces.ring_table`).
+        (:func:`~repulsionpak.sim.forces.ring_table`), the walks of both queries.
     seg_tri_ptr, seg_tri
         The triangles at either end of each segment, as corner vertices
-        (:func:`~repulsionpak.sim.forces.segment_triangles`).
+        (:func:`~repulsionpak.sim.forces.segment_triangles`), the point-in-mesh tests of
+        :func:`follow_contacts`.
     """
 
     ring: np.ndarray
@@ -82,7 +83,7 @@ def find_contacts(model: Model, state: State, grid: Grid) -> None:
     contact_query(st.x, st.active_skin, model.vert_elem,
                   segs.xy, segs.elem, segs.start, segs.order, *segs.params,
                   tris.xy, tris.elem, tris.start, *tris.params,
-                  s.chunk_first, s.chunk_count, s.seg_a, s.seg_b, s.seg_next, s.seg_prev,
+                  s.chunk_first, s.chunk_count, contact_topology(model).ring,
                   st.inside, st.nb_count, st.nb_elem, st.nb_d2, st.nb_q, st.nb_seg)
 
 

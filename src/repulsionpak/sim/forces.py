@@ -176,7 +176,7 @@ def segment_triangles(seg_a, seg_b, vtri_ptr, vtri, tris):
 def contact_query(x, active, vert_elem,
                   seg_xy, seg_elem, seg_start, seg_order, sox, soy, sinv, sgx, sgy,
                   tri_xy, tri_elem, tri_start, tox, toy, tinv, tgx, tgy,
-                  chunk_first, chunk_count, seg_a, seg_b, seg_next, seg_prev,
+                  chunk_first, chunk_count, ring,
                   inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
     """For each vertex in ``active`` (skin vertices of moving elements):
 
@@ -191,7 +191,8 @@ def contact_query(x, active, vert_elem,
     The segment cells hold *chunks*: chords over ``chunk_count`` consecutive skin
     segments starting at segment ``chunk_first``. The nearest chunk of each neighbour is
     found first, then the exact closest point by walking along that neighbour's skin
-    from the matching segment (a few times fewer distance tests than all segments).
+    from the matching segment (a few times fewer distance tests than all segments;
+    ``ring``: :func:`ring_table`).
     """
     K = nb_q.shape[1]
     for k in prange(active.shape[0]):
@@ -267,7 +268,7 @@ def contact_query(x, active, vert_elem,
                     if old_elem[o] == nb_elem[i, j]:
                         start = old_seg[o]
                         break
-            best, qx, qy, s = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, start, px, py, 64)
+            best, qx, qy, s = _walk_ring(x, ring, start, px, py, 64)
             nb_seg[i, j] = s
             nb_d2[i, j] = best
             nb_q[i, j, 0] = qx
