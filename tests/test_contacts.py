@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from repulsionpak.sim.contacts import contact_topology
-from repulsionpak.sim.forces import (_inside_triangle, _walk_ring, _walk_skin, contact_update, ring_table,
-                                     segment_triangles)
+from repulsionpak.sim.forces import _walk_ring, _walk_skin, contact_update, ring_table, segment_triangles
 from repulsionpak.sim.grid import TriangleCover, cell_of
 
 pytestmark = pytest.mark.usefixtures("one_numba_thread")
