@@ -26,6 +26,7 @@ from repulsionpak.sim.forces import (
     overlap_force,
     repulsion_force,
     _walk_skin,
+    ring_table,
 )
 from repulsionpak.sim.grid import Grid
 from repulsionpak.sim.integrate import euler_step, grow, skin_areas
@@ -415,16 +416,16 @@ def run_contact_query(x, active, vert_elem, g, inside, nb_count, nb_elem, nb_d2,
                   np.asarray(seg_a, np.int64), np.asarray(seg_b, np.int64), nxt, prv)
     chunk_first, chunk_count, sa, sb, snext, sprev = chunks
     sox, soy, sinv, sgx, sgy = g.segs.params
-    tox, toy, tinv, tgx, tgy = g.tris.params
+    tox, toy, tinv, tgx, tgy = g.cover.params
     _call_by_name(contact_query, {
         "x": x, "active": np.asarray(active, np.int64), "vert_elem": vert_elem,
         "seg_xy": g.segs.xy, "seg_elem": g.segs.elem, "seg_start": g.segs.start,
         "seg_order": g.segs.order, "sox": sox, "soy": soy, "sinv": sinv, "sgx": sgx, "sgy": sgy,
-        "tri_xy": g.tris.xy, "tri_elem": g.tris.elem, "tri_start": g.tris.start,
+        "tri_xy": g.cover.xy, "tri_elem": g.cover.elem, "tri_start": g.cover.start,
         "tox": tox, "toy": toy, "tinv": tinv, "tgx": tgx, "tgy": tgy,
         "inside": inside, "nb_count": nb_count, "nb_elem": nb_elem, "nb_d2": nb_d2,
         "nb_q": nb_q, "nb_seg": nb_seg, "chunk_first": chunk_first, "chunk_count": chunk_count,
-        "seg_a": sa, "seg_b": sb, "seg_next": snext, "seg_prev": sprev})
+        "ring": ring_table(sa, sb, snext, sprev)})
 
 
 def query(x, vert_elem, seg_a, seg_b, tris, tri_elem, active, cell=20.0, tri_cell=15.0,
@@ -743,6 +744,7 @@ def test_grow_stops_at_the_nominal_size_cap():
 def test_contact_update_tracks_the_full_query(template):
     """Between full queries the walked closest points and inside flags match what a full
     query would find, for small motions."""
+    from repulsionpak.sim.contacts import contact_topology
     from repulsionpak.sim.forces import contact_update
 
     model, state = two_square_model(template, (40, 40), (50, 47), angle1=0.4)
@@ -761,8 +763,9 @@ def test_contact_update_tracks_the_full_query(template):
     inside, cnt, elem, d2, q, seg = full(x)
     rng = np.random.default_rng(0)
     x2 = x + rng.normal(scale=0.05, size=x.shape)
-    contact_update(x2, sim.state.active_skin, model.vert_elem, model.skin.seg_a, model.skin.seg_b, model.skin.seg_next, model.skin.seg_prev,
-                   model.tris, model.vtri_ptr, model.vtri, model.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
+    topo = contact_topology(model)
+    contact_update(x2, sim.state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri,
+                   model.tris, model.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
     inside_f, cnt_f, elem_f, d2_f, q_f, _ = full(x2)
     skin = sim.state.active_skin
     np.testing.assert_array_equal(inside[skin], inside_f[skin])

@@ -178,10 +178,11 @@ class Simulator:
         last one (:func:`~repulsionpak.sim.contacts.follow_contacts`)."""
         m, st, g = self.model, self.state, self.grid
         if full:
-            g.fit_triangles(st.x, m.tris)
-            g.rebuild_triangles(st.x, m.tris, m.tri_elem)
-            if len(m.corners):
+            if len(m.corners):  # (the centroid cells serve only the corners)
+                g.fit_triangles(st.x, m.tris)
+                g.rebuild_triangles(st.x, m.tris, m.tri_elem)
                 self._gather_corner_triangles()
+            g.cover.rebuild(st.x, m.tris, m.tri_elem)
             g.rebuild_segments(st.x, m.skin.chunk_a, m.skin.chunk_b, m.skin.chunk_elem)
             find_contacts(m, st, g)
         else:
