@@ -256,9 +256,9 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
         neighbours give way alone.
     distortions : (n,) array, optional
         Each element's distortion as it comes (:func:`~repulsionpak.verify.straighten`
-        returns them): with ``limits``, an element stops bending once the area its bumps
-        sweep (about 4|v|ρ each) would take it past its limit, and its neighbours give
-        way alone, so that few elements are bent past it and unbent.
+        returns them): with ``limits``, an element stops bending once its bumps
+        (:data:`SWEEP` × |v|ρ of area each) would take it past its limit, and its
+        neighbours give way alone, so that few elements are bent past it and unbent.
 
     Returns
     -------
@@ -302,9 +302,13 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
     return out, DentResult(tuple(counts), dented, tuple(over))
 
 
-#: the area a bump of vector v sweeps, in units of |v|·ρ: √(2π) ≈ 2.5 along one side of
-#: the outline, up to twice that across a thin part (both sides move); the estimate that
-#: stops an element's bending before its shape limit
+#: the area a bump of vector v is taken to add to its element's distortion, in units of
+#: |v|·ρ: the stop that keeps most elements within their shape limit. Alone, a bump sweeps
+#: √(2π) ≈ 2.5 |v|ρ along one side of an outline; but the distortion is measured against
+#: the best similarity, which takes up part of every bend, and an element's bumps overlap.
+#: Measured: 4 stopped the heart's animals early (30 of them, seeds 1-3: area 0.509
+#: against 0.521), 2 still early (0.519); 1 bends as far as no stop at all (0.521) and
+#: leaves 37 of 470 elements of mixed-square-300 to be unbent (none stop: 261)
 SWEEP = 1.0
 
 
