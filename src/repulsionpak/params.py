@@ -314,10 +314,12 @@ class VerifyParams:
         "moves towards it until they are grow_to apart (a band of copies limited by its width "
         "otherwise ends with every gap a little wide); 0: off.")
     dent: int = _doc(
-        8, "rounds", "Before any element is moved or shrunk, elements closer than min_gap to a "
+        3, "rounds", "Before any element is moved or shrunk, elements closer than min_gap to a "
         "neighbour or than the margin to the edge are bent away from the contact by a smooth "
         "local bump, in this many rounds of measuring and bending (0: off; the repair then "
-        "shrinks whole elements for what are mostly contacts of one limb).")
+        "shrinks whole elements for what are mostly contacts of one limb). The heart with 30 "
+        "animals, seeds 1-3: the same area with 2, 4 or 8 rounds (±0.002); the poster's "
+        "1,400 elements take ~2 s a round.")
     dent_radius: float = _doc(
         2.0, "× gap", "The width (Gaussian ρ) of a dent: the art within about two radii of the "
         "contact bends with it.")

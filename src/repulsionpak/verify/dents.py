@@ -109,24 +109,54 @@ def _bent_curves(curves: list[CurveSubpath], bumps: list, two_rho2: float) -> li
     return bent
 
 
-def _bent(placed: PlacedArt, bumps: list, two_rho2: float) -> PlacedArt:
-    """``placed`` with its art moved by ``bumps``: curves through their control points,
-    then flattened at the copy's tolerance (:func:`~repulsionpak.render.placed.refined`);
-    art without curves through its points."""
-    curved = [a.source is not None and bool(a.source.curves) and placed.tolerance is not None
-              for a in placed.paths]
+#: a path farther than this many ρ from every bump is left as it is: the bumps move it by
+#: less than exp(−REACH²/2) ≈ 4·10⁻⁵ of their size
+REACH = 4.5
+
+
+def _near(points: np.ndarray, centres: np.ndarray, reach: float) -> bool:
+    """Whether the bounding box of ``points`` (n, 2) comes within ``reach`` of a centre."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    gap = np.maximum(np.maximum(lo - centres, centres - hi), 0.0)
+    return bool((np.hypot(gap[:, 0], gap[:, 1]) < reach).any())
+
+
+def _bent(placed: PlacedArt, steps: list[list], two_rho2: float) -> PlacedArt:
+    """``placed`` with its art moved by each bump list of ``steps`` in turn: curves
+    through their control points, then flattened at the copy's tolerance
+    (:func:`~repulsionpak.render.placed.refined`); art without curves through its
+    points. Paths out of the bumps' reach (:data:`REACH`) are kept as they are."""
+    centres = np.array([c for bumps in steps for c, _ in bumps])
+    reach = REACH * np.sqrt(0.5 * two_rho2)
+
+    def near(a: ArtPath) -> bool:
+        if a.source is not None and a.source.curves:
+            return _near(np.concatenate([c.ctrl.reshape(-1, 2) for c in a.source.curves]), centres, reach)
+        return _near(np.concatenate(a.subpaths), centres, reach)
+
+    hit = [near(a) for a in placed.paths]
+    if not any(hit):
+        return placed
+    curved = [h and a.source is not None and bool(a.source.curves) and placed.tolerance is not None
+              for a, h in zip(placed.paths, hit)]
     every = [c for a, cv in zip(placed.paths, curved) if cv for c in a.source.curves]
-    bent = iter(_bent_curves(every, bumps, two_rho2) if every else ())
+    for bumps in steps if every else ():
+        every = _bent_curves(every, bumps, two_rho2)
+    bent = iter(every)
     paths = []
-    for a, cv in zip(placed.paths, curved):
+    for a, h, cv in zip(placed.paths, hit, curved):
         src = a.source
-        if cv:
+        if not h:
+            paths.append(a)
+        elif cv:
             curves = tuple(next(bent) for _ in src.curves)
             paths.append(refined(ArtPath(a.subpaths, a.closed, a.style,
                                          source=dataclasses.replace(src, curves=curves)), placed.tolerance))
         else:
-            paths.append(ArtPath(tuple(_bumped(p, bumps, two_rho2) for p in a.subpaths), a.closed, a.style,
-                                 source=None if src is None or src.curves else src))
+            subs = a.subpaths
+            for bumps in steps:
+                subs = tuple(_bumped(p, bumps, two_rho2) for p in subs)
+            paths.append(ArtPath(subs, a.closed, a.style, source=None if src is None or src.curves else src))
     return dataclasses.replace(placed, paths=tuple(paths))
 
 
@@ -220,7 +250,7 @@ def _edge_bumps(geoms: np.ndarray, exact: np.ndarray, inner, frozen: np.ndarray,
 
 
 def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float, *,
-         rounds: int = 8, radius: float = 2.0, push: float = 0.5, budget: float = 3.0,
+         rounds: int = 3, radius: float = 2.0, push: float = 0.5, budget: float = 3.0,
          slack: float = 0.06, frozen: np.ndarray | None = None, rest: list[PlacedArt] | None = None,
          limits: np.ndarray | None = None, distortions: np.ndarray | None = None
          ) -> tuple[list[PlacedArt], DentResult]:
@@ -324,6 +354,7 @@ def _rounds(out, which, frozen, target, inner, rounds, rho, push, budget, eps, r
     counts = []
     exact = np.array([p.art for p in out], dtype=object)
     geoms = shapely.simplify(exact, eps, preserve_topology=False)  # for distances only
+    steps: dict[int, list] = {}  # each element's bump lists, applied to its art at the end
     for _ in range(rounds):
         bumps: dict[int, list] = {}
         blocked = frozen | spent
@@ -333,20 +364,24 @@ def _rounds(out, which, frozen, target, inner, rounds, rho, push, budget, eps, r
         bent = []
         for i, bl in bumps.items():
             moved = sum(float(np.hypot(*v)) for _, v in bl)
-            area = out[i].art.area
+            area = exact[i].area
             add = SWEEP * moved * rho / area if area > 0 else np.inf
             if used[i] + moved > budget or swept[i] + add > room[i]:
                 spent[i] = True
                 continue
             used[i] += moved
             swept[i] += add
-            out[i] = _bent(out[i], bl, two_rho2)
-            exact[i] = out[i].art
+            steps.setdefault(i, []).append(bl)
+            # the outline measured next round: the art's outline under the same map (to
+            # the flattening tolerance what the bent paths' union gives)
+            exact[i] = shapely.transform(exact[i], lambda pts, bl=bl: _bumped(pts, bl, two_rho2))
             geoms[i] = shapely.simplify(exact[i], eps, preserve_topology=False)
             bent.append(i)
         if not bent:  # what is still too close is between elements that may not bend further
             break
         which = np.array(sorted(bent))
+    for i, st in steps.items():
+        out[i] = _bent(out[i], st, two_rho2)
     return out, counts
 
 
