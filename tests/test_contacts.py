@@ -9,10 +9,49 @@ import numpy as np
 import pytest
 
 from repulsionpak.sim.contacts import contact_topology
-from repulsionpak.sim.forces import _walk_ring, _walk_skin, contact_update, ring_table, segment_triangles
+from numba import njit
+
+from repulsionpak.sim.forces import _closest_on_coords, _walk_ring, contact_update, ring_table, segment_triangles
 from repulsionpak.sim.grid import TriangleCover, cell_of
 
 pytestmark = pytest.mark.usefixtures("one_numba_thread")
+
+
+# the skin walk as first written, over separate ring arrays: the reference of the packed one
+@njit(cache=True)
+def _closest_on_segment(x, a, b, px, py):
+    d2, qx, qy, t = _closest_on_coords(x[a, 0], x[a, 1], x[b, 0], x[b, 1], px, py)
+    return d2, qx, qy
+
+
+@njit(cache=True)
+def _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
+    """From skin segment ``s``, step to the next or previous segment of the same ring while
+    that one is closer to (px, py). Returns (d², qx, qy, segment) of the local minimum.
+
+    Once a hop was made, only the segments ahead are tried: the one behind is the one it
+    came from, farther than the current one by construction (``seg_prev[seg_next[s]] ==
+    s`` on a ring), so testing it again, as a walk that tries both sides every hop would,
+    cannot change the outcome."""
+    best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
+    direction = 0  # +1 after a hop to the next segment, -1 after one to the previous
+    for _ in range(max_hops):
+        if direction >= 0:
+            n = seg_next[s]
+            d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+            if d2 < best:
+                best, qx, qy, s = d2, ax, ay, n
+                direction = 1
+                continue
+            if direction > 0:
+                break
+        n = seg_prev[s]
+        d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
+        if d2 >= best:
+            break
+        best, qx, qy, s = d2, ax, ay, n
+        direction = -1
+    return best, qx, qy, s
 
 
 def _inside_all(p, corners):

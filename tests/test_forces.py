@@ -25,7 +25,7 @@ from repulsionpak.sim.forces import (
     outside_distance,
     overlap_force,
     repulsion_force,
-    _walk_skin,
+    _walk_ring,
     ring_table,
 )
 from repulsionpak.sim.grid import Grid
@@ -1160,11 +1160,12 @@ def test_skin_walk_ends_where_a_walk_trying_both_sides_every_hop_ends(n):
     seg_b = (seg_a + 1) % n
     seg_next = seg_b.copy()
     seg_prev = (seg_a - 1) % n
+    ring = ring_table(seg_a, seg_b, seg_next, seg_prev)
     for _ in range(300):
         px, py = rng.uniform(-2, 2, 2)
         s = int(rng.integers(n))
         hops = int(rng.choice([1, 2, 16, 64]))
-        best, qx, qy, end = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, hops)
+        best, qx, qy, end = _walk_ring(x, ring, s, px, py, hops)
         assert end == _walk_both_sides(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, hops)
         d = shapely.LineString([x[seg_a[end]], x[seg_b[end]]]).distance(Point(px, py))
         assert best == pytest.approx(d * d, abs=1e-12)

@@ -57,45 +57,16 @@ def _closest_on_coords(ax, ay, bx, by, px, py):
 
 
 @njit(cache=True, inline="always")
-def _closest_on_segment(x, a, b, px, py):
-    d2, qx, qy, t = _closest_on_coords(x[a, 0], x[a, 1], x[b, 0], x[b, 1], px, py)
-    return d2, qx, qy
-
-
-@njit(cache=True, inline="always")
-def _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
+def _walk_ring(x, ring, s, px, py, max_hops):
     """From skin segment ``s``, step to the next or previous segment of the same ring while
     that one is closer to (px, py). Returns (d², qx, qy, segment) of the local minimum.
+    ``ring`` (S, 4) holds a segment's ends, next and previous segment in one row
+    (:func:`ring_table`).
 
     Once a hop was made, only the segments ahead are tried: the one behind is the one it
-    came from, farther than the current one by construction (``seg_prev[seg_next[s]] ==
-    s`` on a ring), so testing it again, as a walk that tries both sides every hop would,
-    cannot change the outcome."""
-    best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
-    direction = 0  # +1 after a hop to the next segment, -1 after one to the previous
-    for _ in range(max_hops):
-        if direction >= 0:
-            n = seg_next[s]
-            d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-            if d2 < best:
-                best, qx, qy, s = d2, ax, ay, n
-                direction = 1
-                continue
-            if direction > 0:
-                break
-        n = seg_prev[s]
-        d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-        if d2 >= best:
-            break
-        best, qx, qy, s = d2, ax, ay, n
-        direction = -1
-    return best, qx, qy, s
-
-
-@njit(cache=True, inline="always")
-def _walk_ring(x, ring, s, px, py, max_hops):
-    """:func:`_walk_skin` over the packed ring table ``ring`` (S, 4): a segment's ends,
-    next and previous segment in one row (:func:`ring_table`), the same hops and results.
+    came from, farther than the current one by construction (``ring[ring[s, 2], 3] ==
+    s``), so testing it again, as a walk that tries both sides every hop would, cannot
+    change the outcome.
 
     Notes
     -----
