@@ -25,8 +25,8 @@ from .contacts import find_contacts, follow_contacts
 from .controls import apply_controls
 from .forces import corner_candidates, mark_corners_near, project_inside
 from .grid import Grid, bin_points
-from .integrate import (confined_contacts, count_inside, deep_contacts, euler_step, grow, growth_speed_caps, growth_steps,
-                        skin_areas, window_change)
+from .integrate import (confined_contacts, count_inside, deep_contacts, euler_step, grow, growth_speed_caps,
+                        growth_steps, skin_areas, window_change)
 from .model import Model, State
 from .selfintersect import relax_self_intersections
 from .shape import limit_deformation
