@@ -9,49 +9,10 @@ import numpy as np
 import pytest
 
 from repulsionpak.sim.contacts import contact_topology
-from numba import njit
-
-from repulsionpak.sim.forces import _closest_on_coords, _walk_ring, contact_update, ring_table, segment_triangles
+from repulsionpak.sim.forces import _walk_ring, contact_update, ring_table, segment_triangles
 from repulsionpak.sim.grid import TriangleCover, cell_of
 
 pytestmark = pytest.mark.usefixtures("one_numba_thread")
-
-
-# the skin walk as first written, over separate ring arrays: the reference of the packed one
-@njit(cache=True)
-def _closest_on_segment(x, a, b, px, py):
-    d2, qx, qy, t = _closest_on_coords(x[a, 0], x[a, 1], x[b, 0], x[b, 1], px, py)
-    return d2, qx, qy
-
-
-@njit(cache=True)
-def _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
-    """From skin segment ``s``, step to the next or previous segment of the same ring while
-    that one is closer to (px, py). Returns (d², qx, qy, segment) of the local minimum.
-
-    Once a hop was made, only the segments ahead are tried: the one behind is the one it
-    came from, farther than the current one by construction (``seg_prev[seg_next[s]] ==
-    s`` on a ring), so testing it again, as a walk that tries both sides every hop would,
-    cannot change the outcome."""
-    best, qx, qy = _closest_on_segment(x, seg_a[s], seg_b[s], px, py)
-    direction = 0  # +1 after a hop to the next segment, -1 after one to the previous
-    for _ in range(max_hops):
-        if direction >= 0:
-            n = seg_next[s]
-            d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-            if d2 < best:
-                best, qx, qy, s = d2, ax, ay, n
-                direction = 1
-                continue
-            if direction > 0:
-                break
-        n = seg_prev[s]
-        d2, ax, ay = _closest_on_segment(x, seg_a[n], seg_b[n], px, py)
-        if d2 >= best:
-            break
-        best, qx, qy, s = d2, ax, ay, n
-        direction = -1
-    return best, qx, qy, s
 
 
 def _inside_all(p, corners):
@@ -146,25 +107,6 @@ def test_full_query_inside_is_the_point_in_mesh_test_over_all_triangles(jammed):
         sim.update_contacts(True)
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, 7, 40])
-def test_packed_ring_walk_is_the_skin_walk(n):
-    rng = np.random.default_rng(n)
-    t = np.sort(rng.uniform(0, 2 * np.pi, n))
-    r = rng.uniform(0.5, 1.5, n)
-    x = np.stack([r * np.cos(t), r * np.sin(t)], axis=1)
-    seg_a = np.arange(n, dtype=np.int64)
-    seg_b = (seg_a + 1) % n
-    seg_next = seg_b.copy()
-    seg_prev = (seg_a - 1) % n
-    ring = ring_table(seg_a, seg_b, seg_next, seg_prev)
-    for _ in range(300):
-        px, py = rng.uniform(-2, 2, 2)
-        s = int(rng.integers(n))
-        hops = int(rng.choice([1, 2, 16, 64]))
-        assert _walk_ring(x, ring, s, px, py, hops) == _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, s, px,
-                                                                     py, hops)
-
-
 def test_segment_triangles_are_those_at_either_end_once(jammed):
     _, model, _ = jammed
     s = model.skin
@@ -178,8 +120,10 @@ def test_segment_triangles_are_those_at_either_end_once(jammed):
 
 def _reference_update(x, active, seg_a, seg_b, seg_next, seg_prev, tris, vtri_ptr, vtri, tri_ptr, near2, far2,
                       inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
-    """The cheap contact update as first written: separate ring arrays, the triangles at
-    each end of the closest segment through the vertex → triangle lists."""
+    """The cheap contact update as first written: the triangles at each end of the
+    closest segment through the vertex → triangle lists (the walk itself is checked
+    against one trying both sides every hop in test_forces)."""
+    ring = ring_table(seg_a, seg_b, seg_next, seg_prev)
     for i in active:
         px, py = x[i]
         was_inside = inside[i]
@@ -187,7 +131,7 @@ def _reference_update(x, active, seg_a, seg_b, seg_next, seg_prev, tris, vtri_pt
         for j in range(nb_count[i]):
             if nb_d2[i, j] > far2:
                 continue
-            best, qx, qy, s = _walk_skin(x, seg_a, seg_b, seg_next, seg_prev, nb_seg[i, j], px, py, 16)
+            best, qx, qy, s = _walk_ring(x, ring, nb_seg[i, j], px, py, 16)
             nb_seg[i, j], nb_d2[i, j], nb_q[i, j] = s, best, (qx, qy)
             if hit or (best >= near2 and not was_inside):
                 continue

@@ -27,12 +27,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
-import shapely.affinity
 
 from ..render.placed import refined
 from ..types import ArtPath, CurveSubpath, PlacedArt
-from .checks import distortion
-from .repairs import _similarity
+from .repairs import rest_distortion
 
 __all__ = ["DentResult", "dent"]
 
@@ -394,8 +392,6 @@ def _over_limit(placed, out, rest, limits) -> list[int]:
     for i, (p, q) in enumerate(zip(placed, out)):
         if q is p or not np.isfinite(limits[i]):
             continue
-        m, _ = _similarity(rest[i], p)
-        moved = shapely.affinity.affine_transform(rest[i].art, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
-        if distortion(q.art, moved) > limits[i]:
+        if rest_distortion(rest[i], p, q.art) > limits[i]:
             over.append(i)
     return over

@@ -83,6 +83,14 @@ def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
     return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k, deformation=0.0, **extra)
 
 
+def rest_distortion(rest: PlacedArt, placed: PlacedArt, art=None) -> float:
+    """The distortion of ``art`` (default ``placed.art``): its symmetric difference with
+    the rest art ``rest`` moved onto ``placed`` by their similarity, over its area."""
+    m, _ = _similarity(rest, placed)
+    moved = shapely.affinity.affine_transform(rest.art, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
+    return distortion(placed.art if art is None else art, moved)
+
+
 #: a distortion this close to its limit is measured on the similar copy's own art
 #: (:func:`straighten`), not on its rest art moved
 DECIDE_EXACTLY = 1e-4
@@ -104,9 +112,7 @@ def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarra
     on the moved paths' own art, so the choice is the one that art gives."""
     out, dist, replaced = [], np.zeros(len(placed)), []
     for i, (p, r) in enumerate(zip(placed, rest)):
-        m, _ = _similarity(r, p)
-        moved = shapely.affinity.affine_transform(r.art, [m[0, 0], m[0, 1], m[1, 0], m[1, 1], m[0, 2], m[1, 2]])
-        d = distortion(p.art, moved)
+        d = rest_distortion(r, p)
         copy = None
         if abs(d - limits[i]) <= DECIDE_EXACTLY:
             copy = similar_copy(r, p)
