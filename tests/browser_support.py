@@ -37,6 +37,17 @@ def playwright_chromium():
     return sync_api, exe
 
 
+PAGE_TIMEOUT_MS = 120_000  # as wait(): a loaded 2-core CI machine can take tens of seconds
+
+
+def new_page(browser, **kwargs):
+    """``browser.new_page(**kwargs)`` whose waits time out after :data:`PAGE_TIMEOUT_MS`
+    (Playwright's own 30 s is too short on a CI machine busy with the rest of the suite)."""
+    page = browser.new_page(**kwargs)
+    page.set_default_timeout(PAGE_TIMEOUT_MS)
+    return page
+
+
 def wait(cond, timeout: float = 120.0, poll: float = 0.1):
     """``cond()``'s first true value, polled every ``poll`` s; AssertionError after ``timeout`` s."""
     t_end = time.monotonic() + timeout

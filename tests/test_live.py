@@ -24,7 +24,7 @@ aiohttp = pytest.importorskip("aiohttp", reason="the live view needs aiohttp: pi
 
 import repulsionpak  # noqa: E402
 from repulsionpak.live.protocol import decode_frame, encode_frame, parse_command  # noqa: E402
-from browser_support import chromium  # noqa: E402
+from browser_support import chromium, new_page  # noqa: E402
 
 PKG = Path(repulsionpak.__file__).parent
 EX = PKG / "examples"
@@ -333,7 +333,7 @@ def test_browser_pause_step_drag_pin_remove_add_download(live, tmp_path):
 
 
 def _drive(browser, live: Live, tmp_path: Path) -> None:
-    page = browser.new_page(viewport={"width": 900, "height": 800}, accept_downloads=True)
+    page = new_page(browser, viewport={"width": 900, "height": 800}, accept_downloads=True)
     page.goto(live.url)
     page.wait_for_function(f"document.querySelectorAll('#stage .element').length === {COUNT}")
     page.wait_for_function("document.querySelector('#iteration').textContent === '25'")
@@ -403,7 +403,7 @@ def _drive(browser, live: Live, tmp_path: Path) -> None:
     assert page.inner_text("#iteration") == "26"
 
     # a second tab sees the same run
-    other = browser.new_page()
+    other = new_page(browser)
     other.goto(live.url)
     other.wait_for_function("document.querySelector('#iteration').textContent === '26'")
     assert other.locator("#stage .element.pinned").count() == 1

@@ -26,7 +26,8 @@ from repulsionpak.studio.document import Document, History  # noqa: E402
 from repulsionpak.studio.region import Stroke, painted_region, region_svg  # noqa: E402
 from repulsionpak.studio.uploads import MAX_FILE_BYTES  # noqa: E402
 from repulsionpak.studio.settings import DEFAULTS, coerce, command_line, run_settings  # noqa: E402
-from browser_support import paused_apples, playwright_chromium, finish, page_state, unpacked_project, wait  # noqa: E402
+from browser_support import (  # noqa: E402
+    finish, new_page, page_state, paused_apples, playwright_chromium, unpacked_project, wait)
 from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
@@ -423,7 +424,7 @@ def test_page_paint_fill_setting_pin_export(server, tmp_path):
 
 
 def _drive(browser, server, tmp_path):
-    page = browser.new_page(viewport={"width": 1300, "height": 850}, accept_downloads=True)
+    page = new_page(browser, viewport={"width": 1300, "height": 850}, accept_downloads=True)
     errors = []
     page.on("pageerror", lambda e: errors.append(str(e)))
     page.goto(server.url)
@@ -541,7 +542,7 @@ def test_page_drop_files_and_undo(server):
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=exe, args=["--no-sandbox"])
         try:
-            page = browser.new_page()
+            page = new_page(browser)
             page.goto(server.url)
             page.wait_for_function("window.repulsionpakStudio.state !== null")
             drop = """([sel, name, text]) => { const dt = new DataTransfer();

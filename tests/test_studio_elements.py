@@ -18,7 +18,8 @@ import repulsionpak  # noqa: E402
 from repulsionpak.errors import ParameterError  # noqa: E402
 from repulsionpak.flow.align import copy_rotations  # noqa: E402
 from repulsionpak.studio import Session  # noqa: E402
-from browser_support import paused_apples, playwright_chromium, finish, page_state, unpacked_project, wait  # noqa: E402
+from browser_support import (  # noqa: E402
+    finish, new_page, page_state, paused_apples, playwright_chromium, unpacked_project, wait)
 from browser_support import server, session  # noqa: E402,F401  (fixtures)
 
 EX = Path(repulsionpak.__file__).parent / "examples"
@@ -97,7 +98,7 @@ def page(server):
     with sync_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=exe, args=["--no-sandbox"])
         try:
-            pg = browser.new_page(viewport={"width": 1300, "height": 850}, accept_downloads=True)
+            pg = new_page(browser, viewport={"width": 1300, "height": 850}, accept_downloads=True)
             errors: list[str] = []
             pg.on("pageerror", lambda e: errors.append(str(e)))
             pg.goto(server.url)
@@ -273,11 +274,11 @@ def test_painted_room_raises_the_planned_sizes(session):
     session.use_examples("circle", ["apple", "fish"])
     for k, v in (("count", "10"), ("gap", "12"), ("seed", "3"), ("pocket_fill", False)):
         session.set_setting(k, v)
-    session.start()
-    ctl = session.controller
-    wait(lambda: ctl.sim is not None and ctl.sim.state.iteration > 100)
-    ctl.submit({"cmd": "pause"})
-    wait(lambda: ctl.paused and ctl.commands.empty())
+    session.start(paused=True)  # stepped to a fixed iteration: the trajectory does not
+    ctl = session.controller  # depend on the wall clock
+    wait(lambda: ctl.sim is not None and ctl.paused)
+    ctl.submit({"cmd": "step", "n": 100})
+    wait(lambda: ctl.sim.state.iteration >= 100 and ctl.steps_left == 0 and ctl.commands.empty())
     sim = ctl.sim
     cap0 = sim.max_growth.copy()
     area0 = sim.model.container_area
