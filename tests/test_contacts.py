@@ -8,7 +8,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from repulsionpak.sim.contacts import contact_topology
 from repulsionpak.sim.forces import _walk_ring, contact_update, ring_table, segment_triangles
 from repulsionpak.sim.grid import TriangleCover, cell_of
 
@@ -158,14 +157,13 @@ def test_contact_update_gives_the_arrays_of_the_first_version(jammed):
     s = model.skin
     _reference_update(x, state.active_skin, s.seg_a, s.seg_b, s.seg_next, s.seg_prev, model.tris, model.vtri_ptr,
                       model.vtri, model.tri_ptr, sim.near2, np.inf, *ref)
-    topo = contact_topology(model)
+    topo = model.contact
     out = [getattr(state, n).copy() for n in names]
     contact_update(x, state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri, model.tris, model.tri_ptr,
                    sim.near2, np.inf, *out)
     for name, a, b in zip(names, ref, out):
         np.testing.assert_array_equal(a, b, err_msg=name)
     assert ref[0][state.active_skin].any()
-    assert contact_topology(model) is topo  # built once per model
 
 
 def _reference_relax(x, elem_vstart, elem_nskin, moving, edge_rest, growth, vnbr_ptr, vnbr, passes, fraction,

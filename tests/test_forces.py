@@ -744,7 +744,6 @@ def test_grow_stops_at_the_nominal_size_cap():
 def test_contact_update_tracks_the_full_query(template):
     """Between full queries the walked closest points and inside flags match what a full
     query would find, for small motions."""
-    from repulsionpak.sim.contacts import contact_topology
     from repulsionpak.sim.forces import contact_update
 
     model, state = two_square_model(template, (40, 40), (50, 47), angle1=0.4)
@@ -763,7 +762,7 @@ def test_contact_update_tracks_the_full_query(template):
     inside, cnt, elem, d2, q, seg = full(x)
     rng = np.random.default_rng(0)
     x2 = x + rng.normal(scale=0.05, size=x.shape)
-    topo = contact_topology(model)
+    topo = model.contact
     contact_update(x2, sim.state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri,
                    model.tris, model.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
     inside_f, cnt_f, elem_f, d2_f, q_f, _ = full(x2)

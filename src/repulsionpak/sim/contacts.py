@@ -17,54 +17,11 @@ compiles best; these wrappers only name where each comes from.
 
 from __future__ import annotations
 
-import weakref
-from typing import NamedTuple
-
-import numpy as np
-
-from .forces import contact_query, contact_update, ring_table, segment_triangles
+from .forces import contact_query, contact_update
 from .grid import Grid
 from .model import Model, State
 
-__all__ = ["ContactTopology", "contact_topology", "find_contacts", "follow_contacts"]
-
-
-class ContactTopology(NamedTuple):
-    """What the contact kernels walk along and test against, derived once per model from
-    its skin rings and triangles.
-
-    Attributes
-    ----------
-    ring
-        (S, 4) int64: each skin segment's ends, next and previous segment
-        (:func:`~repulsionpak.sim.forces.ring_table`), the walks of both queries.
-    seg_tri_ptr, seg_tri
-        The triangles at either end of each segment, as corner vertices
-        (:func:`~repulsionpak.sim.forces.segment_triangles`), the point-in-mesh tests of
-        :func:`follow_contacts`.
-    """
-
-    ring: np.ndarray
-    seg_tri_ptr: np.ndarray
-    seg_tri: np.ndarray
-
-
-#: id(model) → (weak reference to it, its skin, its triangles, its ContactTopology)
-_TOPOLOGY: dict[int, tuple] = {}
-
-
-def contact_topology(model: Model) -> ContactTopology:
-    """The :class:`ContactTopology` of ``model``, built on first use and kept while the
-    model lives (rebuilt if its ``skin`` or ``tris`` are replaced)."""
-    key = id(model)
-    hit = _TOPOLOGY.get(key)
-    if hit is not None and hit[0]() is model and hit[1] is model.skin and hit[2] is model.tris:
-        return hit[3]
-    s = model.skin
-    ptr, corners = segment_triangles(s.seg_a, s.seg_b, model.vtri_ptr, model.vtri, model.tris)
-    topo = ContactTopology(ring_table(s.seg_a, s.seg_b, s.seg_next, s.seg_prev), ptr, corners)
-    _TOPOLOGY[key] = (weakref.ref(model, lambda _, k=key: _TOPOLOGY.pop(k, None)), s, model.tris, topo)
-    return topo
+__all__ = ["find_contacts", "follow_contacts"]
 
 
 def find_contacts(model: Model, state: State, grid: Grid) -> None:
@@ -83,7 +40,7 @@ def find_contacts(model: Model, state: State, grid: Grid) -> None:
     contact_query(st.x, st.active_skin, model.vert_elem,
                   segs.xy, segs.elem, segs.start, segs.order, *segs.params,
                   tris.xy, tris.elem, tris.start, *tris.params,
-                  s.chunk_first, s.chunk_count, contact_topology(model).ring,
+                  s.chunk_first, s.chunk_count, model.contact.ring,
                   st.inside, st.nb_count, st.nb_elem, st.nb_d2, st.nb_q, st.nb_seg)
 
 
@@ -100,6 +57,6 @@ def follow_contacts(model: Model, state: State, near2: float, far2: float) -> No
     far2
         Squared distance beyond which a neighbour keeps its point of the last full query.
     """
-    st, topo = state, contact_topology(model)
+    st, topo = state, model.contact
     contact_update(st.x, st.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri, model.tris, model.tri_ptr,
                    near2, far2, st.inside, st.nb_count, st.nb_elem, st.nb_d2, st.nb_q, st.nb_seg)

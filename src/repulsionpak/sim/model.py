@@ -17,6 +17,7 @@ import shapely
 from ..geometry.edt import distance_transform
 from ..placement import Placement, placed_vertices
 from ..preprocess import Template
+from .forces import ring_table, segment_triangles
 from .skinwidth import skin_depths
 
 
@@ -129,6 +130,7 @@ class Model:
     # derived by build_model: the skin rings (SkinTopology) and each element's springs and
     # triangles, ``spring_ptr[e]:spring_ptr[e+1]`` and ``tri_ptr[e]:tri_ptr[e+1]`` (element_ranges)
     skin: "SkinTopology | None" = None
+    contact: "ContactTopology | None" = None  # what the contact kernels walk (sim/contacts.py)
     spring_ptr: np.ndarray | None = None  # (M+1,) int64
     tri_ptr: np.ndarray | None = None  # (M+1,) int64
 
@@ -353,6 +355,33 @@ class SkinTopology(NamedTuple):
     chunk_count: np.ndarray
 
 
+class ContactTopology(NamedTuple):
+    """What the contact kernels walk along and test against, derived from the skin rings
+    and triangles (:func:`contact_topology`).
+
+    Attributes
+    ----------
+    ring
+        (S, 4) int64: each skin segment's ends, next and previous segment
+        (:func:`~repulsionpak.sim.forces.ring_table`), the walks of both queries.
+    seg_tri_ptr, seg_tri
+        The triangles at either end of each segment, as corner vertices
+        (:func:`~repulsionpak.sim.forces.segment_triangles`), the point-in-mesh tests of
+        :func:`~repulsionpak.sim.contacts.follow_contacts`.
+    """
+
+    ring: np.ndarray
+    seg_tri_ptr: np.ndarray
+    seg_tri: np.ndarray
+
+
+def contact_topology(m: Model) -> ContactTopology:
+    """The :class:`ContactTopology` of ``m`` (its ``skin`` set)."""
+    s = m.skin
+    ptr, corners = segment_triangles(s.seg_a, s.seg_b, m.vtri_ptr, m.vtri, m.tris)
+    return ContactTopology(ring_table(s.seg_a, s.seg_b, s.seg_next, s.seg_prev), ptr, corners)
+
+
 def skin_topology(m: Model) -> SkinTopology:
     """The skin segments and chunks of every element (also frozen ones: they repel).
     Segment k of a mesh runs from its skin vertex k to k+1; the segments of one mesh are
@@ -508,6 +537,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         model.inset_extra = base[0].inset_extra
         model.bend_limit[:m0] = base[0].bend_limit
     model.skin = skin_topology(model)
+    model.contact = contact_topology(model)
     model.spring_ptr = element_ranges(model.spring_elem, M)
     model.tri_ptr = element_ranges(model.tri_elem, M)
     n_grow = np.zeros(M, np.int64)
