@@ -255,3 +255,31 @@ def test_size_floor_is_a_share_of_the_median():
     assert size_floor([10.0, 30.0, 20.0], 0.2) == pytest.approx(4.0)
     assert size_floor([], 0.2) == 0.0 and size_floor([10.0], 0.0) == 0.0
     assert art_size(shapely.box(0, 0, 4, 9)) == pytest.approx(6.0)
+
+
+def test_copies_not_mapped_are_the_ones_the_floor_drops():
+    """``worth_mapping`` leaves out only pocket copies whose mapped art, even grown by the
+    verification's ``max_grow``, stays below the floor: the mesh sizes it reads agree with
+    the mapped art's within ``MESH_SIZE_SLACK``. A scene with enough pocket copies pressed
+    below the floor that some are left out (the test can fail both ways)."""
+    from repulsionpak import pack
+    from repulsionpak.params import Params
+    from repulsionpak.secondary import MESH_SIZE_SLACK, art_size, mesh_sizes, size_floor, worth_mapping
+    from repulsionpak.sim.art import placed_art
+    from repulsionpak.types import Container
+
+    region = shapely.box(0, 0, 300, 200)
+    p = Params(gap=4.0, seed=2).with_(placement__count=8)
+    packing = pack(Container("box.svg", region), [_bar_element(60.0, 12.0)], p)
+    m = packing.model
+    art = np.array([art_size(q.art) for q in placed_art(packing.templates, m, packing.state, packing.frame,
+                                                        params=p.render)])
+    est = mesh_sizes(packing)
+    assert np.all(est / art <= MESH_SIZE_SLACK) and np.all(art / est <= MESH_SIZE_SLACK), (est / art)
+    primary = np.array([k == "primary" for k in m.kind])
+    floor = size_floor(art[primary], p.secondary.min_size)
+    drawn = worth_mapping(packing, p.secondary.min_size, p.verify.max_grow)
+    left_out = np.setdiff1d(np.arange(m.n_elements), drawn)
+    assert np.isin(np.flatnonzero(primary), drawn).all()  # every primary is drawn
+    assert len(left_out) > 0 and not primary[left_out].any()
+    assert np.all(art[left_out] * p.verify.max_grow < floor), (art[left_out], floor)

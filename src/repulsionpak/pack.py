@@ -315,30 +315,34 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
     t3 = time.perf_counter()
     stage("mapping the art")
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process
-    placed = placed_art(packing.templates, packing.model, packing.state, frame, params=params.render)
-    if packing.model.pinned is not None:
-        placed = [dataclasses.replace(p, pinned=True) if packing.model.pinned[e] else p
-                  for e, p in enumerate(placed)]
-    t4 = time.perf_counter()
     v = params.verify
+    m = packing.model
+    drawn = np.arange(m.n_elements)  # the copies mapped: pocket copies sure to end below the floor are not
+    if auto and params.secondary.min_size > 0 and packing.iterations.get("secondary"):
+        from .secondary import worth_mapping  # noqa: PLC0415
+
+        drawn = worth_mapping(packing, params.secondary.min_size, v.max_grow if v.repair else 1.0)
+    placed = placed_art(packing.templates, m, packing.state, frame, elements=drawn, params=params.render)
+    if m.pinned is not None:
+        placed = [dataclasses.replace(p, pinned=True) if m.pinned[e] else p for e, p in zip(drawn, placed)]
+    t4 = time.perf_counter()
     straightened: list[int] = []
     if v.repair:  # shapes kept: elements bent too far are replaced by their unbent copy
         sp = params.sim
         limits = np.array([(sp.bend_limit_convex if is_convex(packing.templates[ti]) else sp.bend_limit)
-                           for ti in packing.model.template_index]) * v.straighten
+                           for ti in m.template_index]) * v.straighten
         limits[limits <= 0] = np.inf
-        limits = straighten_limits(packing.model, limits)
-        rest = rest_art(packing.templates, packing.model)
+        limits = straighten_limits(m, limits)[drawn]
+        rest = rest_art(packing.templates, m, elements=drawn)
         placed, distortions, straightened = straighten(placed, rest, limits)
         if v.dent > 0:  # contacts of a limb or a back are bent away, not shrunk away
-            m = packing.model
             frozen = np.zeros(m.n_elements, bool)  # pinned and rigid copies keep their shape
             for mask in (m.rigid, m.pinned):
                 if mask is not None:
                     frozen |= mask
             placed, _ = dent(placed, container.region, gap, margin_of(params, gap), v.min_gap * gap,
-                             rounds=v.dent, radius=v.dent_radius, frozen=frozen, rest=rest, limits=limits,
-                             distortions=distortions)
+                             rounds=v.dent, radius=v.dent_radius, frozen=frozen[drawn], rest=rest,
+                             limits=limits, distortions=distortions)
     # a stop asked for during the verification ends its repair rounds; one asked for
     # during the simulation does not (the partial packing is repaired in full)
     stop_repair = None if should_stop is None or should_stop() else should_stop
@@ -348,7 +352,7 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
         min_scale=v.min_scale, repair=v.repair, straightened=straightened,
         grow_to=v.grow_to * gap, max_scale=v.max_grow, should_stop=stop_repair,
         grow_reach=skin_excess(params, gap), gather=v.gather * gap,
-        max_turn=None if packing.model.rot_on is None else np.where(packing.model.rot_on, 0.0, np.inf))
+        max_turn=None if m.rot_on is None else np.where(m.rot_on, 0.0, np.inf)[drawn])
     if stop_repair is not None and v.repair and stop_repair():
         packing.stopped_by["verify"] = "interrupted"  # a partial packing (exit 130), promises kept
     packing.seconds["verify"] = time.perf_counter() - t4
