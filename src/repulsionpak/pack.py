@@ -302,7 +302,7 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
         params = dataclasses.replace(params, secondary=dataclasses.replace(params.secondary, candidates=1))
         packing.params = params
     if secondary and res.stopped_by != "interrupted":
-        from .secondary import add_secondary, mesh_primary_sizes, size_floor  # noqa: PLC0415
+        from .secondary import add_secondary, mesh_sizes, size_floor  # noqa: PLC0415
 
         primary_state = dict(sim.snapshot_state(), done=True, area=res.area_fraction)  # frozen from now on
         stage("placing secondary copies")
@@ -311,7 +311,7 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
                                      lambda st: on_checkpoint({"primary": primary_state, "secondary": st})),
                       checkpoint_every=checkpoint_every, saved=(resume or {}).get("secondary"),
                       snapshot_every=snapshot_every,
-                      min_size=size_floor(mesh_primary_sizes(packing), params.secondary.min_size) if auto else 0.0)
+                      min_size=size_floor(mesh_sizes(packing, "primary"), params.secondary.min_size) if auto else 0.0)
     t3 = time.perf_counter()
     stage("mapping the art")
     warmup.wait()  # first run: the render kernels are being compiled by the warm-up process

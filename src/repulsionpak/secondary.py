@@ -150,11 +150,6 @@ def mesh_sizes(packing, kind: str | None = None) -> np.ndarray:
     return np.asarray(out, dtype=float)
 
 
-def mesh_primary_sizes(packing) -> np.ndarray:
-    """:func:`mesh_sizes` of the primaries, (P,) in element order."""
-    return mesh_sizes(packing, "primary")
-
-
 #: how far a copy's mesh size may fall short of its mapped art's (4 % at most measured)
 MESH_SIZE_SLACK = 1.06
 
