@@ -47,6 +47,25 @@ def test_local_width_of_a_band_and_a_disc():
     assert not is_even(room_of(band, GAP), 15 * GAP)
 
 
+@pytest.mark.parametrize("kind", REGION_KINDS)
+def test_wide_pixels_from_the_large_levels_alone_are_those_of_the_width(tmp_path, kind):
+    """``Room.wide(base)`` transforms only the levels of at least base/2 and finds exactly
+    the pixels ``width >= base`` marks, for bases below the first level up to above the
+    deepest point; it computes no width on the way (the even-container check of the
+    paper's heart needs 10 of its 41 levels)."""
+    region = _container(tmp_path, kind).region
+    for gap in (GAP, 4 * GAP):
+        room = room_of(region, gap)
+        bases = [2.0 * room.levels[0], 5 * gap, 15 * gap, 3.0 * room.levels[-1], room.levels[0], 0.5 * gap]
+        got = [room.wide(b) for b in bases[:4]]
+        assert "width" not in room.__dict__  # no base below twice the first level yet
+        got += [room.wide(b) for b in bases[4:]]
+        fresh = room_of(region, gap)
+        for b, w in zip(bases, got):
+            np.testing.assert_array_equal(w, (fresh.width >= b) & (fresh.part >= 0), err_msg=f"{kind} base {b}")
+        assert got[3].sum() == 0 and got[0].sum() > 0
+
+
 def test_counts_give_every_wide_enough_island_a_primary(tmp_path):
     c = _container(tmp_path, "archipelago", 1)
     r = room_of(c.region, GAP)

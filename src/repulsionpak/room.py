@@ -21,6 +21,7 @@ at least 3 pixels per gap, so the widths are within a level and a pixel.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -37,9 +38,8 @@ class Room:
 
     ``part`` (ny, nx) int: index of the region (``parts``) holding each pixel centre, -1
     outside; ``depth`` (ny, nx): distance of each pixel centre to the container's edge,
-    0 outside; ``width`` (ny, nx): local width (diameter of the largest disc inside the
-    container covering the pixel centre), 0 outside. Pixel (j, i) has its centre at
-    ``origin + h · (i + ½, j + ½)``.
+    0 outside; ``levels``: the disc radii the local width is measured at, increasing.
+    Pixel (j, i) has its centre at ``origin + h · (i + ½, j + ½)``.
     """
 
     parts: list[shapely.Polygon]
@@ -47,7 +47,43 @@ class Room:
     h: float
     part: np.ndarray
     depth: np.ndarray
-    width: np.ndarray
+    levels: tuple[float, ...]
+
+    def opened(self, r: float) -> np.ndarray:
+        """(ny, nx) bool: the pixels within ``r`` of a centre at least ``r`` deep (the
+        container opened by a disc of radius ``r``)."""
+        core = self.depth >= r
+        reach = distance_transform(~core, self.h)  # distance of every pixel to the nearest centre r deep
+        return (reach <= r) & (self.part >= 0)
+
+    @cached_property
+    def width(self) -> np.ndarray:
+        """(ny, nx) local width: the diameter of the largest disc (a level) inside the
+        container covering the pixel centre, twice its depth below the first level, 0
+        outside. One distance transform per level, computed when first asked for."""
+        mask = self.part >= 0
+        width = np.where(mask, 2.0 * self.depth, 0.0)
+        for r in self.levels:
+            width[self.opened(r)] = 2.0 * r
+        return width
+
+    def wide(self, base: float) -> np.ndarray:
+        """(ny, nx) bool: the pixels whose local width is at least ``base``, i.e.
+        ``width >= base`` inside the container.
+
+        Notes
+        -----
+        Only the levels of at least ``base``/2 are transformed (10 of 41 on the paper's
+        heart): a pixel opened at one of them is that wide; one opened only at smaller
+        levels is narrower; one opened at none is less than the first level deep, so
+        narrower too when that level is at most ``base``/2 (else every level is needed)."""
+        if "width" in self.__dict__ or not self.levels or 2.0 * self.levels[0] > base:
+            return (self.width >= base) & (self.part >= 0)
+        out = np.zeros(self.part.shape, np.bool_)
+        for r in self.levels:
+            if 2.0 * r >= base:
+                out |= self.opened(r)
+        return out
 
     def centres(self, mask: np.ndarray) -> np.ndarray:
         """(K, 2) centres of the pixels where ``mask`` is True, in row-major order."""
@@ -98,12 +134,10 @@ def room_of(region, gap: float, pixels: int = 400) -> Room:
         label[jj[inside], ii[inside]] = k
     mask = label >= 0
     depth = distance_transform(mask, h)
-    width = np.where(mask, 2.0 * depth, 0.0)  # below the first level: the point's own depth
     top = float(depth.max()) if mask.any() else 0.0
+    levels = []
     r = max(0.5 * h, 0.25 * gap)
     while r <= top:
-        core = depth >= r
-        reach = distance_transform(~core, h)  # distance of every pixel to the nearest centre r deep
-        width[(reach <= r) & mask] = 2.0 * r
+        levels.append(r)
         r *= LEVEL_STEP
-    return Room(parts, origin, h, label, depth, width)
+    return Room(parts, origin, h, label, depth, tuple(levels))

@@ -64,7 +64,7 @@ def size_field(room: Room, base: float, share: float = 1.0) -> np.ndarray:
 def narrow_share(room: Room, base: float) -> float:
     """Share of the container's pixels whose local width is below ``base``."""
     inside = room.part >= 0
-    return float((room.width[inside] < base).mean()) if inside.any() else 0.0
+    return float((~room.wide(base)[inside]).mean()) if inside.any() else 0.0
 
 
 def is_even(room: Room, base: float, share: float = UNEVEN_SHARE) -> bool:
