@@ -19,6 +19,7 @@ from .inputs import margin_of
 from .params import Params
 from .sim.art import skin_polygons
 from .sim.model import Model, SimFrame, State
+from .threads import worker_threads
 from .types import Container, Element, PlacedArt
 from .verify import Verification
 
@@ -32,18 +33,10 @@ def fit_workers() -> int:
     Returns
     -------
     int
-        This process's cores, at most 4, and at most ``$REPULSIONPAK_THREADS`` (which
-        caps the simulation's threads too).
+        :func:`repulsionpak.threads.worker_threads`: this process's cores, at most 4, and
+        at most ``$REPULSIONPAK_THREADS`` (which caps the simulation's threads too).
     """
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on every platform
-        n = os.cpu_count() or 1
-    if os.environ.get("REPULSIONPAK_THREADS", "").strip():
-        from .sim.runner import auto_threads
-
-        n = min(n, auto_threads())
-    return max(1, min(4, n))
+    return worker_threads()
 
 
 def invariants(packing: "Packing", metrics: dict) -> dict:

@@ -138,15 +138,20 @@ def mesh_sizes(packing, kind: str | None = None) -> np.ndarray:
     heart and the 1,000-element poster; the final floor is set again on the mapped art
     (:func:`size_floor`)."""
     m, st, fr = packing.model, packing.state, packing.frame
+    nominal: dict[int, tuple[float, float]] = {}  # per template: art size, RMS radius
     out = []
     for e in range(m.n_elements):
         if kind is not None and m.kind[e] != kind:
             continue
-        t = packing.templates[int(m.template_index[e])]
+        ti = int(m.template_index[e])
+        if ti not in nominal:
+            t = packing.templates[ti]
+            r_nom = float(np.sqrt(((t.verts - t.verts.mean(axis=0)) ** 2).sum(axis=1).mean()))
+            nominal[ti] = (float(np.sqrt(t.outline.area) * t.scale), r_nom)
+        size, r_nom = nominal[ti]
         v = st.x[m.elem_vstart[e]:m.elem_vstart[e + 1]] * fr.unit
         r_now = float(np.sqrt(((v - v.mean(axis=0)) ** 2).sum(axis=1).mean()))
-        r_nom = float(np.sqrt(((t.verts - t.verts.mean(axis=0)) ** 2).sum(axis=1).mean()))
-        out.append(np.sqrt(t.outline.area) * t.scale * (r_now / r_nom if r_nom > 0 else 1.0))
+        out.append(size * (r_now / r_nom if r_nom > 0 else 1.0))
     return np.asarray(out, dtype=float)
 
 

@@ -10,11 +10,12 @@ a machine with a spare core.
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import shapely
+
+from ..threads import worker_threads
 
 __all__ = ["MIN_PAIRS", "distances", "threads"]
 
@@ -24,20 +25,9 @@ MIN_PAIRS = 256
 
 
 def threads() -> int:
-    """Threads for :func:`distances`: this process's cores, at most 4 and at most
-    ``$REPULSIONPAK_THREADS`` (which caps the simulation's threads too; an unreadable
-    value counts as unset here, the simulation refuses it)."""
-    try:
-        n = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on every platform
-        n = os.cpu_count() or 1
-    text = os.environ.get("REPULSIONPAK_THREADS", "").strip()
-    if text:
-        try:
-            n = min(n, int(text))
-        except ValueError:
-            pass
-    return max(1, min(4, n))
+    """Threads for :func:`distances`: :func:`repulsionpak.threads.worker_threads`, an
+    unreadable ``$REPULSIONPAK_THREADS`` counting as unset (the simulation refuses it)."""
+    return worker_threads(strict=False)
 
 
 def distances(a: np.ndarray, b: np.ndarray, workers: int | None = None) -> np.ndarray:

@@ -11,7 +11,6 @@ bars, frame writers and checkpoints are such consumers.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -19,8 +18,9 @@ import numba
 import numpy as np
 
 from .._jit.kernels import parallel_ready, set_threads
-from ..errors import DivergedError, ParameterError
+from ..errors import DivergedError
 from ..params import SimParams
+from ..threads import thread_cap
 from .contacts import find_contacts, follow_contacts
 from .controls import apply_controls
 from .forces import corner_candidates, mark_corners_near, project_inside
@@ -71,24 +71,12 @@ class RunResult:
     dt: float
 
 
-#: environment variable: the most threads a run with ``sim.threads = 0`` uses (e.g. 1 when
-#: several packings run side by side on the same cores)
-THREADS_ENV = "REPULSIONPAK_THREADS"
-
-
 def auto_threads() -> int:
-    """The most threads an automatic run may use: ``$REPULSIONPAK_THREADS`` if set, else
-    numba's thread count (the cores this process may use)."""
-    text = os.environ.get(THREADS_ENV, "").strip()
-    if not text:
-        return numba.config.NUMBA_NUM_THREADS
-    try:
-        n = int(text)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise ParameterError(f"{THREADS_ENV} must be a positive whole number of threads, got {text!r}")
-    return min(n, numba.config.NUMBA_NUM_THREADS)
+    """The most threads an automatic run may use: ``$REPULSIONPAK_THREADS`` if set
+    (:func:`repulsionpak.threads.thread_cap`), else numba's thread count (the cores this
+    process may use)."""
+    cap = thread_cap()
+    return numba.config.NUMBA_NUM_THREADS if cap is None else min(cap, numba.config.NUMBA_NUM_THREADS)
 
 
 class Simulator:

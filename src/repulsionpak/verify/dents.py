@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from ..geometry.pairwise import distances
 from ..render.placed import refined
 from ..types import ArtPath, CurveSubpath, PlacedArt
 from .repairs import rest_distortion
@@ -195,7 +196,7 @@ def _pair_bumps(geoms: np.ndarray, exact: np.ndarray, target: float, frozen: np.
         return 0
     pairs = np.unique(np.sort(np.column_stack([a[keep], b[keep]]), axis=1), axis=0)
     a, b = pairs[:, 0], pairs[:, 1]
-    d = shapely.distance(geoms[a], geoms[b])
+    d = distances(geoms[a], geoms[b])
     close = d < target
     todo = close & ~(frozen[a] & frozen[b])
     apart = todo & (d > 1e-9)
