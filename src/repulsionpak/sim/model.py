@@ -17,6 +17,7 @@ import shapely
 from ..geometry.edt import distance_transform
 from ..placement import Placement, placed_vertices
 from ..preprocess import Template
+from .alignment import align_weights
 from .forces import ring_table, segment_triangles
 from .skinwidth import skin_depths
 
@@ -131,6 +132,7 @@ class Model:
     # triangles, ``spring_ptr[e]:spring_ptr[e+1]`` and ``tri_ptr[e]:tri_ptr[e+1]`` (element_ranges)
     skin: "SkinTopology | None" = None
     contact: "ContactTopology | None" = None  # what the contact kernels walk (sim/contacts.py)
+    align_weight: np.ndarray | None = None  # (M,) how strongly each element turns (sim/alignment.py)
     spring_ptr: np.ndarray | None = None  # (M+1,) int64
     tri_ptr: np.ndarray | None = None  # (M+1,) int64
 
@@ -538,6 +540,9 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         model.bend_limit[:m0] = base[0].bend_limit
     model.skin = skin_topology(model)
     model.contact = contact_topology(model)
+    model.align_weight = align_weights(x, model.elem_vstart, model.elem_nskin)
+    if base is not None:  # (the placed elements' weights: their rest shapes, not their current ones)
+        model.align_weight[:m0] = base[0].align_weight
     model.spring_ptr = element_ranges(model.spring_elem, M)
     model.tri_ptr = element_ranges(model.tri_elem, M)
     n_grow = np.zeros(M, np.int64)

@@ -21,13 +21,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..params import SimParams
+from .alignment import align_torque, skin_axes
 from .controls import edge_force_stiff
 from .forces import (boundary_force, corner_force, edge_force, inversion_force, overlap_force,
                      repulsion_force, shape_force)
 from .model import Model, State
 
 __all__ = ["Repulsion", "Edges", "ShapeMatching", "Boundary", "Overlap", "Inversion", "Corners",
-           "terms_of"]
+           "Alignment", "terms_of"]
 
 
 @dataclass(frozen=True)
@@ -128,11 +129,39 @@ class Corners:
                          self.k, forces)
 
 
+@dataclass(frozen=True)
+class Alignment:
+    """Beyond the paper: while the elements grow, elongated ones turn parallel to their
+    elongated neighbours and to the container's edge within ``reach`` × gap
+    (:func:`~repulsionpak.sim.alignment.align_torque`; each element's weight is
+    ``model.align_weight``, none for an element whose rotation the designer limits)."""
+
+    k: float
+    reach: float
+
+    def __call__(self, model: Model, state: State, forces: np.ndarray) -> None:
+        w = model.align_weight
+        if w is None or not state.allow_growth:
+            return
+        if model.rot_on is not None:  # rotation windows (controls, flow) rule those elements
+            w = np.where(model.rot_on, 0.0, w)
+        if not w.any():
+            return
+        M = model.n_elements
+        theta, aniso, cx, cy = np.empty(M), np.empty(M), np.empty(M), np.empty(M)
+        skin_axes(state.x, model.elem_vstart, model.elem_nskin, theta, aniso, cx, cy)
+        f = model.field
+        align_torque(state.x, model.elem_vstart, model.elem_nskin, state.moving, w, theta, aniso, cx, cy,
+                     state.nb_count, state.nb_elem, f.values, f.ox, f.oy, 1.0 / f.h, self.reach * model.gap,
+                     self.k, forces)
+
+
 def terms_of(p: SimParams) -> tuple:
     """The force terms a run with parameters ``p`` sums, in the order they are added:
     F = F_r + F_e + F_b + F_o (Eq. 1), the shape-matching force after the springs when
-    ``k_shape`` > 0, the unfolding force when ``min_triangle_area`` > 0, and the corners'
-    (for a container with reflex corners)."""
+    ``k_shape`` > 0, the unfolding force when ``min_triangle_area`` > 0, the corners'
+    (for a container with reflex corners) and the elongated elements' alignment when
+    ``k_align`` > 0."""
     terms = [Repulsion(p.k_repulsion, p.soft), Edges(p.k_edge)]
     if p.k_shape > 0:
         terms.append(ShapeMatching(p.k_shape))
@@ -140,4 +169,6 @@ def terms_of(p: SimParams) -> tuple:
     if p.min_triangle_area > 0:
         terms.append(Inversion(p.min_triangle_area, p.k_overlap))
     terms.append(Corners(p.k_corner))
+    if p.k_align > 0:
+        terms.append(Alignment(p.k_align, p.align_reach))
     return tuple(terms)
