@@ -15,7 +15,8 @@ from repulsionpak.placement import Placement
 from repulsionpak.preprocess import build_template, outline_of
 from repulsionpak.sim.model import SimFrame, State, build_model
 from repulsionpak.sim.runner import Simulator
-from repulsionpak.sim.terms import Boundary, Corners, Edges, Inversion, Overlap, Repulsion, ShapeMatching, terms_of
+from repulsionpak.sim.terms import (Alignment, Boundary, Corners, Edges, Inversion, Overlap, Repulsion,
+                                   ShapeMatching, terms_of)
 from repulsionpak.types import ArtPath, Element, Style
 
 
@@ -77,7 +78,7 @@ def test_every_term_adds_into_the_forces(template):
     sim.update_contacts(full=True)
     m, st = sim.model, sim.state
     assert [type(t) for t in sim.terms] == [Repulsion, Edges, ShapeMatching, Boundary, Overlap, Inversion,
-                                            Corners]
+                                            Corners, Alignment]
     rng = np.random.default_rng(1)
     for term in sim.terms:
         alone = np.zeros_like(st.x)

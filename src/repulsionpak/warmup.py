@@ -70,7 +70,8 @@ class _Recorder:
 
 def _tiny_simulator():
     """A Simulator of two small elements in an L-shaped container (a reflex corner, so
-    the corner kernels run too), built the way :func:`repulsionpak.pack.pack` builds one."""
+    the corner kernels run too), built the way :func:`repulsionpak.pack.pack` builds one;
+    both elements count as elongated, so the alignment kernel runs too."""
     import shapely
 
     from . import examples
@@ -90,6 +91,7 @@ def _tiny_simulator():
     elements = load_elements([examples.element_files()[0]])
     templates, placement, gap = prepare(Container("warm-up", region), elements, params, rng)
     model, state, _ = primary_model(region, templates, placement, gap, params)
+    model.align_weight[:] = 1.0  # every element turns, whatever the example's shape (sim/alignment.py)
     return Simulator(model, state, params.sim)
 
 
