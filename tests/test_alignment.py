@@ -43,8 +43,8 @@ def _far_field():
 @pytest.mark.parametrize("angle", [0.0, 0.4, -1.2, 1.5])
 def test_skin_axes_find_the_long_axis(angle):
     x, vstart, nskin = _blocks(_rect(10, 20, 10, 2, angle), _rect(50, 50, 4, 4, angle))
-    theta, aniso, cx, cy = (np.zeros(2) for _ in range(4))
-    skin_axes(x, vstart, nskin, theta, aniso, cx, cy)
+    theta, aniso, cx, cy, cos2, sin2 = (np.zeros(2) for _ in range(6))
+    skin_axes(x, vstart, nskin, theta, aniso, cx, cy, cos2, sin2)
     turn = (theta[0] - angle + math.pi / 2) % math.pi - math.pi / 2  # nematic: modulo π
     assert abs(turn) < 1e-9
     assert aniso[0] > 0.8 and aniso[1] < 1e-9  # a 5:1 bar against a square
@@ -64,8 +64,8 @@ def _torque(angle, neighbour_angle, k=10.0, edge=None):
     bar = _rect(0, 0, 10, 2, angle)
     x, vstart, nskin = _blocks(bar, _rect(0, 5, 10, 2, neighbour_angle))
     M, N = 2, len(x)
-    theta, aniso, cx, cy = (np.zeros(M) for _ in range(4))
-    skin_axes(x, vstart, nskin, theta, aniso, cx, cy)
+    theta, aniso, cx, cy, cos2, sin2 = (np.zeros(M) for _ in range(6))
+    skin_axes(x, vstart, nskin, theta, aniso, cx, cy, cos2, sin2)
     nb_count = np.zeros(N, np.int64)
     nb_elem = np.zeros((N, 4), np.int32)
     if edge is None:
@@ -76,8 +76,8 @@ def _torque(angle, neighbour_angle, k=10.0, edge=None):
         values, ox, oy, inv_h = edge
     F = np.zeros_like(x)
     moving = np.array([True, False])
-    align_torque(x, vstart, nskin, moving, np.array([1.0, 1.0]), theta, aniso, cx, cy, nb_count, nb_elem,
-                 values, ox, oy, inv_h, 3.0, k, F)
+    align_torque(x, vstart, nskin, moving, np.array([1.0, 1.0]), theta, aniso, cx, cy, cos2, sin2, nb_count,
+                 nb_elem, values, ox, oy, inv_h, 3.0, k, F)
     assert np.all(F[len(bar):] == 0.0)  # the pinned neighbour is not turned
     r = x[:len(bar)] - (cx[0], cy[0])
     f = F[:len(bar)]

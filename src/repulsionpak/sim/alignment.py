@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit, prange
 
 from .._jit.kernels import parallel_kernel
-from .forces import _field_sample
+from .forces import _deep, _field_sample
 
 #: rest anisotropy (λ_max − λ_min)/(λ_max + λ_min) of the skin below which an element is
 #: not turned (0.4: the outline of a rectangle about 1.8:1)
@@ -33,10 +33,11 @@ __all__ = ["ANISOTROPY_FULL", "ANISOTROPY_START", "align_weights", "align_torque
 
 
 @njit(cache=True)
-def skin_axes(x, elem_vstart, elem_nskin, theta, aniso, cx, cy):
+def skin_axes(x, elem_vstart, elem_nskin, theta, aniso, cx, cy, cos2, sin2):
     """Per element: the direction (radians, in (−π/2, π/2]) of the long axis of its skin
     vertices, their anisotropy in [0, 1] and their centroid, written into ``theta``,
-    ``aniso``, ``cx``, ``cy`` (M,)."""
+    ``aniso``, ``cx``, ``cy`` (M,); ``cos2``, ``sin2`` get cos 2θ and sin 2θ (each
+    element's vote, computed once rather than at every vertex that sees it)."""
     for e in range(elem_vstart.shape[0] - 1):
         a = elem_vstart[e]
         n = elem_nskin[e]
@@ -61,19 +62,21 @@ def skin_axes(x, elem_vstart, elem_nskin, theta, aniso, cx, cy):
         aniso[e] = np.sqrt((sxx - syy) ** 2 + 4.0 * sxy * sxy) / tr if tr > 0.0 else 0.0
         cx[e] = mx
         cy[e] = my
+        cos2[e] = np.cos(2.0 * theta[e])
+        sin2[e] = np.sin(2.0 * theta[e])
 
 
 def align_weights(x_rest: np.ndarray, elem_vstart: np.ndarray, elem_nskin: np.ndarray) -> np.ndarray:
     """How strongly each element (M,) is turned, in [0, 1], from its rest skin's
     anisotropy: 0 below :data:`ANISOTROPY_START`, 1 from :data:`ANISOTROPY_FULL` on."""
     M = len(elem_nskin)
-    theta, aniso, cx, cy = (np.zeros(M) for _ in range(4))
-    skin_axes(x_rest, elem_vstart, elem_nskin, theta, aniso, cx, cy)
+    theta, aniso, cx, cy, cos2, sin2 = (np.zeros(M) for _ in range(6))
+    skin_axes(x_rest, elem_vstart, elem_nskin, theta, aniso, cx, cy, cos2, sin2)
     return np.clip((aniso - ANISOTROPY_START) / (ANISOTROPY_FULL - ANISOTROPY_START), 0.0, 1.0)
 
 
 @parallel_kernel
-def align_torque(x, elem_vstart, elem_nskin, moving, weight, theta, aniso, cx, cy,
+def align_torque(x, elem_vstart, elem_nskin, moving, weight, theta, aniso, cx, cy, cos2, sin2,
                  nb_count, nb_elem, values, ox, oy, inv_h, edge_reach, k, F):
     """Turn every moving element with ``weight`` > 0 towards the nematic mean of its
     surroundings: the axes ``theta`` of the elements its skin vertices see (``nb_elem``),
@@ -81,7 +84,9 @@ def align_torque(x, elem_vstart, elem_nskin, moving, weight, theta, aniso, cx, c
     within ``edge_reach`` of the container's boundary (signed distance field ``values``),
     weighted 1. The force on a vertex r from the centroid is k·w·c·sin(2Δ)/2 · r⊥/r_rms,
     Δ the turn to the mean direction and c ∈ [0, 1] how much the votes agree: a rotation
-    about the centroid, strongest for a far vertex, nothing for a net push."""
+    about the centroid, strongest for a far vertex, nothing for a net push. ``cos2``,
+    ``sin2``: cos 2θ and sin 2θ of every element (:func:`skin_axes`). The edge is sampled
+    only for an element not entirely deeper inside than ``edge_reach``."""
     for e in prange(elem_vstart.shape[0] - 1):
         w = weight[e]
         if w <= 0.0 or not moving[e]:
@@ -91,15 +96,18 @@ def align_torque(x, elem_vstart, elem_nskin, moving, weight, theta, aniso, cx, c
         sc = 0.0
         ss = 0.0
         total = 0.0
+        near_edge = not _deep(x, a, a + n, values, ox, oy, inv_h, edge_reach)
         for i in range(a, a + n):
             for j in range(nb_count[i]):
                 f = nb_elem[i, j]
                 if f == e:
                     continue
                 v = aniso[f]
-                sc += v * np.cos(2.0 * theta[f])
-                ss += v * np.sin(2.0 * theta[f])
+                sc += v * cos2[f]
+                ss += v * sin2[f]
                 total += v
+            if not near_edge:
+                continue
             d, gx, gy = _field_sample(values, ox, oy, inv_h, x[i, 0], x[i, 1])
             if d > -edge_reach:  # the edge's tangent: the normal's doubled angle, turned by π
                 phi = np.arctan2(gy, gx)

@@ -148,11 +148,11 @@ class Alignment:
         if not w.any():
             return
         M = model.n_elements
-        theta, aniso, cx, cy = np.empty(M), np.empty(M), np.empty(M), np.empty(M)
-        skin_axes(state.x, model.elem_vstart, model.elem_nskin, theta, aniso, cx, cy)
+        theta, aniso, cx, cy, cos2, sin2 = (np.empty(M) for _ in range(6))
+        skin_axes(state.x, model.elem_vstart, model.elem_nskin, theta, aniso, cx, cy, cos2, sin2)
         f = model.field
         align_torque(state.x, model.elem_vstart, model.elem_nskin, state.moving, w, theta, aniso, cx, cy,
-                     state.nb_count, state.nb_elem, f.values, f.ox, f.oy, 1.0 / f.h, self.reach * model.gap,
+                     cos2, sin2, state.nb_count, state.nb_elem, f.values, f.ox, f.oy, 1.0 / f.h, self.reach * model.gap,
                      self.k, forces)
 
 
