@@ -155,3 +155,26 @@ def test_pinning_moves_the_active_vertices(template):
     np.testing.assert_array_equal(st.x[own], x1)  # a pinned element does not move
     sim.set_moving(1, True)
     assert len(st.active_all) == n_all
+
+
+def test_alignment_leaves_limited_rotations_and_settling_alone(template):
+    """The alignment term turns elongated elements (here all three squares, weighted as
+    if they were) while they grow, but not an element whose rotation the designer limits
+    (``rot_on``), and nothing once the run settles."""
+    sim = _sim(template)
+    for _ in range(sim.params.requery_every):
+        sim.step()
+    sim.update_contacts(full=True)
+    m, st = sim.model, sim.state
+    term = Alignment(10.0, 2.0)
+    m.align_weight = np.ones(m.n_elements)
+    free = _alone(term, m, st)
+    vs = m.elem_vstart
+    assert free[vs[0]:vs[1]].any()
+    m.rot_on = np.array([True, False, False])
+    limited = _alone(term, m, st)
+    assert not limited[vs[0]:vs[1]].any()
+    np.testing.assert_array_equal(limited[vs[1]:], free[vs[1]:])
+    m.rot_on = None
+    sim.begin_settle()
+    assert not _alone(term, m, st).any()
