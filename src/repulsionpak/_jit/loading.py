@@ -24,25 +24,62 @@ Loading a kernel still imports the modules of the numba implementations it calls
 environments): ``np.empty`` brings ``numba.np.arrayobj`` (~20 ms), ``ndarray.sum``
 ``numba.np.arraymath`` and with it ``scipy.linalg`` (~0.2 s), so the kernels total by a
 loop (``tests/test_kernels.py`` checks that a warm run imports neither).
+
+The hash secret's symbols come from importing ``numba.cpython.hashing`` (and with it
+numba's unicode and character-sequence support: ~22 ms of every run). Only machine code
+that hashes refers to them, and none of this package's kernels does; so a kernel's cache
+entry is read here and the module imported, before the entry's machine code is linked,
+only when the entry names the symbols (:func:`_needs_hash_secret`).
 """
 
 from __future__ import annotations
+
+import pickle
+import sys
 
 __all__ = ["install", "installed"]
 
 #: functions defined in modules under this prefix load without the refresh
 _PACKAGE = __name__.split(".")[0] + "."
 _original = None
+#: the prefix of the hash secret's symbols (``numba.cpython.hashing`` installs them)
+_HASH_SECRET = b"_numba_hashsecret_"
+_HASHING = "numba.cpython.hashing"
 
 
 def _runtime_ready(target_context) -> None:
     """What machine code from the cache needs besides the CPU target: numba's runtime
-    (NRT) initialised, and the hash secret's symbols (installed when ``numba.cpython.hashing``
-    is imported: string hashing in a kernel refers to them)."""
+    (NRT) initialised (the hash secret's symbols are installed by :func:`_load_entry`,
+    for the entries that need them)."""
     from numba.core.runtime import rtsys
-    import numba.cpython.hashing  # noqa: F401  (its symbols, see above)
 
     rtsys.initialize(target_context)
+
+
+def _needs_hash_secret(raw: bytes) -> bool:
+    """Whether a cache entry's bytes (pickled, with the object code) name the hash
+    secret's symbols, while they are not installed yet."""
+    return _HASHING not in sys.modules and _HASH_SECRET in raw
+
+
+def _load_entry(cache, sig, target_context):
+    """numba's ``Cache._load_overload`` and ``IndexDataCacheFile.load``: the cached
+    overload of ``sig``, or None; installs the hash secret's symbols first when the entry
+    refers to them (see the module docstring)."""
+    if not cache._enabled:
+        return None
+    files = cache._cache_file
+    name = files._load_index().get(cache._index_key(sig, target_context.codegen()))
+    if name is None:
+        return None
+    try:
+        with open(files._data_path(name), "rb") as fh:
+            raw = fh.read()
+    except OSError:  # removed while the index still names it (as numba's load)
+        return None
+    if _needs_hash_secret(raw):
+        import numba.cpython.hashing  # noqa: F401  (installs the symbols)
+    return cache._impl.rebuild(target_context, pickle.loads(raw))
 
 
 def _load_overload(self, sig, target_context):
@@ -52,7 +89,7 @@ def _load_overload(self, sig, target_context):
         return _original(self, sig, target_context)
     _runtime_ready(target_context)
     with self._guard_against_spurious_io_errors():
-        return self._load_overload(sig, target_context)
+        return _load_entry(self, sig, target_context)
 
 
 def install() -> bool:
@@ -69,12 +106,13 @@ def install() -> bool:
     if _original is not None:
         return True
     try:
-        from numba.core.caching import Cache
+        from numba.core.caching import Cache, IndexDataCacheFile
         from numba.core.runtime import rtsys  # noqa: F401
     except ImportError:
         return False
-    needed = ("load_overload", "_load_overload", "_guard_against_spurious_io_errors")
-    if not all(callable(getattr(Cache, name, None)) for name in needed):
+    needed = ("load_overload", "_index_key", "_guard_against_spurious_io_errors")
+    if not all(callable(getattr(Cache, name, None)) for name in needed) or not all(
+            callable(getattr(IndexDataCacheFile, name, None)) for name in ("_load_index", "_data_path")):
         return False
     _original = Cache.load_overload
     Cache.load_overload = _load_overload

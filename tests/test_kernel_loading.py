@@ -1,0 +1,57 @@
+"""Kernels loaded from numba's cache without its compiler set-up (repulsionpak._jit.loading):
+the hash secret's symbols are installed only for machine code that refers to them."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: a kernel that hashes a string, in a module under the package's name (the lean loading
+#: applies to the package's kernels only), and one that does not
+_KERNELS = '''
+from numba import njit
+
+@njit(cache=True)
+def string_hash(s):
+    return hash(s)
+
+@njit(cache=True)
+def plain(x):
+    return x + 1
+'''
+
+#: loads (or, on a cold cache, compiles) the kernels named on the command line and prints
+#: the results, then whether numba's hashing module was imported
+_RUN = '''
+import importlib.util, sys
+from repulsionpak._jit import loading
+loading.install()
+spec = importlib.util.spec_from_file_location("repulsionpak._loading_probe", sys.argv[1])
+mod = importlib.util.module_from_spec(spec)
+sys.modules[spec.name] = mod
+spec.loader.exec_module(mod)
+out = []
+for name in sys.argv[2:]:
+    out.append(mod.string_hash("packing") == hash("packing") if name == "hash" else mod.plain(1))
+print(out, "numba.cpython.hashing" in sys.modules)
+'''
+
+
+def _run(tmp: Path, *names: str) -> str:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp / "cache"), PYTHONPATH=str(ROOT / "src"),
+               PYTHONHASHSEED="0")
+    proc = subprocess.run([sys.executable, "-c", _RUN, str(tmp / "probe.py"), *names],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout.strip().splitlines()[-1]
+
+
+def test_hash_secret_is_installed_only_for_kernels_that_use_it(tmp_path):
+    (tmp_path / "probe.py").write_text(_KERNELS)
+    _run(tmp_path, "hash", "plain")  # compiles both into the cache
+    assert _run(tmp_path, "plain") == "[2] False"  # loaded: no hashing import
+    assert _run(tmp_path, "plain", "hash") == "[2, True] True"  # loaded, with the symbols
