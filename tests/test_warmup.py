@@ -120,6 +120,28 @@ def test_shipped_signatures_are_current():
     assert "contact_query" in names and "window_change" in names
 
 
+def test_signatures_are_read_again_only_when_the_file_changes(tmp_path):
+    import json
+    import os
+
+    from repulsionpak._jit.signatures import SIGNATURES, load_signatures
+
+    path = tmp_path / "signatures.json"
+    data = json.loads(SIGNATURES.read_text(encoding="utf-8"))
+    path.write_text(json.dumps(data), encoding="utf-8")
+    first = load_signatures(path)
+    assert first and load_signatures(path) == first
+    load_signatures(path).clear()  # each answer is the caller's own list
+    assert load_signatures(path) == first
+    data["kernels"][0]["params"][0] = "renamed"
+    path.write_text(json.dumps(data), encoding="utf-8")
+    st = path.stat()
+    os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))  # (a coarse clock: another time)
+    assert load_signatures(path) is None
+    path.unlink()
+    assert load_signatures(path) is None
+
+
 def test_stale_signatures_fall_back_to_recording(tmp_path, monkeypatch):
     import json
 

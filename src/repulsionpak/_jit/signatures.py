@@ -87,6 +87,10 @@ def write_signatures(calls: list, path: Path = SIGNATURES) -> list[dict]:
     return entries
 
 
+#: :func:`load_signatures`' answers, by file and the file's size and modification time
+_loaded: dict[tuple[str, int, int], tuple | None] = {}
+
+
 def load_signatures(path: Path = SIGNATURES) -> list | None:
     """The specialisations recorded in ``path``.
 
@@ -96,7 +100,26 @@ def load_signatures(path: Path = SIGNATURES) -> list | None:
         ``[(dispatcher, argument types), ...]`` (the serial build of a
         :class:`~repulsionpak._jit.kernels.Kernel`); None when the file is missing or does
         not match the kernels (a kernel gone, its parameters changed, a type it cannot read).
+
+    Notes
+    -----
+    Read once per process while the file stays as it is: a run asks several times (whether
+    the parallel builds are cached, at each phase's start and for the warm-up), ~3 ms each.
     """
+    try:
+        st = Path(path).stat()
+    except OSError:
+        return None
+    key = (str(path), st.st_size, st.st_mtime_ns)
+    if key not in _loaded:
+        calls = _read(path)
+        _loaded[key] = None if calls is None else tuple(calls)
+    calls = _loaded[key]
+    return None if calls is None else list(calls)
+
+
+def _read(path: Path) -> list | None:
+    """:func:`load_signatures` from the file itself."""
     try:
         entries = json.loads(Path(path).read_text(encoding="utf-8"))["kernels"]
         calls = []
