@@ -70,76 +70,90 @@ def _pt(p) -> np.ndarray:
     return np.array([float(p[0]), float(p[1])])
 
 
+def _xy(p) -> tuple[float, float]:
+    return (float(p[0]), float(p[1]))
+
+
+def _moved(a: tuple[float, float], b: tuple[float, float]) -> bool:
+    """Whether points ``a`` and ``b`` differ (False when a coordinate is NaN, as
+    ``np.abs(b - a).max() > 0`` says)."""
+    dx, dy = abs(b[0] - a[0]), abs(b[1] - a[1])
+    return (dx > 0 or dy > 0) and dx == dx and dy == dy
+
+
 def segments_to_curves(segments, matrix: np.ndarray | None = None) -> tuple[CurveSubpath, ...]:
     """svgelements segments (local coordinates) -> curve subpaths under ``matrix``.
 
     Zero-length lines are dropped, ``Z`` adds an explicit closing line when the pen is
     away from the start, subpaths without a segment are dropped. Non-finite input gives
     an empty tuple (the flattened outline reports the error).
+
+    Notes
+    -----
+    A traced drawing has thousands of segments: each is kept as a row of 8 Python floats
+    (its 4 control points) and a subpath becomes an array once, at its end.
     """
     import svgelements as se
 
     out: list[CurveSubpath] = []
     order: list[int] = []
-    ctrl: list[np.ndarray] = []
+    rows: list[tuple[float, ...]] = []
     start = cur = None
 
     def flush(closed: bool):
-        nonlocal order, ctrl
+        nonlocal order, rows
         if order:
-            c = np.array(ctrl)
+            c = np.array(rows, dtype=float).reshape(-1, 4, 2)
             if matrix is not None:
                 c = c @ matrix[:2, :2].T + matrix[:2, 2]
             if np.all(np.isfinite(c)):
                 out.append(CurveSubpath(np.array(order), c, closed))
-        order, ctrl = [], []
+        order, rows = [], []
 
-    def add(o: int, pts: np.ndarray):
+    def add(o: int, *pts: tuple[float, float]):
         nonlocal cur
-        row = np.empty((4, 2))
-        row[: o + 1] = pts
-        row[o + 1 :] = pts[-1]
+        end = pts[-1]
+        rows.append((*pts[0], *(pts[1] if o > 1 else end), *(pts[2] if o > 2 else end), *end))
         order.append(o)
-        ctrl.append(row)
-        cur = pts[-1]
+        cur = end
 
     for seg in segments:
         if isinstance(seg, se.Move):
             flush(False)
-            start = cur = None if seg.end is None else _pt(seg.end)
+            start = cur = None if seg.end is None else _xy(seg.end)
             continue
         if isinstance(seg, se.Close):
-            if start is not None and cur is not None and np.abs(cur - start).max() > 0:
-                add(1, np.array([cur, start]))
+            if start is not None and cur is not None and _moved(cur, start):
+                add(1, cur, start)
             flush(True)
             cur = start
             continue
         if getattr(seg, "start", None) is None or seg.end is None:
             continue
-        p0 = _pt(seg.start) if cur is None else cur
+        p0 = _xy(seg.start) if cur is None else cur
         if start is None:
             start = p0
-        end = _pt(seg.end)
+        end = _xy(seg.end)
         if isinstance(seg, se.Linear):
-            if np.abs(end - p0).max() > 0:
-                add(1, np.array([p0, end]))
+            if _moved(p0, end):
+                add(1, p0, end)
         elif isinstance(seg, se.QuadraticBezier):
-            add(2, np.array([p0, _pt(seg.control), end]))
+            add(2, p0, _xy(seg.control), end)
         elif isinstance(seg, se.CubicBezier):
-            add(3, np.array([p0, _pt(seg.control1), _pt(seg.control2), end]))
+            add(3, p0, _xy(seg.control1), _xy(seg.control2), end)
         elif isinstance(seg, se.Arc):
             if seg.center is None or seg.prx is None or seg.pry is None or not seg.sweep:
-                if np.abs(end - p0).max() > 0:
-                    add(1, np.array([p0, end]))
+                if _moved(p0, end):
+                    add(1, p0, end)
                 continue
             c = _pt(seg.center)
             cubics = arc_to_cubics(c, _pt(seg.prx) - c, _pt(seg.pry) - c,
                                    float(seg.get_start_t()), float(seg.sweep))
             cubics[0, 0], cubics[-1, -1] = p0, end
-            for cb in cubics:
-                add(3, cb)
-        elif np.abs(end - p0).max() > 0:
-            add(1, np.array([p0, end]))
+            for cb in cubics.tolist():
+                add(3, *map(tuple, cb))
+        elif _moved(p0, end):
+            add(1, p0, end)
     flush(False)
     return tuple(out)
 
@@ -174,9 +188,34 @@ def _bezier_extrema(ctrl: np.ndarray, order: int) -> np.ndarray:
     return s**3 * p[0] + 3 * s * s * t * p[1] + 3 * s * t * t * p[2] + t**3 * p[3]
 
 
+def _line_ends(ctrl: np.ndarray) -> np.ndarray:
+    """(n, 2, 2): :func:`_bezier_extrema` of n line segments at once (their end points,
+    computed as it computes them, so the same numbers to the bit)."""
+    t = np.array([[0.0], [1.0]])
+    s = 1 - t
+    return s * ctrl[:, None, 0] + t * ctrl[:, None, 1]
+
+
 def curves_bbox(curves) -> tuple[float, float, float, float] | None:
-    """Exact bounding box (x0, y0, x1, y1) of curve subpaths, None when empty."""
-    pts = [_bezier_extrema(c, int(o)) for sp in curves for o, c in zip(sp.order, sp.ctrl)]
+    """Exact bounding box (x0, y0, x1, y1) of curve subpaths, None when empty.
+
+    Notes
+    -----
+    Drawings are mostly lines (a traced animal: ~1,700 of them): their end points are
+    taken a subpath at a time (:func:`_line_ends`), the curves' extrema one by one; the
+    points are gathered in segment order either way.
+    """
+    pts = []
+    for sp in curves:
+        order = np.asarray(sp.order)
+        ctrl = np.asarray(sp.ctrl, dtype=float)
+        line = order == 1
+        ends = _line_ends(ctrl[line]) if line.any() else None
+        if line.all():
+            pts.append(ends.reshape(-1, 2))
+            continue
+        at = np.cumsum(line) - 1  # each line's row in ends
+        pts += [ends[at[k]] if o == 1 else _bezier_extrema(ctrl[k], o) for k, o in enumerate(order.tolist())]
     if not pts:
         return None
     a = np.concatenate(pts)
