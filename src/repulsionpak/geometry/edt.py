@@ -47,7 +47,15 @@ def _envelope_1d(f, n, out, v, z):
 @njit(cache=True)
 def squared_edt(mask):
     """For each True pixel the squared distance (in pixels) to the nearest False pixel;
-    0 on False pixels; ~1e20 everywhere if there is no False pixel."""
+    0 on False pixels; ~1e20 everywhere if there is no False pixel.
+
+    The first pass (along the columns) is the distance to the nearest False pixel of the
+    column, found by one sweep down and one up over the rows, which reads the raster in
+    memory order; a column without a False pixel takes the envelope (:func:`_envelope_1d`)
+    instead. Where the column has a False pixel the envelope gives that same exact
+    integer (its parabolas over False pixels meet at half-integers, and those over True
+    pixels lie ~1e20 higher, beyond the raster), so both ways give the same numbers; the
+    strided sweep of the envelope took half the transform's time."""
     ny, nx = mask.shape
     d = np.empty((ny, nx))
     m = max(nx, ny)
@@ -55,12 +63,31 @@ def squared_edt(mask):
     out = np.empty(m)
     v = np.empty(m, np.int64)
     z = np.empty(m + 1)
-    for i in range(nx):  # columns
-        for j in range(ny):
-            f[j] = _FAR if mask[j, i] else 0.0
-        _envelope_1d(f, ny, out, v, z)
-        for j in range(ny):
-            d[j, i] = out[j]
+    # columns: rows since the last False pixel above (ny + 1: none yet) ...
+    up = np.empty((ny, nx), np.int64)
+    last = np.full(nx, -1, np.int64)
+    for j in range(ny):
+        for i in range(nx):
+            if not mask[j, i]:
+                last[i] = j
+            up[j, i] = j - last[i] if last[i] >= 0 else ny + 1
+    # ... and to the next one below: the nearer of the two, squared
+    nxt = np.full(nx, -1, np.int64)
+    for j in range(ny - 1, -1, -1):
+        for i in range(nx):
+            if not mask[j, i]:
+                nxt[i] = j
+            k = up[j, i]
+            if nxt[i] >= 0 and nxt[i] - j < k:
+                k = nxt[i] - j
+            d[j, i] = k * k
+    for i in range(nx):  # a column without a False pixel
+        if last[i] < 0:
+            for j in range(ny):
+                f[j] = _FAR
+            _envelope_1d(f, ny, out, v, z)
+            for j in range(ny):
+                d[j, i] = out[j]
     for j in range(ny):  # rows
         for i in range(nx):
             f[i] = d[j, i]
