@@ -203,3 +203,16 @@ def test_switching_threads_mid_run_gives_the_same_packing(monkeypatch):
         kernels.set_threads(1)
     np.testing.assert_array_equal(flipped.state.x, one.state.x)
     assert flipped.iterations == one.iterations
+
+
+def test_governor_keeps_threads_while_the_iterations_grow_costlier():
+    # an idle machine, two threads 1.7x faster, and iterations that grow three times as
+    # costly over the first 1,500 (the packing fills; the poster's doubled in 1,000): a
+    # window of two threads soon takes longer than one thread's first window, which is no
+    # reason to leave them
+    def cost(i, threads):
+        grow = 1.0 + 2.0 * min(i, 1500) / 1500
+        return (0.5e-3 if threads == 1 else 0.3e-3) * grow * (5.0 if i % 32 == 0 else 1.0)
+    total, used = _drive(cost, 9000)
+    assert (used == 2).mean() > 0.97
+    assert total < 0.66 * _single(cost, 9000)

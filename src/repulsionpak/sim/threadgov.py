@@ -59,7 +59,10 @@ class ThreadGovernor:
     slow then costs a single iteration, see below) and, after :data:`WARM_UP` iterations
     that are not measured, measures a window, then measures the other count
     for a window, and keeps the faster. On several threads it checks one thread every
-    :data:`CHECK_EVERY` iterations; on one thread it probes several threads after
+    :data:`CHECK_EVERY` iterations, and sooner when a window of them is no faster than
+    one thread's last (a fresh window of one thread then decides: the iterations of a
+    run grow costlier as it fills, so only windows measured side by side compare); on
+    one thread it probes several threads after
     :data:`PROBE_FIRST` iterations, waiting twice as long after each probe that lost, so a
     machine that stays busy costs at most one slow iteration per few thousand. A single
     iteration more than :data:`SPIKE` times slower than the other count's mean ends the
@@ -130,7 +133,12 @@ class ThreadGovernor:
                 self._probe_gap = PROBE_FIRST
             return None
         if self.current > 1 and self.mean[self.n] >= self.mean[1]:
-            return self._switch(1, failed=True)
+            # no faster than one thread was when last measured: measure one thread again
+            # now, and keep the faster of two windows side by side (iterations grow
+            # costlier as the packing fills, so an old window of one thread is no
+            # reference: compared with one from the first iterations, a poster's two
+            # threads, 1.8x faster, fell back to one for ~500 iterations)
+            return self._switch(1, probe=True)
         return None
 
     def _record(self) -> None:
