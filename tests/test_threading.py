@@ -216,3 +216,16 @@ def test_governor_keeps_threads_while_the_iterations_grow_costlier():
     total, used = _drive(cost, 9000)
     assert (used == 2).mean() > 0.97
     assert total < 0.66 * _single(cost, 9000)
+
+
+def test_governor_backs_off_from_threads_a_neighbour_slows_moderately():
+    # idle for 1,500 steps, then a neighbour makes two threads 1.5x slower than one: no
+    # step is a spike, so each window of two threads must lose a side-by-side check, and
+    # the checks come ever more rarely (400, 800, ... 6,400 steps apart): at most five
+    # windows of two threads in the 7,500 steps (168 steps without the back-off)
+    def cost(i, threads):
+        return 0.5e-3 if threads == 1 else (0.3e-3 if i < 1500 else 0.75e-3)
+    total, used = _drive(cost, 9000)
+    after = used[1500:]
+    assert (after == 2).sum() <= 5 * 32
+    assert total < 0.96 * _single(cost, 9000)

@@ -129,8 +129,9 @@ class ThreadGovernor:
             faster = self.n if self.mean[self.n] < GAIN * self.mean[1] else 1
             if faster != self.current:
                 return self._switch(faster, failed=faster == 1)
-            if faster > 1:
-                self._probe_gap = PROBE_FIRST
+            # one thread won its check: the next probe of several waits longer, as after
+            # a probe of several that lost
+            self._probe_gap = PROBE_FIRST if faster > 1 else min(2 * self._probe_gap, PROBE_MAX)
             return None
         if self.current > 1 and self.mean[self.n] >= self.mean[1]:
             # no faster than one thread was when last measured: measure one thread again
