@@ -216,7 +216,10 @@ def test_page_takes_a_folder_and_a_manifest(page, tmp_path):
     # the manifest and its files through "Add SVGs…"
     page.set_input_files("#open-elements", [str(scene / "elements.toml"), str(scene / "shapes" / "apple.svg"),
                                             str(scene / "shapes" / "fish.svg")])
-    page.wait_for_function("window.repulsionpakStudio.state.elements.length === 2")
+    # (the state with both elements and their weights: once, under a loaded CI machine, the
+    # page's state was read with the two elements but no weights yet)
+    page.wait_for_function("window.repulsionpakStudio.state.elements.length === 2"
+                           " && window.repulsionpakStudio.state.weights.length === 2")
     st = page_state(page)
     assert st["weights"] == [2.0, 1.0] and st["own"][1]["rotation"] == "fixed:30"
     assert page.eval_on_selector("#element-list li:nth-child(2) select.own-rotation", "e => e.value") == "fixed"
