@@ -332,3 +332,33 @@ def test_ctrl_c_while_the_command_starts_prints_no_traceback(tmp_path, after):
     lines = [ln for ln in err.splitlines() if not ln.startswith("import time:")]
     if after == "repulsionpak.errors":
         assert lines and lines[-1] == "repulsionpak: interrupted", err[-2000:]
+
+
+def test_a_ctrl_c_swallowed_by_a_callback_still_interrupts(monkeypatch):
+    """A KeyboardInterrupt raised inside a weakref callback (as the import system's module
+    locks run one after every import) is printed and dropped by Python; the console entry
+    point hands it back to the main thread, so the command still stops (``.ci/run`` once
+    printed that traceback when Ctrl-C landed in such a callback during start-up)."""
+    import sys
+    import time
+    import weakref
+
+    from repulsionpak.cli import _interrupts_are_not_lost
+
+    monkeypatch.setattr(sys, "unraisablehook", sys.unraisablehook)  # restored afterwards
+    _interrupts_are_not_lost()
+
+    class Thing:
+        pass
+
+    def callback(_ref):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        thing = Thing()
+        ref = weakref.ref(thing, callback)
+        del thing  # the callback runs here; its interrupt is not raised here...
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline:  # ... but in the main thread soon after
+            time.sleep(0.001)
+    assert ref() is None

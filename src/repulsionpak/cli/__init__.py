@@ -410,8 +410,40 @@ def _fewer_collections() -> None:
     gc.set_threshold(GC_THRESHOLD, g1, g2)
 
 
+def _interrupts_are_not_lost() -> None:
+    """Deliver again a Ctrl-C that Python could not raise where it landed.
+
+    Notes
+    -----
+    A KeyboardInterrupt raised while Python runs a callback it cannot raise from (a weakref
+    callback, such as the import system's module locks dropping after every import, or a
+    ``__del__``) is printed as "Exception ignored in: ..." with a traceback, and the
+    command goes on as if no key had been pressed. Such an interrupt is handed back to the
+    main thread (``_thread.interrupt_main``, as if the signal came again), where it ends
+    the command as any Ctrl-C does. It is sent from another thread, 10 ms later: sent
+    from the hook, it would land in the hook itself, which cannot raise either (and in
+    the unlikely case it lands in a callback again, it comes back here). For the console entry
+    point alone, like :func:`_fewer_collections`: a library leaves the host's hooks alone.
+    """
+    import _thread
+    import threading
+
+    previous = sys.unraisablehook
+
+    def hook(unraisable) -> None:
+        if unraisable.exc_type is not None and issubclass(unraisable.exc_type, KeyboardInterrupt):
+            timer = threading.Timer(0.01, _thread.interrupt_main)
+            timer.daemon = True
+            timer.start()
+            return
+        previous(unraisable)
+
+    sys.unraisablehook = hook
+
+
 def main() -> None:
     """Console entry point: one line per warning or error, the documented exit codes."""
+    _interrupts_are_not_lost()  # first: the imports below can swallow a Ctrl-C
     import warnings
 
     from typer._click.exceptions import ClickException, UsageError  # noqa: PLC0415
