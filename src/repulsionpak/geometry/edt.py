@@ -63,21 +63,20 @@ def squared_edt(mask):
     out = np.empty(m)
     v = np.empty(m, np.int64)
     z = np.empty(m + 1)
-    # columns: rows since the last False pixel above (ny + 1: none yet) ...
-    up = np.empty((ny, nx), np.int64)
+    # columns: rows since the last False pixel above (ny + 1: none yet), in d ...
     last = np.full(nx, -1, np.int64)
     for j in range(ny):
         for i in range(nx):
             if not mask[j, i]:
                 last[i] = j
-            up[j, i] = j - last[i] if last[i] >= 0 else ny + 1
-    # ... and to the next one below: the nearer of the two, squared
+            d[j, i] = j - last[i] if last[i] >= 0 else ny + 1
+    # ... then the nearer of that and the next one below, squared, in place
     nxt = np.full(nx, -1, np.int64)
     for j in range(ny - 1, -1, -1):
         for i in range(nx):
             if not mask[j, i]:
                 nxt[i] = j
-            k = up[j, i]
+            k = d[j, i]
             if nxt[i] >= 0 and nxt[i] - j < k:
                 k = nxt[i] - j
             d[j, i] = k * k
