@@ -1093,7 +1093,7 @@ def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre(
     w = model.anchor_w[i]
     assert w > 0.5
     growth = np.ones(model.n_elements)
-    active = np.flatnonzero(model.is_skin).astype(np.int64)
+    moving = np.ones(model.n_elements, np.bool_)
 
     def normal(p):
         tang = p[s + (i - s + 1) % n] - p[s + (i - s - 1) % n]
@@ -1110,8 +1110,8 @@ def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre(
     start = x.copy()
     for _ in range(12):
         keep_skin_width(x, model.tris, model.anchor_tri, model.anchor_bary, model.anchor_w,
-                        model.ring_sign, active, model.vert_elem, model.elem_vstart,
-                        model.elem_nskin, growth, 0.8, 0.5)
+                        model.ring_sign, moving, model.elem_vstart, model.elem_nskin, growth,
+                        0.8, 0.5)
     assert depth(x) == pytest.approx(0.8 * w, rel=1e-3)  # half the shortfall per call
     e0 = slice(s, int(model.elem_vstart[1]))
     assert np.allclose(x[e0].mean(axis=0), start[e0].mean(axis=0), atol=1e-9)
@@ -1119,8 +1119,8 @@ def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre(
     # at rest nothing moves
     y = state.x.copy()
     assert keep_skin_width(y, model.tris, model.anchor_tri, model.anchor_bary, model.anchor_w,
-                           model.ring_sign, active, model.vert_elem, model.elem_vstart,
-                           model.elem_nskin, growth, 0.8, 0.5) == 0
+                           model.ring_sign, moving, model.elem_vstart, model.elem_nskin, growth,
+                           0.8, 0.5) == 0
     assert np.array_equal(y, state.x)
 
 

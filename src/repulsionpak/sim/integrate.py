@@ -205,13 +205,17 @@ def growth_steps(x, elem_vstart, elem_nskin, moving, nb_count, nb_d2, values, ox
     return n_fast
 
 
-@njit(cache=True)
+@parallel_kernel
 def skin_areas(x, elem_vstart, elem_nskin, moving, out):
     """Area enclosed by each element's skin polygon (shoelace) into ``out`` (M,); returns
-    (sum of all areas, sum over the ``moving`` elements)."""
-    total = 0.0
-    total_moving = 0.0
-    for e in range(elem_nskin.shape[0]):
+    (sum of all areas, sum over the ``moving`` elements).
+
+    Notes
+    -----
+    The elements' areas are computed in parallel, their sums serially in element order:
+    the same totals to the bit on any number of threads (the stopping rule reads them).
+    """
+    for e in prange(elem_nskin.shape[0]):
         s = elem_vstart[e]
         n = elem_nskin[e]
         acc = 0.0
@@ -220,6 +224,9 @@ def skin_areas(x, elem_vstart, elem_nskin, moving, out):
             b = s + (k + 1) % n
             acc += x[a, 0] * x[b, 1] - x[b, 0] * x[a, 1]
         out[e] = 0.5 * abs(acc)
+    total = 0.0
+    total_moving = 0.0
+    for e in range(elem_nskin.shape[0]):
         total += out[e]
         if moving[e]:
             total_moving += out[e]

@@ -186,8 +186,7 @@ class Simulator:
             project_inside(st.x, st.active_all, f.values, f.ox, f.oy, 1.0 / f.h, 0.0)
         if p.skin_width > 0 and m.anchor_tri is not None:
             keep_skin_width(st.x, m.tris, m.anchor_tri, m.anchor_bary, m.anchor_w, m.ring_sign,
-                            st.active_skin, m.vert_elem, m.elem_vstart, m.elem_nskin, st.growth,
-                            p.skin_width, SKIN_RELAX)
+                            st.moving, m.elem_vstart, m.elem_nskin, st.growth, p.skin_width, SKIN_RELAX)
         if m.bend_limit.any():
             limit_deformation(st.x, m.x_rest, m.elem_vstart, st.moving, m.bend_limit, st.inside)
         if m.rot_on is not None:  # designer controls: rotation limits, rigid bodies

@@ -18,7 +18,9 @@ not move: pressure on the skin reaches the element as a whole, as a thick skin's
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
+
+from .._jit.kernels import parallel_kernel
 
 #: the share of a violation corrected per step: half, so that a vertex pressed between
 #: its skin constraint and a neighbour's overlap force does not jump back and forth
@@ -63,26 +65,22 @@ def skin_depths(x, tris, anchor_tri, anchor_bary, ring_sign, vert_elem, elem_vst
         out[i] = max(d, 0.0)
 
 
-@njit(cache=True)
-def keep_skin_width(x, tris, anchor_tri, anchor_bary, anchor_w, ring_sign, active_skin,
-                    vert_elem, elem_vstart, elem_nskin, growth, fraction, relax):
-    """Project every skin vertex in ``active_skin`` to at least ``fraction`` × its rest
-    width (``anchor_w`` × its element's growth) outside its anchor, along the outward
-    normal of its skin ring (:func:`_depth`; ``ring_sign`` per element, +1 for a
-    counter-clockwise ring). ``relax`` of the violation is corrected per call. Returns the
-    number of vertices corrected."""
+@njit(cache=True, inline="always")
+def _keep_element(x, e, tris, anchor_tri, anchor_bary, anchor_w, ring_sign, elem_vstart, elem_nskin,
+                  grown, fraction, relax):
+    """:func:`keep_skin_width` on the skin of element ``e`` (its growth factor ``grown``),
+    vertex by vertex; returns the number of vertices corrected."""
     hits = 0
-    for k in range(active_skin.shape[0]):
-        i = active_skin[k]
+    s = elem_vstart[e]
+    for i in range(s, s + elem_nskin[e]):
         t = anchor_tri[i]
         if t < 0:
             continue
-        e = vert_elem[i]
         depth, nx, ny = _depth(x, i, e, tris, anchor_tri, anchor_bary, ring_sign, elem_vstart, elem_nskin,
                                False)
         if nx == 0.0 and ny == 0.0:
             continue
-        target = fraction * anchor_w[i] * growth[e]
+        target = fraction * anchor_w[i] * grown
         if depth >= target:
             continue
         a = tris[t, 0]
@@ -117,3 +115,32 @@ def keep_skin_width(x, tris, anchor_tri, anchor_bary, anchor_w, ring_sign, activ
         x[c, 1] += lam * cc * ny
         hits += 1
     return hits
+
+
+@parallel_kernel
+def keep_skin_width(x, tris, anchor_tri, anchor_bary, anchor_w, ring_sign, moving,
+                    elem_vstart, elem_nskin, growth, fraction, relax):
+    """Project every skin vertex of the ``moving`` elements to at least ``fraction`` × its
+    rest width (``anchor_w`` × its element's growth) outside its anchor, along the outward
+    normal of its skin ring (:func:`_depth`; ``ring_sign`` per element, +1 for a
+    counter-clockwise ring). ``relax`` of the violation is corrected per call. Returns the
+    number of vertices corrected.
+
+    Notes
+    -----
+    A correction moves the skin vertex and the corners of its anchor triangle, all of its
+    own element, and the next vertex's depth reads them (Gauss–Seidel): the elements are
+    independent of each other, the vertices of one are not. So the elements run in
+    parallel and each one's skin in vertex order, the order of a serial sweep over all
+    skin vertices: the same positions to the bit on any number of threads.
+    """
+    M = elem_nskin.shape[0]
+    fixed = np.zeros(M, np.int64)
+    for e in prange(M):
+        if moving[e]:
+            fixed[e] = _keep_element(x, e, tris, anchor_tri, anchor_bary, anchor_w, ring_sign,
+                                     elem_vstart, elem_nskin, growth[e], fraction, relax)
+    total = 0
+    for e in range(M):  # (a loop: ``ndarray.sum`` would load numba's array maths with the kernel)
+        total += fixed[e]
+    return total
