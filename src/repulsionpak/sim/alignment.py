@@ -18,7 +18,7 @@ votes with its current anisotropy, so round neighbours have no say.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from .._jit.kernels import parallel_kernel
 from .forces import _deep, _field_sample
@@ -32,13 +32,15 @@ ANISOTROPY_FULL = 0.8
 __all__ = ["ANISOTROPY_FULL", "ANISOTROPY_START", "align_weights", "align_torque", "skin_axes"]
 
 
-@njit(cache=True)
+@parallel_kernel
 def skin_axes(x, elem_vstart, elem_nskin, theta, aniso, cx, cy, cos2, sin2):
     """Per element: the direction (radians, in (−π/2, π/2]) of the long axis of its skin
     vertices, their anisotropy in [0, 1] and their centroid, written into ``theta``,
     ``aniso``, ``cx``, ``cy`` (M,); ``cos2``, ``sin2`` get cos 2θ and sin 2θ (each
-    element's vote, computed once rather than at every vertex that sees it)."""
-    for e in range(elem_vstart.shape[0] - 1):
+    element's vote, computed once rather than at every vertex that sees it). The
+    elements run in parallel, each one's sums in vertex order: the same values on any
+    number of threads."""
+    for e in prange(elem_vstart.shape[0] - 1):
         a = elem_vstart[e]
         n = elem_nskin[e]
         mx = 0.0
