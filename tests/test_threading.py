@@ -142,6 +142,23 @@ def test_governor_keeps_the_faster_thread_count_on_an_idle_machine():
     assert total < 0.72 * _single(cost, 9000)
 
 
+def test_governor_does_not_count_the_first_iteration_on_new_threads():
+    # the first iteration on two threads loads their kernels (60 ms, once per run): that is
+    # no spike, and the run keeps the threads that are 1.5x faster from the first probe on
+    base = _steps(one=0.5e-3, many=0.33e-3)
+    first = []
+
+    def cost(i, threads):
+        if threads > 1 and not first:
+            first.append(i)
+            return 60e-3
+        return base(i, threads)
+    total, used = _drive(cost, 3000)
+    assert first and first[0] < 100
+    assert (used[first[0]:] == 2).mean() > 0.95
+    assert total - 60e-3 < 0.75 * _single(base, 3000)
+
+
 def test_governor_leaves_threads_that_are_slower_than_one():
     # TBB's idle crawl: 10 ms an iteration on two threads, 0.4 ms on one
     cost = _steps(one=0.4e-3, many=10e-3)

@@ -27,7 +27,9 @@ WINDOW = 16
 #: times the other count's mean and twice the other's slowest iteration of its window (a
 #: neighbour started, or a probe went badly)
 SPIKE = 5.0
-#: the first iterations of a run, not measured (they build grids and caches)
+#: the first iterations of a run, not measured (they build grids and caches); nor is the
+#: first iteration on a thread count the run has not used before (it loads that count's
+#: builds of the kernels)
 WARM_UP = 4
 #: several threads are kept only when their window's mean is below this share of one thread's
 GAIN = 0.92
@@ -57,7 +59,8 @@ class ThreadGovernor:
     -----
     The run starts on ``start`` threads (one, for an automatic run: a count that turns out
     slow then costs a single iteration, see below) and, after :data:`WARM_UP` iterations
-    that are not measured, measures a window, then measures the other count
+    that are not measured, measures a window, then measures the other count (its first
+    iteration, which loads that count's kernels, not counted)
     for a window, and keeps the faster. On several threads it checks one thread every
     :data:`CHECK_EVERY` iterations, and sooner when a window of them is no faster than
     one thread's last (a fresh window of one thread then decides: the iterations of a
@@ -85,6 +88,7 @@ class ThreadGovernor:
         self._probe_gap = PROBE_FIRST
         self._probing = False
         self._warming = True
+        self._used = {self.current}  # thread counts that have run an iteration
 
     @property
     def active(self) -> bool:
@@ -108,6 +112,13 @@ class ThreadGovernor:
             if len(self._times) >= WARM_UP:
                 self._warming = False
                 self._times.clear()
+            return None
+        if self.current not in self._used:
+            # the first iteration on this count loaded its builds of the kernels (tens of
+            # milliseconds, once per run): neither a measurement nor a spike
+            self._used.add(self.current)
+            self._times.pop()
+            self._since_switch -= 1
             return None
         if ref is not None and dt > max(SPIKE * ref, 2.0 * self.peak[other]):
             # one iteration far slower than the other count: leave now (the neighbour
