@@ -13,7 +13,7 @@ import shapely
 from .controls import any_controls, controls_of, initial_angles, setup_model, weighted_assignment
 from .measure.raster import rasterize
 from .geometry.edt import distance_transform
-from .geometry.pockets import Pockets, fit_scales, outline_samples
+from .geometry.pockets import Pockets, best_fit, outline_samples
 from .params import SecondaryParams
 from .placement import Placement
 from .preprocess import build_template, outline_of
@@ -398,21 +398,35 @@ class _PocketFits:
         return self.done[k]
 
     def _fit(self, k: int) -> tuple[float, float, int]:
+        """Pocket k's copy: of its candidates, the one whose fitted copy covers the most
+        art (the first of equals), at its best angle (the first of equals).
+
+        Notes
+        -----
+        A candidate whose art at its inscribed-circle fit already beats the best before
+        it has every angle fitted (:func:`best_fit`); any other counts only with an
+        angle that fits beyond the smallest winning scale, and the fit stops at once
+        for the candidates that have none — most of them. The same choice as fitting
+        every candidate at every angle (the scales, a step of ``_STEPS`` apart, differ
+        by far more than the 1e-9 within which two count as equal)."""
         pockets, offset = self.pockets, self.offset
         angles = self._angles(k)
         best_area, out = -1.0, (0.0, 0.0, int(self.candidates[k, 0]))
         for i in map(int, self.candidates[k]):
             # the inscribed-circle fit: the circumscribed skin radius equals the distance
             s_round = max(pockets.distance[k] - offset, 0.5 * pockets.distance[k]) / max(self.radius[i], 1e-300)
-            best = (-1.0, 0.0)
-            for a, sc in zip(angles, fit_scales(pockets, self.seeds[k], self.samples[i], angles, offset,
-                                                s_round, _STEPS)):
-                if sc > best[0] * (1.0 + 1e-9):
-                    best = (float(sc), float(a))
-            sc = max(best[0], s_round)
-            if self.art[i] * sc * sc > best_area * (1.0 + 1e-9):
+            to_beat = best_area * (1.0 + 1e-9)
+            above = -1
+            if not self.art[i] * s_round * s_round > to_beat:  # only a fit of more art than the best counts
+                wins = self.art[i] * (s_round * _STEPS) * (s_round * _STEPS) > to_beat
+                above = int(np.argmax(wins)) - 1 if wins.any() else len(_STEPS) - 1
+            a, sc = best_fit(pockets, self.seeds[k], self.samples[i], angles, offset, s_round, _STEPS, above)
+            if a < 0:
+                continue
+            sc = max(sc, s_round)
+            if self.art[i] * sc * sc > to_beat:
                 best_area = self.art[i] * sc * sc
-                out = (best[1], sc, i)
+                out = (float(angles[a]), sc, i)
         return out
 
 

@@ -157,14 +157,17 @@ def _warm_flatten() -> None:
 
 
 def _warm_misfit() -> None:
-    """The pocket fill's fitting kernel (:func:`repulsionpak.geometry.pockets.fit_scales`), between
-    the two simulations."""
-    from .geometry.pockets import Pockets, fit_scales
+    """The fitting kernels of the pocket fill and the size plan
+    (:func:`repulsionpak.geometry.pockets.best_fit`, :func:`~repulsionpak.geometry.pockets.fit_scales`),
+    between the two simulations."""
+    from .geometry.pockets import Pockets, best_fit, fit_scales
 
     none = np.zeros(0, np.int64)
     pockets = Pockets(np.ones((4, 4)), 0.0, 0.0, 1.0, np.zeros(0), none, none)
-    fit_scales(pockets, np.array([2.0, 2.0]), np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([0.0]), 0.5, 1.0,
-               np.array([1.0, 2.0]))
+    args = (pockets, np.array([2.0, 2.0]), np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([0.0]), 0.5, 1.0,
+            np.array([1.0, 2.0]))
+    best_fit(*args)
+    fit_scales(*args)
 
 
 def _arc():

@@ -108,29 +108,86 @@ def fit_scales(pockets: Pockets, seed: np.ndarray, pts: np.ndarray, angles: np.n
 
 
 @njit(cache=True)
+def _misfits(dist, x0, y0, h, sx, sy, q, a, s, offset):  # pragma: no cover - numba
+    """Whether a sample of the turned outline ``q[a]``, scaled by ``s`` and centred on
+    (sx, sy), lies less than ``offset`` from a skin or the boundary on the grid ``dist``
+    (0 off the grid)."""
+    ny, nx = dist.shape
+    for p in range(q.shape[1]):
+        jx = int(np.floor((sx + s * q[a, p, 0] - x0) / h))
+        iy = int(np.floor((sy + s * q[a, p, 1] - y0) / h))
+        d = dist[iy, jx] if 0 <= iy < ny and 0 <= jx < nx else 0.0
+        if not d >= offset:
+            return True
+    return False
+
+
+@njit(cache=True)
 def _first_misfit(dist, x0, y0, h, sx, sy, q, scales, offset):  # pragma: no cover - numba
     """For each turned outline ``q[a]`` (A, n, 2) centred on (sx, sy): the index of the first
     of ``scales`` at which one of its samples lies less than ``offset`` from a skin or the
     boundary on the grid ``dist`` (0 off the grid), or len(scales) when every one fits.
     Each outline stops at its first misfit (the same answer as testing every scale)."""
-    ny, nx = dist.shape
-    n_a, n = q.shape[0], q.shape[1]
+    n_a = q.shape[0]
     out = np.full(n_a, len(scales), np.int64)
     for a in range(n_a):
         for j in range(len(scales)):
-            s = scales[j]
-            misfit = False
-            for p in range(n):
-                jx = int(np.floor((sx + s * q[a, p, 0] - x0) / h))
-                iy = int(np.floor((sy + s * q[a, p, 1] - y0) / h))
-                d = dist[iy, jx] if 0 <= iy < ny and 0 <= jx < nx else 0.0
-                if not d >= offset:
-                    misfit = True
-                    break
-            if misfit:
+            if _misfits(dist, x0, y0, h, sx, sy, q, a, scales[j], offset):
                 out[a] = j
                 break
     return out
 
 
-__all__ = ["Pockets", "fit_scale", "fit_scales", "outline_samples", "turned"]
+@njit(cache=True)
+def _best_misfit(dist, x0, y0, h, sx, sy, q, scales, offset, above):  # pragma: no cover - numba
+    """(a, f): the first turned outline ``q[a]`` whose fit index f (one below its first
+    misfit, :func:`_first_misfit`, at least 0) is the largest of all and above ``above``;
+    (-1, above) when none is. An outline after the best so far (fit index b) counts only
+    if it fits at every scale up to b + 1: those are tried first, the largest first, and
+    the first misfit among them drops it; only a new best is fitted on upwards."""
+    m = len(scales)
+    best_a, best_f = -1, above
+    for a in range(q.shape[0]):
+        if best_f >= m - 1:  # a fit at every scale: nothing after it is larger
+            break
+        start = 0
+        if best_f >= 0:
+            beaten = True
+            for j in range(best_f + 1, -1, -1):
+                if _misfits(dist, x0, y0, h, sx, sy, q, a, scales[j], offset):
+                    beaten = False
+                    break
+            if not beaten:
+                continue
+            start = best_f + 2
+        first = m
+        for j in range(start, m):
+            if _misfits(dist, x0, y0, h, sx, sy, q, a, scales[j], offset):
+                first = j
+                break
+        best_a, best_f = a, max(first - 1, 0)
+    return best_a, best_f
+
+
+def best_fit(pockets: Pockets, seed: np.ndarray, pts: np.ndarray, angles: np.ndarray, offset: float,
+             s0: float, steps: np.ndarray, above: int = -1) -> tuple[int, float]:
+    """The first of ``angles`` whose :func:`fit_scales` is the largest, and that scale:
+    ``(a, fit_scales(...)[a])`` for ``a`` its first maximum — or (-1, nan) when no fit
+    is above ``s0 · steps[above]`` (``above`` -1: any fit counts).
+
+    Notes
+    -----
+    The pocket fill keeps, of each element, its best angle only, and of the elements of
+    a pocket the one with the most art: an angle can only matter if it fits at every
+    scale up to one step beyond the best before it, and a fit at the step beyond is
+    tried first and mostly fails at once. On the 1,000-element poster's pockets most
+    angles and most candidate elements are so dropped after a few lookups
+    (``tests/test_pockets.py`` checks the answers against :func:`fit_scales`)."""
+    q = turned(pts, angles)
+    scales = s0 * np.asarray(steps, dtype=float)
+    a, f = _best_misfit(pockets.dist, pockets.x0, pockets.y0, pockets.h, float(seed[0]), float(seed[1]),
+                        np.ascontiguousarray(q), scales, float(offset), int(above))
+    return (int(a), float(scales[f])) if a >= 0 else (-1, float("nan"))
+
+
+__all__ = ["Pockets", "best_fit", "fit_scale", "fit_scales", "outline_samples", "turned"]
