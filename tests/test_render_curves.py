@@ -94,6 +94,62 @@ def test_reader_keeps_curves_that_match_the_flattened_outline(tmp_path):
         assert d < 0.2  # the reader's flattening tolerance (1e-3 of the diagonal)
 
 
+def _flattened_by_numpy(sub, tol):
+    """flatten_subpath's points (the kernel's arithmetic, in numpy) with the repeated ones
+    dropped by numpy steps."""
+    pts = [sub.ctrl[0, 0][None]]
+    for c, o in zip(sub.ctrl, sub.order.tolist()):
+        hyp = [math.hypot(c[k, 0] - 2 * c[k + 1, 0] + c[k + 2, 0], c[k, 1] - 2 * c[k + 1, 1] + c[k + 2, 1])
+               for k in range(2)]
+        bound = {1: 0.0, 2: 2.0 * hyp[0], 3: 6.0 * max(hyp[0], hyp[1])}[o]
+        m = max(1, min(4096, int(math.ceil(math.sqrt(bound / (8.0 * tol)))))) if bound > 0 else 1
+        t = np.arange(1, m + 1) / m
+        s = 1.0 - t
+        xy = []
+        for d in range(2):
+            if o == 1:
+                xy.append(s * c[0, d] + t * c[1, d])
+            elif o == 2:
+                xy.append(s * s * c[0, d] + 2 * s * t * c[1, d] + t * t * c[2, d])
+            else:
+                xy.append(s * s * s * c[0, d] + 3 * s * s * t * c[1, d] + 3 * s * t * t * c[2, d] + t * t * t * c[3, d])
+        pts.append(np.column_stack(xy))
+    out = np.concatenate(pts)
+    eps = 1e-12 * (1.0 + float(np.abs(out).max()))
+    out = out[np.concatenate([[True], np.abs(np.diff(out, axis=0)).max(axis=1) > eps])]
+    if sub.closed and len(out) > 2 and np.abs(out[-1] - out[0]).max() <= eps:
+        out = out[:-1]
+    return out
+
+
+def test_flatten_drops_the_repeated_points_as_numpy_steps_would():
+    """The kernel's own dropping of repeated points (and of a closing point) keeps the
+    points numpy's steps keep, also with segments of zero length and with NaN."""
+    rng = np.random.default_rng(3)
+    for _ in range(3000):
+        n = int(rng.integers(1, 6))
+        order = rng.integers(1, 4, n).astype(np.int8)
+        ctrl = rng.normal(size=(n, 4, 2)) * rng.uniform(0.001, 100.0)
+        if rng.random() < 0.3:
+            ctrl = np.round(ctrl, 1)
+            ctrl[rng.integers(n)] = ctrl[0, 0]  # a segment of zero length
+        if rng.random() < 0.05:
+            ctrl.flat[rng.integers(ctrl.size)] = np.nan
+        for k in range(1, n):
+            ctrl[k, 0] = ctrl[k - 1, order[k - 1]]
+        closed = bool(rng.random() < 0.5)
+        if closed and rng.random() < 0.5:
+            ctrl[-1, order[-1]:] = ctrl[0, 0]
+        for k in range(n):
+            ctrl[k, order[k] + 1:] = ctrl[k, order[k]]
+        sub = CurveSubpath(order, ctrl, closed)
+        tol = float(rng.choice([1e-3, 0.1, 10.0]))
+        with np.errstate(all="ignore"):
+            want = _flattened_by_numpy(sub, tol)
+            got = flatten_subpath(sub, tol)
+        assert got.shape == want.shape and np.array_equal(got, want, equal_nan=True)
+
+
 def test_circle_and_rect_markup_and_curves(tmp_path):
     disc = _element(tmp_path, DISC, "disc.svg").paths[0].source
     assert disc.tag == "circle" and dict(disc.attrs)["r"] == "45"

@@ -49,8 +49,9 @@ def bezier_deriv(ctrl: np.ndarray, order: int, t: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _flatten(order, ctrl, tol):
-    """Points of every segment, uniform pieces with chord error <= tol (h²/8 · max|B''|)."""
+def _flatten(order, ctrl, tol, closed):
+    """Points of every segment, uniform pieces with chord error <= tol (h²/8 · max|B''|),
+    without repeated points (:func:`_distinct`)."""
     n = len(order)
     counts = np.ones(n, np.int64)
     for k in range(n):
@@ -86,18 +87,66 @@ def _flatten(order, ctrl, tol):
                 y = s * s * s * c[0, 1] + 3 * s * s * t * c[1, 1] + 3 * s * t * t * c[2, 1] + t * t * t * c[3, 1]
             out[j, 0], out[j, 1] = x, y
             j += 1
-    return out
+    return _distinct(out, closed)
+
+
+@njit(cache=True)
+def _apart(dx, dy, eps):
+    """``max(|dx|, |dy|) > eps`` as numpy takes it: a NaN makes the maximum NaN, and no
+    comparison with a NaN holds."""
+    if math.isnan(dx) or math.isnan(dy):
+        return False
+    return max(abs(dx), abs(dy)) > eps
+
+
+@njit(cache=True)
+def _within(dx, dy, eps):
+    """``max(|dx|, |dy|) <= eps`` as numpy takes it (see :func:`_apart`)."""
+    if math.isnan(dx) or math.isnan(dy):
+        return False
+    return max(abs(dx), abs(dy)) <= eps
+
+
+@njit(cache=True)
+def _distinct(out, closed):
+    """``out`` (K, 2) without the points within eps = 1e-12 · (1 + max |coordinate|) of the
+    one before them in x and y, nor, ``closed``, a last point so close to the first (when
+    more than two are left); a new array. The coordinates' maximum as numpy's (NaN if
+    any is): no point is then kept after the first."""
+    top = 0.0
+    for v in out.ravel():
+        if math.isnan(v) or abs(v) > top:
+            top = abs(v)
+            if math.isnan(v):
+                break
+    eps = 1e-12 * (1.0 + top)
+    keep = np.empty(len(out), np.bool_)
+    n = 0
+    for i in range(len(out)):
+        keep[i] = i == 0 or _apart(out[i, 0] - out[i - 1, 0], out[i, 1] - out[i - 1, 1], eps)
+        if keep[i]:
+            n += 1
+    res = np.empty((n, 2))
+    k = 0
+    for i in range(len(out)):
+        if keep[i]:
+            res[k, 0], res[k, 1] = out[i, 0], out[i, 1]
+            k += 1
+    if closed and n > 2 and _within(res[n - 1, 0] - res[0, 0], res[n - 1, 1] - res[0, 1], eps):
+        res = res[:n - 1].copy()
+    return res
 
 
 def flatten_subpath(sub: CurveSubpath, tol: float) -> np.ndarray:
-    """Polyline (K, 2) within ``tol`` of the curves; no repeated points or closing point."""
-    out = _flatten(sub.order.astype(np.int64), np.ascontiguousarray(sub.ctrl), float(tol))
-    eps = 1e-12 * (1.0 + float(np.abs(out).max()))
-    if len(out) > 1:
-        out = out[np.concatenate([[True], np.abs(np.diff(out, axis=0)).max(axis=1) > eps])]
-    if sub.closed and len(out) > 2 and np.abs(out[-1] - out[0]).max() <= eps:
-        out = out[:-1]
-    return out
+    """Polyline (K, 2) within ``tol`` of the curves; no repeated points or closing point.
+
+    Notes
+    -----
+    One kernel call flattens and drops the repeated points: the writer flattens every
+    written subpath (a 1,000-element poster: 40,000), and the numpy steps of the
+    dropping cost four times the flattening itself. The same points
+    (``tests/test_render_curves.py``)."""
+    return _flatten(sub.order.astype(np.int64), np.ascontiguousarray(sub.ctrl), float(tol), bool(sub.closed))
 
 
 def decimals_for(tol: float) -> int:
