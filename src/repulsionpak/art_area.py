@@ -50,39 +50,71 @@ def _signed_area(pts: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.concatenate((y[1:], y[:1]))) - np.dot(np.concatenate((x[1:], x[:1])), y))
 
 
-def _subpath_polygon(pts: np.ndarray, method: str) -> shapely.Geometry:
-    """The (implicitly closed) subpath as a valid polygonal geometry (maybe empty)."""
+def _ring_points(pts: np.ndarray) -> np.ndarray | None:
+    """The finite points of a subpath without a repeated closing point; None when fewer
+    than three are left (no area)."""
     pts = np.asarray(pts, dtype=float)
     pts = pts[np.all(np.isfinite(pts), axis=1)]
     if len(pts) >= 2 and np.array_equal(pts[0], pts[-1]):
         pts = pts[:-1]
-    if len(pts) < 3:
-        return Polygon()
-    poly = Polygon(pts)
-    if not poly.is_valid:
-        try:
-            if method == "structure":
-                poly = shapely.make_valid(poly, method="structure", keep_collapsed=False)
-            else:
-                poly = shapely.make_valid(poly)
-        except TypeError:  # pragma: no cover - old shapely without the method argument
+    return pts if len(pts) >= 3 else None
+
+
+def _repaired(poly, method: str) -> shapely.Geometry:
+    """The invalid polygon ``poly`` made valid as its fill rule splits it (``method``:
+    ``structure`` for nonzero, ``linework`` for evenodd), polygonal."""
+    try:
+        if method == "structure":
+            poly = shapely.make_valid(poly, method="structure", keep_collapsed=False)
+        else:
             poly = shapely.make_valid(poly)
+    except TypeError:  # pragma: no cover - old shapely without the method argument
+        poly = shapely.make_valid(poly)
     return _polygonal(poly)
 
 
-def _fill_geometry(path) -> shapely.Geometry:
-    """Area painted by the fill of ``path`` following its fill rule."""
+def _subpath_polygon(pts: np.ndarray, method: str) -> shapely.Geometry:
+    """The (implicitly closed) subpath as a valid polygonal geometry (maybe empty)."""
+    return _subpath_polygons([pts], [method])[0]
+
+
+def _subpath_polygons(subpaths: Sequence[np.ndarray], methods: Sequence[str]) -> list:
+    """:func:`_subpath_polygon` of each of ``subpaths`` (with its ``methods``): the
+    polygons built and checked all at once, the invalid ones repaired one by one.
+
+    Notes
+    -----
+    A copy's art is a few dozen subpaths, and a packing measures thousands of copies:
+    one shapely ``Polygon`` and two validity checks per subpath cost more than the union
+    of the copy's fills (a 1,000-element poster: 41,000 subpaths, 1.5 s). The rings are
+    the same coordinates, closed the same way, so the polygons are the same."""
+    rings = [_ring_points(p) for p in subpaths]
+    out = [Polygon()] * len(rings)
+    full = [k for k, r in enumerate(rings) if r is not None]
+    if not full:
+        return out
+    counts = [len(rings[k]) for k in full]
+    polys = shapely.polygons(shapely.linearrings(np.concatenate([rings[k] for k in full]),
+                                                 indices=np.repeat(np.arange(len(full)), counts)))
+    for k, poly, valid in zip(full, polys, shapely.is_valid(polys)):
+        out[k] = poly if valid else _repaired(poly, methods[k])
+    return out
+
+
+def _fill_geometry(path, polys: Sequence | None = None) -> shapely.Geometry:
+    """Area painted by the fill of ``path`` following its fill rule; ``polys``: its
+    subpaths' polygons (:func:`_subpath_polygons`), when known."""
     evenodd = path.style.fill_rule == "evenodd"
-    polys, signs, pts_list = [], [], []
-    for pts in path.subpaths:
-        # A self-intersecting subpath is split like its own fill rule would: evenodd ->
-        # "linework" (alternating), nonzero -> "structure" (union of the loops).
-        poly = _subpath_polygon(pts, "linework" if evenodd else "structure")
+    if polys is None:
+        polys = _subpath_polygons(path.subpaths, [_fill_method(path)] * len(path.subpaths))
+    kept, signs, pts_list = [], [], []
+    for pts, poly in zip(path.subpaths, polys):
         if poly.is_empty or poly.area <= 0:
             continue
-        polys.append(poly)
+        kept.append(poly)
         signs.append(1 if _signed_area(np.asarray(pts, dtype=float)) >= 0 else -1)
         pts_list.append(pts)
+    polys = kept
     if not polys:
         return Polygon()
     if evenodd:
@@ -111,6 +143,13 @@ def _fill_geometry(path) -> shapely.Geometry:
         inside &= areas < areas[j]
         winding[inside] += signs[j]
     return _polygonal(_compose(polys, order, winding != 0))
+
+
+def _fill_method(path) -> str:
+    """How a self-intersecting subpath of ``path`` is split (:func:`_repaired`): as its
+    fill rule would (evenodd: ``linework``, alternating; nonzero: ``structure``, the
+    union of the loops)."""
+    return "linework" if path.style.fill_rule == "evenodd" else "structure"
 
 
 def _compose(polys: list, order: np.ndarray, fill: np.ndarray) -> shapely.Geometry:
@@ -182,6 +221,13 @@ def _stroke_geometry(path, width: float) -> shapely.Geometry:
     return _polygonal(shapely.union_all(parts))
 
 
+def _filled(path) -> bool:
+    """Whether ``path``'s fill shows (not fully transparent, with a fill of non-zero
+    opacity)."""
+    st = path.style
+    return not st.opacity <= 0 and st.fill is not None and st.fill_opacity > 0
+
+
 def art_area(paths: Sequence, stroke_scale: float = 1.0) -> shapely.Geometry:
     """The area covered by ``paths`` (valid, polygonal, maybe empty).
 
@@ -197,13 +243,16 @@ def art_area(paths: Sequence, stroke_scale: float = 1.0) -> shapely.Geometry:
       (and miter limit); closed subpaths have no caps; dashes are ignored (the
       stroke counts as solid: its gaps are not space for other art).
     """
+    filled = [p for p in paths if _filled(p)]
+    polys = iter(_subpath_polygons([q for p in filled for q in p.subpaths],
+                                   [_fill_method(p) for p in filled for _ in p.subpaths]))
     parts = []
     for path in paths:
         st = path.style
         if st.opacity <= 0:
             continue
-        if st.fill is not None and st.fill_opacity > 0:
-            g = _fill_geometry(path)
+        if _filled(path):
+            g = _fill_geometry(path, [next(polys) for _ in path.subpaths])
             if not g.is_empty:
                 parts.append(g)
         width = float(st.stroke_width) * float(stroke_scale)
