@@ -104,6 +104,11 @@ class ThreadGovernor:
             return None
         dt = self.clock() - self._t0
         self._t0 = None
+        if self.current not in self._used:
+            # the first iteration on this count loaded its builds of the kernels (tens of
+            # milliseconds, once per run): neither a measurement nor a spike
+            self._used.add(self.current)
+            return None
         self._times.append(dt)
         self._since_switch += 1
         other = 1 if self.current > 1 else self.n
@@ -112,13 +117,6 @@ class ThreadGovernor:
             if len(self._times) >= WARM_UP:
                 self._warming = False
                 self._times.clear()
-            return None
-        if self.current not in self._used:
-            # the first iteration on this count loaded its builds of the kernels (tens of
-            # milliseconds, once per run): neither a measurement nor a spike
-            self._used.add(self.current)
-            self._times.pop()
-            self._since_switch -= 1
             return None
         if ref is not None and dt > max(SPIKE * ref, 2.0 * self.peak[other]):
             # one iteration far slower than the other count: leave now (the neighbour
