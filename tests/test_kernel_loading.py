@@ -55,3 +55,56 @@ def test_hash_secret_is_installed_only_for_kernels_that_use_it(tmp_path):
     _run(tmp_path, "hash", "plain")  # compiles both into the cache
     assert _run(tmp_path, "plain") == "[2] False"  # loaded: no hashing import
     assert _run(tmp_path, "plain", "hash") == "[2, True] True"  # loaded, with the symbols
+
+
+
+#: three kernels like ``plain``: the first call loads the runtime, the second is loaded as
+#: the package loads, the third with llvmlite's lock callbacks left in place
+_THREE = _KERNELS + '''
+
+@njit(cache=True)
+def plain2(x):
+    return x + 2
+
+@njit(cache=True)
+def plain3(x):
+    return x + 3
+'''
+
+#: calls into LLVM (the lock's callbacks) while each of ``plain2`` and ``plain3`` loads;
+#: then whether the lock's callbacks are as they were
+_QUIET = '''
+import contextlib, importlib.util, sys
+from llvmlite.binding import ffi
+from repulsionpak._jit import loading
+loading.install()
+spec = importlib.util.spec_from_file_location("repulsionpak._loading_probe", sys.argv[1])
+mod = importlib.util.module_from_spec(spec)
+sys.modules[spec.name] = mod
+spec.loader.exec_module(mod)
+assert mod.plain(1) == 2  # (numba's runtime set up)
+seen = []
+def count():
+    seen.append(1)
+ffi.register_lock_callback(count, count)
+before = list(ffi.lib._lock._cblist)
+assert mod.plain2(1) == 3
+quiet = len(seen)
+loading._quiet_llvm_lock = contextlib.nullcontext
+assert mod.plain3(1) == 4
+print(quiet, len(seen) - quiet, ffi.lib._lock._cblist == before)
+'''
+
+
+def test_loading_a_cached_kernel_skips_the_lock_callbacks_and_restores_them(tmp_path):
+    (tmp_path / "probe.py").write_text(_THREE)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT / "src"))
+    for _ in range(2):  # compiles the kernels into the cache, then loads them
+        proc = subprocess.run([sys.executable, "-c", _QUIET, str(tmp_path / "probe.py")],
+                              capture_output=True, text=True, env=env, timeout=300)
+        assert proc.returncode == 0, proc.stderr
+    quiet, loud, restored = proc.stdout.split()
+    # the rebuild's calls into LLVM (most of a load's) no longer run the callbacks; the
+    # dispatcher's own calls around it still do, and the callbacks are back afterwards
+    assert int(quiet) < int(loud) / 3, (quiet, loud)
+    assert restored == "True"

@@ -34,6 +34,7 @@ only when the entry names the symbols (:func:`_needs_hash_secret`).
 
 from __future__ import annotations
 
+import contextlib
 import pickle
 import sys
 
@@ -79,7 +80,37 @@ def _load_entry(cache, sig, target_context):
         return None
     if _needs_hash_secret(raw):
         import numba.cpython.hashing  # noqa: F401  (installs the symbols)
-    return cache._impl.rebuild(target_context, pickle.loads(raw))
+    with _quiet_llvm_lock():
+        return cache._impl.rebuild(target_context, pickle.loads(raw))
+
+
+@contextlib.contextmanager
+def _quiet_llvm_lock():
+    """llvmlite's lock without the callbacks numba registers on it (for the duration of a
+    load): every call into LLVM takes that lock, and numba's callbacks broadcast a start
+    and an end event through its event system each time. Rebuilding a cached kernel makes
+    ~180 such calls (reading the kernel's module, listing the symbols it defines); the
+    events cost ~3 µs a call, a fifth of the loading (no listener waits for them here:
+    they time compilations, and nothing is compiled)."""
+    lock = getattr(getattr(_ffi(), "lib", None), "_lock", None)
+    callbacks = getattr(lock, "_cblist", None)
+    if not isinstance(callbacks, list) or not callbacks:
+        yield
+        return
+    lock._cblist = []
+    try:
+        yield
+    finally:
+        lock._cblist = callbacks
+
+
+def _ffi():
+    """``llvmlite.binding.ffi`` (None without it)."""
+    try:
+        from llvmlite.binding import ffi
+    except ImportError:  # pragma: no cover - numba requires llvmlite
+        return None
+    return ffi
 
 
 def _load_overload(self, sig, target_context):
