@@ -57,7 +57,6 @@ def test_hash_secret_is_installed_only_for_kernels_that_use_it(tmp_path):
     assert _run(tmp_path, "plain", "hash") == "[2, True] True"  # loaded, with the symbols
 
 
-
 #: three kernels like ``plain``: the first call loads the runtime, the second is loaded as
 #: the package loads, the third with llvmlite's lock callbacks left in place
 _THREE = _KERNELS + '''

@@ -89,9 +89,9 @@ def _quiet_llvm_lock():
     """llvmlite's lock without the callbacks numba registers on it (for the duration of a
     load): every call into LLVM takes that lock, and numba's callbacks broadcast a start
     and an end event through its event system each time. Rebuilding a cached kernel makes
-    ~180 such calls (reading the kernel's module, listing the symbols it defines); the
-    events cost ~3 µs a call, a fifth of the loading (no listener waits for them here:
-    they time compilations, and nothing is compiled)."""
+    150–180 such calls (reading the kernel's module, listing the symbols it defines); the
+    events cost a few µs a call, about a seventh of the loading (no listener waits for
+    them here: they time compilations, and nothing is compiled)."""
     lock = getattr(getattr(_ffi(), "lib", None), "_lock", None)
     callbacks = getattr(lock, "_cblist", None)
     if not isinstance(callbacks, list) or not callbacks:
