@@ -24,9 +24,9 @@ def plain(x):
     return x + 1
 '''
 
-#: loads (or, on a cold cache, compiles) the kernels named on the command line and prints
-#: the results, then whether numba's hashing module was imported
-_RUN = '''
+#: a child's start: the lean loading in place, the kernels' module (``sys.argv[1]``) imported
+#: as ``mod`` under the package's name
+_IMPORT_PROBE = '''
 import importlib.util, sys
 from repulsionpak._jit import loading
 loading.install()
@@ -34,6 +34,11 @@ spec = importlib.util.spec_from_file_location("repulsionpak._loading_probe", sys
 mod = importlib.util.module_from_spec(spec)
 sys.modules[spec.name] = mod
 spec.loader.exec_module(mod)
+'''
+
+#: loads (or, on a cold cache, compiles) the kernels named on the command line and prints
+#: the results, then whether numba's hashing module was imported
+_RUN = _IMPORT_PROBE + '''
 out = []
 for name in sys.argv[2:]:
     out.append(mod.string_hash("packing") == hash("packing") if name == "hash" else mod.plain(1))
@@ -59,28 +64,13 @@ def test_hash_secret_is_installed_only_for_kernels_that_use_it(tmp_path):
 
 #: three kernels like ``plain``: the first call loads the runtime, the second is loaded as
 #: the package loads, the third with llvmlite's lock callbacks left in place
-_THREE = _KERNELS + '''
-
-@njit(cache=True)
-def plain2(x):
-    return x + 2
-
-@njit(cache=True)
-def plain3(x):
-    return x + 3
-'''
+_THREE = _KERNELS + "".join(f"\n@njit(cache=True)\ndef plain{k}(x):\n    return x + {k}\n" for k in (2, 3))
 
 #: calls into LLVM (the lock's callbacks) while each of ``plain2`` and ``plain3`` loads;
 #: then whether the lock's callbacks are as they were
-_QUIET = '''
-import contextlib, importlib.util, sys
+_QUIET = _IMPORT_PROBE + '''
+import contextlib
 from llvmlite.binding import ffi
-from repulsionpak._jit import loading
-loading.install()
-spec = importlib.util.spec_from_file_location("repulsionpak._loading_probe", sys.argv[1])
-mod = importlib.util.module_from_spec(spec)
-sys.modules[spec.name] = mod
-spec.loader.exec_module(mod)
 assert mod.plain(1) == 2  # (numba's runtime set up)
 seen = []
 def count():
