@@ -73,14 +73,10 @@ def _repaired(poly, method: str) -> shapely.Geometry:
     return _polygonal(poly)
 
 
-def _subpath_polygon(pts: np.ndarray, method: str) -> shapely.Geometry:
-    """The (implicitly closed) subpath as a valid polygonal geometry (maybe empty)."""
-    return _subpath_polygons([pts], [method])[0]
-
-
 def _subpath_polygons(subpaths: Sequence[np.ndarray], methods: Sequence[str]) -> list:
-    """:func:`_subpath_polygon` of each of ``subpaths`` (with its ``methods``): the
-    polygons built and checked all at once, the invalid ones repaired one by one.
+    """Each (implicitly closed) subpath of ``subpaths`` as a valid polygonal geometry
+    (maybe empty; an invalid one split by :func:`_repaired` with its ``methods`` entry):
+    the polygons built and checked all at once, the invalid ones repaired one by one.
 
     Notes
     -----

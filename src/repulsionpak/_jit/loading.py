@@ -92,7 +92,9 @@ def _quiet_llvm_lock():
     150–180 such calls (reading the kernel's module, listing the symbols it defines); the
     events cost a few µs a call, about a seventh of the loading (no listener waits for
     them here: they time compilations, and nothing is compiled)."""
-    lock = getattr(getattr(_ffi(), "lib", None), "_lock", None)
+    from llvmlite.binding import ffi  # (numba's own dependency)
+
+    lock = getattr(getattr(ffi, "lib", None), "_lock", None)
     callbacks = getattr(lock, "_cblist", None)
     if not isinstance(callbacks, list) or not callbacks:
         yield
@@ -102,15 +104,6 @@ def _quiet_llvm_lock():
         yield
     finally:
         lock._cblist = callbacks
-
-
-def _ffi():
-    """``llvmlite.binding.ffi`` (None without it)."""
-    try:
-        from llvmlite.binding import ffi
-    except ImportError:  # pragma: no cover - numba requires llvmlite
-        return None
-    return ffi
 
 
 def _load_overload(self, sig, target_context):

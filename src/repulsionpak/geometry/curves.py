@@ -91,20 +91,12 @@ def _flatten(order, ctrl, tol, closed):
 
 
 @njit(cache=True)
-def _apart(dx, dy, eps):
-    """``max(|dx|, |dy|) > eps`` as numpy takes it: a NaN makes the maximum NaN, and no
-    comparison with a NaN holds."""
+def _chebyshev(dx, dy):
+    """``max(|dx|, |dy|)`` as numpy takes it: NaN if either is (Python's ``max`` would
+    drop it), so that no comparison with it holds."""
     if math.isnan(dx) or math.isnan(dy):
-        return False
-    return max(abs(dx), abs(dy)) > eps
-
-
-@njit(cache=True)
-def _within(dx, dy, eps):
-    """``max(|dx|, |dy|) <= eps`` as numpy takes it (see :func:`_apart`)."""
-    if math.isnan(dx) or math.isnan(dy):
-        return False
-    return max(abs(dx), abs(dy)) <= eps
+        return math.nan
+    return max(abs(dx), abs(dy))
 
 
 @njit(cache=True)
@@ -123,7 +115,7 @@ def _distinct(out, closed):
     keep = np.empty(len(out), np.bool_)
     n = 0
     for i in range(len(out)):
-        keep[i] = i == 0 or _apart(out[i, 0] - out[i - 1, 0], out[i, 1] - out[i - 1, 1], eps)
+        keep[i] = i == 0 or _chebyshev(out[i, 0] - out[i - 1, 0], out[i, 1] - out[i - 1, 1]) > eps
         if keep[i]:
             n += 1
     res = np.empty((n, 2))
@@ -132,7 +124,7 @@ def _distinct(out, closed):
         if keep[i]:
             res[k, 0], res[k, 1] = out[i, 0], out[i, 1]
             k += 1
-    if closed and n > 2 and _within(res[n - 1, 0] - res[0, 0], res[n - 1, 1] - res[0, 1], eps):
+    if closed and n > 2 and _chebyshev(res[n - 1, 0] - res[0, 0], res[n - 1, 1] - res[0, 1]) <= eps:
         res = res[:n - 1].copy()
     return res
 
