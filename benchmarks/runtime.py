@@ -171,9 +171,49 @@ def bench_poster(count: int = 1000) -> None:
     print("stages: " + ", ".join(f"{k} {v:.1f} s" for k, v in rep["seconds"].items()))
 
 
+#: packs the heart in this process and prints the kernels made ready (numba's dispatchers
+#: compile or load on a first call with new types) and the seconds that took
+_LOADING = """
+import sys, time
+import numba.core.dispatcher as D
+import repulsionpak
+from repulsionpak.params import Params
+spent = [0.0, 0]
+first_call = D.Dispatcher._compile_for_args
+def timed(self, *a, **k):
+    t = time.perf_counter()
+    try:
+        return first_call(self, *a, **k)
+    finally:
+        spent[0] += time.perf_counter() - t
+        spent[1] += 1
+D.Dispatcher._compile_for_args = timed
+repulsionpak.pack(sys.argv[1], [sys.argv[2]], Params(seed=1, gap=5.2))
+print(spent[1], spent[0])
+"""
+
+
+def bench_loading(runs: int = 3) -> None:
+    """Seconds spent making the kernels ready over a default heart run, each run a fresh
+    process (the kernels loaded from numba's warm cache)."""
+    compiled_bytecode()
+    seconds, kernels = [], 0
+    for r in range(runs):
+        out = subprocess.run([sys.executable, "-c", _LOADING, str(HEART), str(ANIMALS)], check=True,
+                             capture_output=True, text=True).stdout.split()
+        kernels, s = int(out[-2]), float(out[-1])
+        seconds.append(s)
+        print(f"run {r + 1}: {kernels} kernels ready in {s:.3f} s", file=sys.stderr)
+    print(f"machine: {machine()}")
+    print("| scene | kernels | seconds to make them ready (median; all runs) |")
+    print("|---|---:|---|")
+    print(f"| heart + 9 animals, gap 5.2, default settings | {kernels} | {_median(seconds):.3f} "
+          f"({', '.join(f'{s:.3f}' for s in seconds)}) |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("what", choices=["cpp", "neighbour", "poster"])
+    ap.add_argument("what", choices=["cpp", "neighbour", "poster", "loading"])
     ap.add_argument("--cpp-dir", type=Path, help="the C++ build folder (build.sh OUTDIR)")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--count", type=int, default=1000)
@@ -184,6 +224,8 @@ def main() -> None:
         bench_cpp(a.cpp_dir.resolve(), a.runs)
     elif a.what == "neighbour":
         bench_neighbour(a.runs)
+    elif a.what == "loading":
+        bench_loading(a.runs)
     else:
         bench_poster(a.count)
 
