@@ -90,7 +90,7 @@ def _quiet_llvm_lock():
     load): every call into LLVM takes that lock, and numba's callbacks broadcast a start
     and an end event through its event system each time. Rebuilding a cached kernel makes
     150–180 such calls (reading the kernel's module, listing the symbols it defines); the
-    events cost a few µs a call, about a seventh of the loading (no listener waits for
+    events cost a few µs a call, about a tenth of the loading (no listener waits for
     them here: they time compilations, and nothing is compiled)."""
     from llvmlite.binding import ffi  # (numba's own dependency)
 
