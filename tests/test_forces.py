@@ -491,6 +491,41 @@ def test_contact_query_ignores_far_meshes_and_only_fills_active():
     np.testing.assert_array_equal(nb_count, 0)
 
 
+def test_contact_query_keeps_the_nearest_meshes_when_more_are_in_reach():
+    """A vertex with more neighbouring meshes in its window than it has slots keeps the
+    MAX_NEIGHBOURS nearest, each with its exact closest point (the farther ones, whose
+    repulsion is the weakest, are dropped)."""
+    n_meshes = MAX_NEIGHBOURS + 6
+    # mesh 0: a tiny triangle at the origin; the others: small squares on a spiral around
+    # it, at distances 3, 3.5, 4, ... (all within the 3×3 window of 20-unit cells)
+    pts, ve, tris, sa, sb = [[-0.5, -0.5], [0.5, -0.5], [0.0, 0.5]], [0, 0, 0], [[0, 1, 2]], [0, 1, 2], [1, 2, 0]
+    dist = 3.0 + 0.5 * np.arange(n_meshes - 1, dtype=float)
+    for k, d in enumerate(dist):
+        a = 2.4 * k
+        c = np.array([np.cos(a), np.sin(a)]) * (d + 0.25)  # nearest side d from the origin
+        base = len(pts)
+        pts += (c + np.array([[-0.25, -0.25], [0.25, -0.25], [0.25, 0.25], [-0.25, 0.25]])).tolist()
+        ve += [k + 1] * 4
+        tris += [[base, base + 1, base + 2], [base, base + 2, base + 3]]
+        sa += [base, base + 1, base + 2, base + 3]
+        sb += [base + 1, base + 2, base + 3, base]
+    x = np.array(pts, float)
+    ve = np.array(ve, np.int32)
+    tris = np.array(tris, np.int32)
+    te = ve[tris[:, 0]].astype(np.int32)
+    inside, nb_count, nb_elem, nb_d2, nb_q = query(x, ve, np.array(sa, np.int64), np.array(sb, np.int64),
+                                                   tris, te, np.array([2]))
+    assert not inside[2]
+    assert nb_count[2] == MAX_NEIGHBOURS
+    true_d = {e: Polygon(x[ve == e]).exterior.distance(Point(x[2])) for e in range(1, n_meshes)}
+    nearest = sorted(true_d, key=true_d.get)[:MAX_NEIGHBOURS]
+    assert sorted(int(e) for e in nb_elem[2, :MAX_NEIGHBOURS]) == sorted(nearest)
+    for j in range(MAX_NEIGHBOURS):
+        e = int(nb_elem[2, j])
+        sq = Polygon(x[ve == e])
+        assert nb_d2[2, j] == pytest.approx(sq.exterior.distance(Point(x[2])) ** 2, rel=1e-9)
+
+
 def test_contact_query_on_built_model_matches_shapely(template):
     # two squares of the template overlapping diagonally; field region large
     model, state = two_square_model(template, (40, 40), (50, 47), angle1=0.4)

@@ -129,6 +129,31 @@ def test_a_state_saved_to_a_checkpoint_file_resumes_bit_identically(template, tm
     np.testing.assert_array_equal(again.state.growth, sim.state.growth)
 
 
+def test_a_checkpoint_with_wider_neighbour_lists_resumes(template):
+    """A checkpoint written by a build that kept more neighbouring meshes per vertex (24
+    before MAX_NEIGHBOURS became 12) loads: the inside vertices keep their first entries,
+    and the run continues exactly as from a checkpoint of this build whose lists hold them."""
+    sim = _sim(template)
+    every = sim.params.requery_every
+    for _ in range(every):
+        sim.step()
+    saved = sim.snapshot_state()
+    k = sim.state.nb_elem.shape[1]
+    assert len(saved["inside_idx"])  # vertices inside a mesh: their lists are saved
+    wide = dict(saved)
+    for name in ("inside_nb_elem", "inside_nb_seg"):  # unused slots beyond the counts
+        a = saved[name]
+        wide[name] = np.concatenate([a, np.full((len(a), k), 7, a.dtype)], axis=1)
+    runs = []
+    for state in (saved, wide):
+        again = _sim(template)
+        again.restore(state)
+        for _ in range(every):
+            again.step()
+        runs.append(again.state.x.copy())
+    np.testing.assert_array_equal(runs[0], runs[1])
+
+
 def test_state_copy_shares_no_array(template):
     sim = _sim(template)
     sim.step()

@@ -145,8 +145,15 @@ class Model:
         return len(self.elem_nskin)
 
 
-#: the most neighbouring meshes a skin vertex keeps contact with (the closest win)
-MAX_NEIGHBOURS = 24
+#: the most neighbouring meshes a skin vertex keeps contact with (the closest win). A skin
+#: vertex sees the meshes with skin in the 3×3 cells around it (cells 0.65 × the element
+#: size, ``sim.cell_size``): 6–8 on a jammed poster, at most 12, almost all of them
+#: several gaps away (the median 10). Every contact kernel reads these rows, (N, K) and
+#: (N, K, 2), so their width is memory traffic on every step: 12 instead of 24 made the
+#: primary phase of 150 poster elements ~15 % faster on one thread
+#: (``docs/benchmarks.md``), and changed 4 of the 26 suite scenes, those where a
+#: vertex saw more than 12 meshes (the farthest are dropped, whose repulsion is weakest)
+MAX_NEIGHBOURS = 12
 
 
 @dataclass(eq=False)
@@ -286,9 +293,11 @@ class State:
         if "inside_idx" in saved:  # (older checkpoints lack it: their resumed run differs a little)
             ins = np.asarray(saved["inside_idx"], np.int64)
             self.inside[ins] = True
-            self.nb_count[ins] = saved["inside_nb_count"]
-            self.nb_elem[ins] = saved["inside_nb_elem"]
-            self.nb_seg[ins] = saved["inside_nb_seg"]
+            # a checkpoint of a build that kept more neighbours per vertex: the first K
+            k = min(self.nb_elem.shape[1], np.shape(saved["inside_nb_elem"])[1])
+            self.nb_count[ins] = np.minimum(saved["inside_nb_count"], k)
+            self.nb_elem[ins, :k] = np.asarray(saved["inside_nb_elem"])[:, :k]
+            self.nb_seg[ins, :k] = np.asarray(saved["inside_nb_seg"])[:, :k]
         self.refresh_growth(k_growth_dt)
         self.allow_growth = self.settle_left is None
 
