@@ -502,7 +502,7 @@ def test_contact_query_keeps_the_nearest_meshes_when_more_are_in_reach():
     dist = 3.0 + 0.5 * np.arange(n_meshes - 1, dtype=float)
     for k, d in enumerate(dist):
         a = 2.4 * k
-        c = np.array([np.cos(a), np.sin(a)]) * (d + 0.25)  # nearest side d from the origin
+        c = np.array([np.cos(a), np.sin(a)]) * (d + 0.25)  # its centre d + 0.25 from the origin
         base = len(pts)
         pts += (c + np.array([[-0.25, -0.25], [0.25, -0.25], [0.25, 0.25], [-0.25, 0.25]])).tolist()
         ve += [k + 1] * 4

@@ -130,9 +130,9 @@ def test_a_state_saved_to_a_checkpoint_file_resumes_bit_identically(template, tm
 
 
 def test_a_checkpoint_with_wider_neighbour_lists_resumes(template):
-    """A checkpoint written by a build that kept more neighbouring meshes per vertex (24
-    before MAX_NEIGHBOURS became 12) loads: the inside vertices keep their first entries,
-    and the run continues exactly as from a checkpoint of this build whose lists hold them."""
+    """A checkpoint written by a build that kept more neighbouring meshes per vertex
+    (wider lists than MAX_NEIGHBOURS) loads: the inside vertices keep their first
+    entries, and the run continues exactly as from a checkpoint of this build."""
     sim = _sim(template)
     every = sim.params.requery_every
     for _ in range(every):

@@ -145,14 +145,13 @@ class Model:
         return len(self.elem_nskin)
 
 
-#: the most neighbouring meshes a skin vertex keeps contact with (the closest win). A skin
-#: vertex sees the meshes with skin in the 3×3 cells around it (cells 0.65 × the element
-#: size, ``sim.cell_size``): 6–8 on a jammed poster, at most 12, almost all of them
-#: several gaps away (the median 10). Every contact kernel reads these rows, (N, K) and
-#: (N, K, 2), so their width is memory traffic on every step: 12 instead of 24 made the
-#: primary phase of 150 poster elements ~15 % faster on one thread
-#: (``docs/benchmarks.md``), and changed 4 of the 26 suite scenes, those where a
-#: vertex saw more than 12 meshes (the farthest are dropped, whose repulsion is weakest)
+#: the most neighbouring meshes a skin vertex keeps contact with (the nearest win; the
+#: farther ones, whose repulsion is the weakest, are dropped). A skin vertex sees the
+#: meshes with skin in the 3×3 cells around it (cells 0.65 × the element size,
+#: ``sim.cell_size``): 6–8 on a jammed poster, at most 12, the median of them 10 gaps
+#: away. Every contact kernel reads these rows, (N, K) and (N, K, 2), on every step, so
+#: their width is memory traffic: at 24 the primary phase of 150 poster elements took
+#: ~16 % longer on one thread (``docs/benchmarks.md``)
 MAX_NEIGHBOURS = 12
 
 
