@@ -533,6 +533,50 @@ def test_studio_command_prints_the_url_and_opens_its_files(tmp_path):
     assert rc == 0, proc.stderr.read()
 
 
+#: drops a file (name, text) on the page's element ``sel``, as a file manager would
+_DROP = """([sel, name, text]) => { const dt = new DataTransfer();
+    dt.items.add(new File([text], name, {type: 'image/svg+xml'}));
+    document.querySelector(sel).dispatchEvent(new DragEvent('drop', {bubbles: true, dataTransfer: dt})); }"""
+
+
+def test_page_keeps_an_edit_over_an_older_state_poll(server):
+    """The page polls the state (on load, and when the run's status changes). A poll the
+    server answered before an edit but whose answer arrives after the edit's (a busy
+    machine) must not put the page back to the document before the edit: the page kept
+    showing no elements after a drop once, and a test waiting for them timed out."""
+    sync_api, exe = playwright_chromium()
+    circle = (EX / "containers" / "circle.svg").read_text()
+    held = []
+
+    def is_poll(url: str) -> bool:
+        return "/state?" in url
+
+    def hold(route):  # every poll is answered at once but its answer held back
+        held.append((route, route.fetch()))
+
+    with sync_api.sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=exe, args=["--no-sandbox"])
+        try:
+            page = new_page(browser)
+            page.route(is_poll, hold)
+            page.goto(server.url)
+            for _ in range(600):  # the load's poll, answered and held
+                if held:
+                    break
+                page.wait_for_timeout(50)
+            older = len(held)
+            assert older and json.loads(held[0][1].text())["container"] is None
+            page.evaluate(_DROP, ["#container-name", "circle.svg", circle])
+            page.wait_for_function("window.repulsionpakStudio.state !== null && "
+                                   "window.repulsionpakStudio.state.container === 'circle.svg'")
+            for route, answer in held[:older]:  # the answers from before the drop arrive now
+                route.fulfill(response=answer)
+            page.wait_for_timeout(1000)
+            assert page_state(page)["container"] == "circle.svg"
+        finally:
+            browser.close()
+
+
 def test_page_drop_files_and_undo(server):
     """Files dropped on the container's section open the container, elsewhere add elements;
     Undo and Redo in the page walk the history."""
@@ -545,12 +589,9 @@ def test_page_drop_files_and_undo(server):
             page = new_page(browser)
             page.goto(server.url)
             page.wait_for_function("window.repulsionpakStudio.state !== null")
-            drop = """([sel, name, text]) => { const dt = new DataTransfer();
-                dt.items.add(new File([text], name, {type: 'image/svg+xml'}));
-                document.querySelector(sel).dispatchEvent(new DragEvent('drop', {bubbles: true, dataTransfer: dt})); }"""
-            page.evaluate(drop, ["#container-name", "circle.svg", circle])
+            page.evaluate(_DROP, ["#container-name", "circle.svg", circle])
             page.wait_for_function("window.repulsionpakStudio.state.container === 'circle.svg'")
-            page.evaluate(drop, ["#stage", "apple.svg", apple])
+            page.evaluate(_DROP, ["#stage", "apple.svg", apple])
             page.wait_for_function("window.repulsionpakStudio.state.elements.join() === 'apple.svg'")
             st = page_state(page)
             assert st["region_area"] == pytest.approx(

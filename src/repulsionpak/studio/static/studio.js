@@ -18,19 +18,26 @@
 
   function showError(msg) { q("#setting-error").textContent = msg || ""; }
 
-  // refresh: a state poll, which leaves the last edit's error message in place
+  // refresh: a state poll, which leaves the last edit's error message in place. A poll's
+  // answer is shown only when no edit was on its way while the poll was: the server may
+  // have answered it before the edit, and its answer, arriving after the edit's (a busy
+  // machine), would put the page back to the document before the edit
+  let edits = 0, editsOut = 0;  // edits sent so far; edits awaiting their answer
   async function call(path, opts, refresh) {
     busy++;
+    const sent = edits, quiet = editsOut === 0;
+    if (!refresh) { edits++; editsOut++; }
     try {
       const r = await fetch(withToken(path), opts);
       const text = await r.text();
       let body = null;
       try { body = JSON.parse(text); } catch (e) { body = { error: text }; }
+      if (refresh && !(quiet && editsOut === 0 && edits === sent)) return body;  // an edit's answer is newer
       if (!r.ok) { showError(body.error || ("error " + r.status)); render(state, true); return null; }
       if (!refresh) showError("");
       render(body);
       return body;
-    } finally { busy--; }
+    } finally { busy--; if (!refresh) editsOut--; }
   }
   const post = (path, obj) => call(path, { method: "POST", headers: { "Content-Type": "application/json" },
                                            body: JSON.stringify(obj) });
