@@ -21,7 +21,9 @@
   // refresh: a state poll, which leaves the last edit's error message in place. A poll's
   // answer is shown only when no edit was on its way while the poll was: the server may
   // have answered it before the edit, and its answer, arriving after the edit's (a busy
-  // machine), would put the page back to the document before the edit
+  // machine), would put the page back to the document before the edit. A poll left unshown
+  // is made again at the status check's next tick (what changed since the edit's answer,
+  // a run that finished, still shows)
   let edits = 0, editsOut = 0;  // edits sent so far; edits awaiting their answer
   async function call(path, opts, refresh) {
     busy++;
@@ -32,7 +34,10 @@
       const text = await r.text();
       let body = null;
       try { body = JSON.parse(text); } catch (e) { body = { error: text }; }
-      if (refresh && !(quiet && editsOut === 0 && edits === sent)) return body;  // an edit's answer is newer
+      if (refresh && !(quiet && editsOut === 0 && edits === sent)) {  // an edit's answer is newer
+        lastPhase = null;
+        return body;
+      }
       if (!r.ok) { showError(body.error || ("error " + r.status)); render(state, true); return null; }
       if (!refresh) showError("");
       render(body);
