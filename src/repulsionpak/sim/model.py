@@ -293,10 +293,11 @@ class State:
             ins = np.asarray(saved["inside_idx"], np.int64)
             self.inside[ins] = True
             # a checkpoint of a build that kept more neighbours per vertex: the first K
-            k = min(self.nb_elem.shape[1], np.shape(saved["inside_nb_elem"])[1])
+            elem, seg = np.asarray(saved["inside_nb_elem"]), np.asarray(saved["inside_nb_seg"])
+            k = min(self.nb_elem.shape[1], elem.shape[1])
             self.nb_count[ins] = np.minimum(saved["inside_nb_count"], k)
-            self.nb_elem[ins, :k] = np.asarray(saved["inside_nb_elem"])[:, :k]
-            self.nb_seg[ins, :k] = np.asarray(saved["inside_nb_seg"])[:, :k]
+            self.nb_elem[ins, :k] = elem[:, :k]
+            self.nb_seg[ins, :k] = seg[:, :k]
         self.refresh_growth(k_growth_dt)
         self.allow_growth = self.settle_left is None
 
