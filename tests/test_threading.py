@@ -235,6 +235,23 @@ def test_governor_keeps_threads_while_the_iterations_grow_costlier():
     assert total < 0.66 * _single(cost, 9000)
 
 
+def test_governor_probes_again_once_one_thread_grows_costlier():
+    # an idle machine where two threads lose on the first, cheap iterations (their fixed
+    # cost of handing work over outweighs the split work) and win once the packing has
+    # filled: one thread 0.4 -> 1.2 ms over the first 1,500 steps, two 0.3 ms + half of
+    # that. The first probe loses; waiting out the doubled probe gap (800 steps) would leave
+    # two threads unused until ~870; the probe that one thread's growing mean calls for
+    # finds them faster by ~350
+    def cost(i, threads):
+        grow = 1.0 + 2.0 * min(i, 1500) / 1500
+        return 0.4e-3 * grow if threads == 1 else 0.3e-3 + 0.15e-3 * grow
+    total, used = _drive(cost, 3000)
+    assert (used[40:70] == 2).any()  # the first probe, which loses
+    assert (used[70:200] == 1).mean() > 0.7
+    assert (used[450:1500] == 2).mean() > 0.95
+    assert total < 0.8 * _single(cost, 3000)
+
+
 def test_governor_backs_off_from_threads_a_neighbour_slows_moderately():
     # idle for 1,500 steps, then a neighbour makes two threads 1.5x slower than one: no
     # step is a spike, so each window of two threads must lose a side-by-side check, and

@@ -39,6 +39,10 @@ PROBE_FIRST = 400
 PROBE_MAX = 6400
 #: iterations on several threads between two checks of one thread
 CHECK_EVERY = 2000
+#: one thread's mean step this many times its mean when several threads last lost to it
+#: makes a probe of several due at once (the iterations grew costlier as the packing
+#: filled, and several threads win on costlier ones)
+REPROBE = 1.2
 
 
 class ThreadGovernor:
@@ -67,7 +71,12 @@ class ThreadGovernor:
     run grow costlier as it fills, so only windows measured side by side compare); on
     one thread it probes several threads after
     :data:`PROBE_FIRST` iterations, waiting twice as long after each probe that lost, so a
-    machine that stays busy costs at most one slow iteration per few thousand. A single
+    machine that stays busy costs at most one slow iteration per few thousand; and at once
+    when one thread's window mean has grown :data:`REPROBE` times since several threads
+    last lost to it: the first probe runs on the cheapest iterations of the run, where
+    handing work over costs more than splitting it saves, and its verdict no longer holds
+    once the packing has filled (the iteration cost is bounded, so this adds a few probes
+    a run). A single
     iteration more than :data:`SPIKE` times slower than the other count's mean ends the
     current count's window at once: with a neighbour hogging a core, two threads take
     tens of milliseconds an iteration, and waiting for a whole window would cost more
@@ -89,6 +98,7 @@ class ThreadGovernor:
         self._probing = False
         self._warming = True
         self._used = {self.current}  # thread counts that have run an iteration
+        self._lost_at: float | None = None  # one thread's mean when several last lost to it
 
     @property
     def active(self) -> bool:
@@ -141,7 +151,11 @@ class ThreadGovernor:
             # one thread won its check: the next probe of several waits longer, as after
             # a probe of several that lost
             self._probe_gap = PROBE_FIRST if faster > 1 else min(2 * self._probe_gap, PROBE_MAX)
+            if faster == 1:
+                self._lost_at = self.mean[1]
             return None
+        if self.current == 1 and self._lost_at is not None and self.mean[1] > REPROBE * self._lost_at:
+            return self._switch(self.n, probe=True)
         if self.current > 1 and self.mean[self.n] >= self.mean[1]:
             # no faster than one thread was when last measured: measure one thread again
             # now, and keep the faster of two windows side by side (iterations grow
@@ -159,6 +173,7 @@ class ThreadGovernor:
     def _switch(self, to: int, probe: bool = False, failed: bool = False) -> int:
         if failed and to == 1:
             self._probe_gap = min(2 * self._probe_gap, PROBE_MAX)
+            self._lost_at = self.mean.get(1)
         self._probing = probe
         self.current = to
         self._times.clear()
@@ -166,4 +181,5 @@ class ThreadGovernor:
         return to
 
 
-__all__ = ["ThreadGovernor", "WINDOW", "SPIKE", "GAIN", "PROBE_FIRST", "PROBE_MAX", "CHECK_EVERY", "WARM_UP"]
+__all__ = ["ThreadGovernor", "WINDOW", "SPIKE", "GAIN", "PROBE_FIRST", "PROBE_MAX", "CHECK_EVERY", "REPROBE",
+           "WARM_UP"]
