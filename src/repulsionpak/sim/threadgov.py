@@ -148,11 +148,11 @@ class ThreadGovernor:
             faster = self.n if self.mean[self.n] < GAIN * self.mean[1] else 1
             if faster != self.current:
                 return self._switch(faster, failed=faster == 1)
-            # one thread won its check: the next probe of several waits longer, as after
-            # a probe of several that lost
-            self._probe_gap = PROBE_FIRST if faster > 1 else min(2 * self._probe_gap, PROBE_MAX)
+            # one thread won its check: several threads lost, as after a probe of them
             if faster == 1:
-                self._lost_at = self.mean[1]
+                self._threads_lost()
+            else:
+                self._probe_gap = PROBE_FIRST
             return None
         if self.current == 1 and self._lost_at is not None and self.mean[1] > REPROBE * self._lost_at:
             return self._switch(self.n, probe=True)
@@ -170,10 +170,15 @@ class ThreadGovernor:
         self.peak[self.current] = max(self._times)
         self._times.clear()
 
+    def _threads_lost(self) -> None:
+        """Several threads lost to one: the next probe of them waits twice as long, or
+        until one thread's mean has grown :data:`REPROBE` times."""
+        self._probe_gap = min(2 * self._probe_gap, PROBE_MAX)
+        self._lost_at = self.mean.get(1)
+
     def _switch(self, to: int, probe: bool = False, failed: bool = False) -> int:
         if failed and to == 1:
-            self._probe_gap = min(2 * self._probe_gap, PROBE_MAX)
-            self._lost_at = self.mean.get(1)
+            self._threads_lost()
         self._probing = probe
         self.current = to
         self._times.clear()
