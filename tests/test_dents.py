@@ -136,12 +136,40 @@ def test_bending_keeps_smooth_joins_smooth(tmp_path):
     wall = poly([[50.5, 0.0], [80, 0], [80, 60], [50.5, 60]])  # 0.5 from the disc: a deep dent
     (bent, _), _ = dent([disc, wall], CONTAINER, GAP, 0.5, 0.9 * GAP, frozen=np.array([False, True]))
     c = bent.paths[0].source.curves[0]
-    assert not np.allclose(c.ctrl, disc.paths[0].source.curves[0].ctrl)
+    orig = disc.paths[0].source.curves[0].ctrl
+    assert c.ctrl.shape != orig.shape or not np.allclose(c.ctrl, orig)  # bent
     for k in range(len(c.order)):  # every join of the circle's arcs stays tangent-continuous
         j = (k + 1) % len(c.order)
         u = c.ctrl[k, int(c.order[k])] - c.ctrl[k, int(c.order[k]) - 1]
         v = c.ctrl[j, 1] - c.ctrl[j, 0]
         assert abs(u[0] * v[1] - u[1] * v[0]) <= 1e-3 * np.hypot(*u) * np.hypot(*v)
+
+
+def test_a_dent_in_segments_longer_than_the_bump_stays_local(tmp_path):
+    """A disc of radius 60 written as arcs ~90 long, pressed to a wall: the dent (ρ = 2
+    gaps = 4) moves the outline near the contact and leaves the rest on the circle, as
+    the bump does. Bent through their ends and handles alone, the arcs spread the dent
+    over their whole length (0.3-0.9 off the circle 18 from the contact)."""
+    from repulsionpak.io import load_element
+    from repulsionpak.render.placed import refined
+
+    f = tmp_path / "disc.svg"
+    f.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                 '<circle cx="50" cy="50" r="50"/></svg>')
+    el = load_element(f)
+    tol = 0.04
+    box = shapely.box(0, 0, 400, 200)
+    for wall_x in (130.5, 131.0, 131.5):  # the disc's right side is at x = 130
+        disc = PlacedArt(str(f), "primary", tuple(refined(a.transformed(lambda p: np.asarray(p) * 1.2 + 10.0), tol)
+                                                  for a in el.paths), tolerance=tol)  # r = 60 about (70, 70)
+        wall = poly([[wall_x, 0.0], [200, 0], [200, 150], [wall_x, 150]])
+        (bent, _), _ = dent([disc, wall], box, GAP, 0.5, 0.9 * GAP, frozen=np.array([False, True]))
+        assert shapely.distance(bent.art, wall.art) >= 0.9 * GAP
+        pts = shapely.get_coordinates(bent.art.exterior)
+        r = np.hypot(pts[:, 0] - 70.0, pts[:, 1] - 70.0)
+        assert r.min() < 60.0 - 0.4  # dented
+        far = np.hypot(pts[:, 0] - 130.0, pts[:, 1] - 70.0) > 4.5 * 2.0 * GAP
+        assert np.abs(r[far] - 60.0).max() <= tol
 
 
 def test_arts_a_hair_apart_count_as_touching_without_breaking_the_overlap_parting():
