@@ -127,12 +127,14 @@ def _cubic_form(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
     return c
 
 
-def _point_and_tangent(c: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-    """Points and derivatives (n, 2) of cubics ``c`` (n, 4, 2) at parameter ``t``."""
+def _points_and_tangents(c: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points and derivatives (len(t) · n, 2) of cubics ``c`` (n, 4, 2) at each parameter
+    of ``t`` (the n points at t[0] first)."""
+    t = np.asarray(t, float)[:, None, None]
     s = 1.0 - t
     p = s ** 3 * c[:, 0] + 3 * s * s * t * c[:, 1] + 3 * s * t * t * c[:, 2] + t ** 3 * c[:, 3]
     d = 3 * s * s * (c[:, 1] - c[:, 0]) + 6 * s * t * (c[:, 2] - c[:, 1]) + 3 * t * t * (c[:, 3] - c[:, 2])
-    return p, d
+    return p.reshape(-1, 2), d.reshape(-1, 2)
 
 
 def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, steps: list[list],
@@ -140,17 +142,14 @@ def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, steps: lis
     """(n,) bool: whether each bent segment is farther than ``distance`` from the bumped
     curve, or turned from its direction by more than ``angle`` (radians), at any of
     :data:`CHECK_AT`."""
-    src, out = _cubic_form(order, ctrl), _cubic_form(order, bent)
-    bad = np.zeros(len(order), bool)
-    for t in CHECK_AT:
-        p, d = _point_and_tangent(src, t)
-        for bumps in steps:  # the exact map: one bump list after the other
-            d = np.einsum("nij,nj->ni", _jacobians(p, bumps, two_rho2), d)
-            p = _bumped(p, bumps, two_rho2)
-        q, e = _point_and_tangent(out, t)
-        turn = np.abs(np.arctan2(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0], (d * e).sum(axis=1)))
-        bad |= (np.hypot(*(p - q).T) > distance) | (turn > angle)
-    return bad
+    p, d = _points_and_tangents(_cubic_form(order, ctrl), CHECK_AT)
+    for bumps in steps:  # the exact map: one bump list after the other
+        d = np.einsum("nij,nj->ni", _jacobians(p, bumps, two_rho2), d)
+        p = _bumped(p, bumps, two_rho2)
+    q, e = _points_and_tangents(_cubic_form(order, bent), CHECK_AT)
+    turn = np.abs(np.arctan2(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0], (d * e).sum(axis=1)))
+    bad = (np.hypot(*(p - q).T) > distance) | (turn > angle)
+    return bad.reshape(len(CHECK_AT), -1).any(axis=0)
 
 
 def _halves(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
@@ -191,11 +190,15 @@ def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float,
     ctrl = np.concatenate([c.ctrl for c in curves])
     owner = np.repeat(np.arange(len(curves)), [len(c.order) for c in curves])
     check = near(ctrl) & (order > 1)
-    for depth in range(SPLIT_DEPTH + 1):
-        bent = ctrl
+
+    def bent_by_all(o, c):
         for bumps in steps:
-            bent = _bend(order, bent, bumps, two_rho2)
-        if depth == SPLIT_DEPTH or not check.any():
+            c = _bend(o, c, bumps, two_rho2)
+        return c
+
+    bent = bent_by_all(order, ctrl)
+    for _ in range(SPLIT_DEPTH):
+        if not check.any():
             break
         bad = np.zeros(len(order), bool)
         bad[check] = _off_curve(order[check], ctrl[check], bent[check], steps, two_rho2,
@@ -203,17 +206,14 @@ def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float,
         if not bad.any():
             break
         idx = np.repeat(np.arange(len(order)), np.where(bad, 2, 1))
-        new = ctrl[idx]
-        twice = np.flatnonzero(bad[idx])  # two rows per split segment, in order
-        halves = _halves(order[bad], ctrl[bad])
-        new[twice[0::2]] = halves[:, 0]
-        new[twice[1::2]] = halves[:, 1]
-        order, ctrl, owner, check = order[idx], new, owner[idx], bad[idx]  # only halves again
-    out = []
-    for i, c in enumerate(curves):
-        m = owner == i
-        out.append(CurveSubpath(order[m], bent[m], c.closed))
-    return out
+        order, ctrl, owner, bent, check = order[idx], ctrl[idx], owner[idx], bent[idx], bad[idx]
+        twice = np.flatnonzero(check)  # two rows per split segment, in order
+        halves = _halves(order[twice[0::2]], ctrl[twice[0::2]])
+        ctrl[twice[0::2]] = halves[:, 0]
+        ctrl[twice[1::2]] = halves[:, 1]
+        bent[check] = bent_by_all(order[check], ctrl[check])  # only the halves are new
+    cut = np.searchsorted(owner, np.arange(len(curves) + 1))  # owner is sorted
+    return [CurveSubpath(order[a:b], bent[a:b], c.closed) for c, a, b in zip(curves, cut[:-1], cut[1:])]
 
 
 #: a path farther than this many ρ from every bump is left as it is: the bumps move it by
