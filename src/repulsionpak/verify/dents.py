@@ -14,10 +14,11 @@ Notes
 A bump moves every point ``p`` of an element's art by ``v · exp(-|p − c|² / (2ρ²))``:
 the contact point ``c`` by ``v``, points a few ρ away not at all. With ``|v|`` at most
 half a gap and ρ two gaps, the map stretches the art by at most ~15 % locally and cannot
-fold it. Curves are bent by moving their control points, a segment longer than the bump
-varies over split first (:func:`_bent_curves`), and flattened again as the writer writes
-them, so the checks measure what is written. On the heart with 30 animals (seeds 1–3) the repair's shrinking cost 0.016–0.025
-of the container's area; the dents give back 0.009–0.018 of it (``docs/algorithm.md``).
+fold it. Curves are bent by moving their control points (a segment too long to follow
+the bump that way is split first, :func:`_bent_curves`) and flattened again as the writer
+writes them, so the checks measure what is written. On the heart with 30 animals (seeds
+1–3) the repair's shrinking cost 0.016–0.025 of the container's area; the dents give back
+0.009–0.018 of it (``docs/algorithm.md``).
 """
 
 from __future__ import annotations
@@ -172,11 +173,11 @@ def _halves(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
 
 
 def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float, tol: float,
-                 near) -> list[CurveSubpath]:
+                 centres: np.ndarray, reach: float) -> list[CurveSubpath]:
     """``curves`` (all of one element's) under the bump lists ``steps``, applied in turn
-    (:func:`_bend`). A curved segment that ``near`` marks (control points (n, 4, 2) ->
-    (n,) bool) is split in halves, exactly, until each bent half is within
-    :data:`SPLIT_DISTANCE` × ``tol`` and :data:`SPLIT_ANGLE` of the bumped curve.
+    (:func:`_bend`). A curved segment within ``reach`` of one of the bumps' ``centres`` is
+    split in halves, exactly, until each bent half is within :data:`SPLIT_DISTANCE` ×
+    ``tol`` and :data:`SPLIT_ANGLE` of the bumped curve.
 
     Notes
     -----
@@ -189,7 +190,7 @@ def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float,
     order = np.concatenate([c.order for c in curves]).astype(np.int64)
     ctrl = np.concatenate([c.ctrl for c in curves])
     owner = np.repeat(np.arange(len(curves)), [len(c.order) for c in curves])
-    check = near(ctrl) & (order > 1)
+    check = _near_each(ctrl, centres, reach) & (order > 1)
 
     def bent_by_all(o, c):
         for bumps in steps:
@@ -221,19 +222,17 @@ def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float,
 REACH = 4.5
 
 
-def _near(points: np.ndarray, centres: np.ndarray, reach: float) -> bool:
-    """Whether the bounding box of ``points`` (n, 2) comes within ``reach`` of a centre."""
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    gap = np.maximum(np.maximum(lo - centres, centres - hi), 0.0)
-    return bool((np.hypot(gap[:, 0], gap[:, 1]) < reach).any())
-
-
-def _near_each(ctrl: np.ndarray, centres: np.ndarray, reach: float) -> np.ndarray:
-    """Whether the bounding box of each segment's control points (n, 4, 2) comes within
-    ``reach`` of a centre, (n,) bool."""
-    lo, hi = ctrl.min(axis=1), ctrl.max(axis=1)
+def _near_each(groups: np.ndarray, centres: np.ndarray, reach: float) -> np.ndarray:
+    """(n,) bool: whether the bounding box of each group of points (n, k, 2), e.g. a
+    segment's control points, comes within ``reach`` of a centre."""
+    lo, hi = groups.min(axis=1), groups.max(axis=1)
     off = np.maximum(np.maximum(lo[:, None] - centres, centres - hi[:, None]), 0.0)
     return (np.hypot(off[..., 0], off[..., 1]) < reach).any(axis=1)
+
+
+def _near(points: np.ndarray, centres: np.ndarray, reach: float) -> bool:
+    """Whether the bounding box of ``points`` (n, 2) comes within ``reach`` of a centre."""
+    return bool(_near_each(points[None], centres, reach)[0])
 
 
 def _bent(placed: PlacedArt, steps: list[list], two_rho2: float) -> PlacedArt:
@@ -256,8 +255,7 @@ def _bent(placed: PlacedArt, steps: list[list], two_rho2: float) -> PlacedArt:
               for a, h in zip(placed.paths, hit)]
     every = [c for a, cv in zip(placed.paths, curved) if cv for c in a.source.curves]
     if every:
-        every = _bent_curves(every, steps, two_rho2, placed.tolerance,
-                             lambda ctrl: _near_each(ctrl, centres, reach))
+        every = _bent_curves(every, steps, two_rho2, placed.tolerance, centres, reach)
     bent = iter(every)
     paths = []
     for a, h, cv in zip(placed.paths, hit, curved):
