@@ -1,6 +1,7 @@
 """Test set-up: the scene suites and studies live in ``benchmarks/`` (they are not part of
 the library), so that folder goes on ``sys.path`` for the tests that build their scenes
-(``import scenes``, ``import region_scenes``, ``import deformation_study``)."""
+(``import scenes``, ``import region_scenes``, ``import deformation_study``); the files with
+slow tests are collected first."""
 
 import sys
 from pathlib import Path
@@ -24,3 +25,11 @@ def one_numba_thread():
     numba.set_num_threads(1)
     yield
     numba.set_num_threads(old)
+
+
+def pytest_collection_modifyitems(config, items):
+    """The files holding ``slow`` tests first, in their order, then the rest: with one
+    worker per core (pytest-xdist, ``--dist loadfile``) the long files then start at once
+    beside the short ones instead of running alone at the end."""
+    slow = {item.path for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: item.path not in slow)

@@ -369,6 +369,7 @@ def test_extremely_thin_element_warns(tmp_path):
 # --------------------------------------------------------------------------- not errors
 
 
+@pytest.mark.slow
 def test_element_much_larger_than_the_container_packs(tmp_path):
     """Sizes are relative: a 100000-unit element in a 500-unit container is fine."""
     out = tmp_path / "big.svg"

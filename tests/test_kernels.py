@@ -155,6 +155,7 @@ def _pack(tmp: Path, cache: Path, report_modules: bool = False, **env_extra) -> 
     return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=900)
 
 
+@pytest.mark.slow
 def test_cli_says_once_that_it_compiles_on_a_cold_cache_only(tmp_path):
     """An empty numba cache: the message appears once on stderr (nothing on stdout);
     with the cache filled by that run it does not appear again, and a run then imports

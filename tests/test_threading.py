@@ -186,6 +186,7 @@ def test_governor_with_one_thread_never_switches():
     assert (used == 1).all()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="needs two cores")
 def test_switching_threads_mid_run_gives_the_same_packing(monkeypatch):
     """Both builds compute the same numbers: a run whose thread count changes every few
