@@ -70,7 +70,7 @@ SecondaryOpt = Annotated[Optional[list[Path]], typer.Option("--secondary", help=
 GapOpt = Annotated[Optional[float], typer.Option(help="Gap between elements' art, container units (default: 1% of its size, at most 4% of its width).")]
 ConfigOpt = Annotated[Optional[Path], typer.Option(help="TOML file of parameters (see `repulsionpak params`).")]
 CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary elements (default: from container area and gap).")]
-MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on the growing iterations of each phase; the settling ones (sim.settle_iterations, default 300) follow.")]
+MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on the growing iterations of each phase; the settling ones (sim.settle_iterations, default 100) follow.")]
 QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
 MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
 RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE], limited:DEG or upright[:DEG] (see docs/controls.md).")]
