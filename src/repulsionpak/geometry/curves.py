@@ -20,7 +20,7 @@ from numba import njit
 
 from ..types import CurveSubpath
 
-__all__ = ["bezier", "bezier_deriv", "decimals_for", "flatten_subpath", "path_data",
+__all__ = ["as_cubics", "bezier", "bezier_deriv", "decimals_for", "flatten_subpath", "path_data",
            "round_curves", "segment_count"]
 
 
@@ -46,6 +46,22 @@ def bezier_deriv(ctrl: np.ndarray, order: int, t: np.ndarray) -> np.ndarray:
     if order == 2:
         return 2 * s * (p[1] - p[0]) + 2 * t * (p[2] - p[1])
     return 3 * s * s * (p[1] - p[0]) + 6 * s * t * (p[2] - p[1]) + 3 * t * t * (p[3] - p[2])
+
+
+def as_cubics(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
+    """Segments ``order`` (n,), ``ctrl`` (n, 4, 2) as cubic control points (n, 4, 2), the
+    same curves with the same parametrisation (lines and quadratics degree-elevated
+    exactly)."""
+    c = np.array(ctrl, dtype=float)
+    q = order == 2
+    c[q, 1] = ctrl[q, 0] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 0])
+    c[q, 2] = ctrl[q, 2] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 2])
+    c[q, 3] = ctrl[q, 2]
+    ln = order == 1
+    c[ln, 1] = ctrl[ln, 0] + (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
+    c[ln, 2] = ctrl[ln, 0] + 2.0 * (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
+    c[ln, 3] = ctrl[ln, 1]
+    return c
 
 
 @njit(cache=True)

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ..geometry.curves import as_cubics
 from ..geometry.mesh import bind_points
 from ..types import CurveSubpath
 
@@ -242,21 +243,6 @@ class MapPlan:
         return self.W @ x, self.D @ x
 
 
-def _as_cubics(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
-    """Every segment as cubic control points (n, 4, 2), same parametrisation (lines and
-    quadratics are degree-elevated exactly)."""
-    c = ctrl.copy()
-    q = order == 2
-    c[q, 1] = ctrl[q, 0] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 0])
-    c[q, 2] = ctrl[q, 2] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 2])
-    c[q, 3] = ctrl[q, 2]
-    ln = order == 1
-    c[ln, 1] = ctrl[ln, 0] + (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
-    c[ln, 2] = ctrl[ln, 0] + 2.0 * (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
-    c[ln, 3] = ctrl[ln, 1]
-    return c
-
-
 def _samples_per_segment(order: np.ndarray, cubic: np.ndarray, spacing: float, density: float,
                          tol: float) -> np.ndarray:
     """Intervals per segment: ``density`` per mesh spacing along it, and enough that the
@@ -275,7 +261,7 @@ def _samples_per_segment(order: np.ndarray, cubic: np.ndarray, spacing: float, d
 
 def _sample_chain(order: np.ndarray, ctrl: np.ndarray, spacing: float, density: float, tol: float):
     """Samples of one subpath: points, derivatives d/dt, parameters, segment starts."""
-    c = _as_cubics(order, ctrl)
+    c = as_cubics(order, ctrl)
     n = _samples_per_segment(order, c, spacing, density, tol)
     seg = np.repeat(np.arange(len(order)), n + 1)
     first = np.concatenate([[0], np.cumsum(n + 1)])

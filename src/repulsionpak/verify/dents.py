@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from ..geometry.curves import as_cubics
 from ..geometry.pairwise import distances
 from ..render.placed import FIT_SHARE, refined
 from ..types import ArtPath, CurveSubpath, PlacedArt
@@ -116,18 +117,6 @@ SPLIT_ANGLE = 0.5
 SPLIT_DEPTH = 5
 
 
-def _cubic_form(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
-    """Every segment as cubic control points, same parametrisation (exact elevation)."""
-    c = ctrl.copy()
-    q = order == 2
-    c[q, 1] = ctrl[q, 0] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 0])
-    c[q, 2] = ctrl[q, 2] + 2.0 / 3.0 * (ctrl[q, 1] - ctrl[q, 2])
-    ln = order == 1
-    c[ln, 1] = ctrl[ln, 0] + (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
-    c[ln, 2] = ctrl[ln, 0] + 2.0 / 3.0 * (ctrl[ln, 1] - ctrl[ln, 0])
-    return c
-
-
 def _points_and_tangents(c: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Points and derivatives (len(t) · n, 2) of cubics ``c`` (n, 4, 2) at each parameter
     of ``t`` (the n points at t[0] first)."""
@@ -143,11 +132,11 @@ def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, steps: lis
     """(n,) bool: whether each bent segment is farther than ``distance`` from the bumped
     curve, or turned from its direction by more than ``angle`` (radians), at any of
     :data:`CHECK_AT`."""
-    p, d = _points_and_tangents(_cubic_form(order, ctrl), CHECK_AT)
+    p, d = _points_and_tangents(as_cubics(order, ctrl), CHECK_AT)
     for bumps in steps:  # the exact map: one bump list after the other
         d = np.einsum("nij,nj->ni", _jacobians(p, bumps, two_rho2), d)
         p = _bumped(p, bumps, two_rho2)
-    q, e = _points_and_tangents(_cubic_form(order, bent), CHECK_AT)
+    q, e = _points_and_tangents(as_cubics(order, bent), CHECK_AT)
     turn = np.abs(np.arctan2(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0], (d * e).sum(axis=1)))
     bad = (np.hypot(*(p - q).T) > distance) | (turn > angle)
     return bad.reshape(len(CHECK_AT), -1).any(axis=0)
@@ -156,7 +145,7 @@ def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, steps: lis
 def _halves(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
     """Control points (n, 2, 4, 2) of each segment's two halves, the same curve exactly
     (de Casteljau at t = 1/2); a quadratic's halves are quadratics."""
-    c = _cubic_form(order, ctrl)
+    c = as_cubics(order, ctrl)
     a, b, d = 0.5 * (c[:, 0] + c[:, 1]), 0.5 * (c[:, 1] + c[:, 2]), 0.5 * (c[:, 2] + c[:, 3])
     ab, bd = 0.5 * (a + b), 0.5 * (b + d)
     mid = 0.5 * (ab + bd)
