@@ -315,7 +315,11 @@ def test_ctrl_c_while_the_command_starts_prints_no_traceback(tmp_path, after):
     import signal
     import subprocess
 
-    exe = shutil.which("repulsionpak")
+    import sys
+
+    # the command this interpreter's install put beside it (a venv not activated), else PATH's
+    beside = Path(sys.executable).parent / "repulsionpak"
+    exe = str(beside) if beside.is_file() else shutil.which("repulsionpak")
     if exe is None:
         pytest.skip("the repulsionpak command is not installed")
     # SIGINT as a terminal leaves it (a test run started in the background ignores SIGINT,
