@@ -225,7 +225,7 @@ class SimParams:
         "The overlaps growth leaves are resolved within the first few dozen; those left then stay "
         "(about 100 skin vertices inside a neighbour on the heart, from 50 to 300 settling "
         "iterations) for the verification to bend apart, while the springs relax the shapes a "
-        "little more (the suite's distortion p95 0.0963 with 300, 0.0975 with 50). The heart "
+        "little more (the suite's distortion p95 0.0963 with 300, 0.0976 with 100). The heart "
         "with 30 animals, seeds 1-3: area 0.513 with 0, 0.533-0.535 with 25-150, 0.531 with "
         "300; the main suite keeps the same promises with 100 as with 300, mean area 0.5658 "
         "either way.")
