@@ -20,7 +20,7 @@ from numba import njit
 
 from ..types import CurveSubpath
 
-__all__ = ["as_cubics", "bezier", "bezier_deriv", "decimals_for", "flatten_subpath", "path_data",
+__all__ = ["as_cubics", "bezier", "bezier_deriv", "cubic_points", "decimals_for", "flatten_subpath", "path_data",
            "round_curves", "segment_count"]
 
 
@@ -62,6 +62,16 @@ def as_cubics(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
     c[ln, 2] = ctrl[ln, 0] + 2.0 * (ctrl[ln, 1] - ctrl[ln, 0]) / 3.0
     c[ln, 3] = ctrl[ln, 1]
     return c
+
+
+def cubic_points(c: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points and derivatives d/dt (m, 2) of cubics ``c`` (m, 4, 2), each at its own
+    parameter ``t`` (m,)."""
+    t = np.asarray(t, dtype=float)[:, None]
+    s = 1.0 - t
+    pts = s**3 * c[:, 0] + 3 * s * s * t * c[:, 1] + 3 * s * t * t * c[:, 2] + t**3 * c[:, 3]
+    der = 3 * s * s * (c[:, 1] - c[:, 0]) + 6 * s * t * (c[:, 2] - c[:, 1]) + 3 * t * t * (c[:, 3] - c[:, 2])
+    return pts, der
 
 
 @njit(cache=True)

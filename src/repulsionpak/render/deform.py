@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..geometry.curves import as_cubics
+from ..geometry.curves import as_cubics, cubic_points
 from ..geometry.mesh import bind_points
 from ..types import CurveSubpath
 
@@ -266,11 +266,7 @@ def _sample_chain(order: np.ndarray, ctrl: np.ndarray, spacing: float, density: 
     seg = np.repeat(np.arange(len(order)), n + 1)
     first = np.concatenate([[0], np.cumsum(n + 1)])
     t = (np.arange(len(seg)) - first[seg]) / n[seg]
-    cc = c[seg]
-    tt = t[:, None]
-    s = 1.0 - tt
-    pts = s**3 * cc[:, 0] + 3 * s * s * tt * cc[:, 1] + 3 * s * tt * tt * cc[:, 2] + tt**3 * cc[:, 3]
-    der = 3 * s * s * (cc[:, 1] - cc[:, 0]) + 6 * s * tt * (cc[:, 2] - cc[:, 1]) + 3 * tt * tt * (cc[:, 3] - cc[:, 2])
+    pts, der = cubic_points(c[seg], t)
     return pts, der, t, first
 
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from ..geometry.curves import as_cubics
+from ..geometry.curves import as_cubics, cubic_points
 from ..geometry.pairwise import distances
 from ..render.placed import FIT_SHARE, refined
 from ..types import ArtPath, CurveSubpath, PlacedArt
@@ -117,26 +117,17 @@ SPLIT_ANGLE = 0.5
 SPLIT_DEPTH = 5
 
 
-def _points_and_tangents(c: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Points and derivatives (len(t) · n, 2) of cubics ``c`` (n, 4, 2) at each parameter
-    of ``t`` (the n points at t[0] first)."""
-    t = np.asarray(t, float)[:, None, None]
-    s = 1.0 - t
-    p = s ** 3 * c[:, 0] + 3 * s * s * t * c[:, 1] + 3 * s * t * t * c[:, 2] + t ** 3 * c[:, 3]
-    d = 3 * s * s * (c[:, 1] - c[:, 0]) + 6 * s * t * (c[:, 2] - c[:, 1]) + 3 * t * t * (c[:, 3] - c[:, 2])
-    return p.reshape(-1, 2), d.reshape(-1, 2)
-
-
 def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, steps: list[list],
                two_rho2: float, distance: float, angle: float) -> np.ndarray:
     """(n,) bool: whether each bent segment is farther than ``distance`` from the bumped
     curve, or turned from its direction by more than ``angle`` (radians), at any of
     :data:`CHECK_AT`."""
-    p, d = _points_and_tangents(as_cubics(order, ctrl), CHECK_AT)
+    t = np.repeat(CHECK_AT, len(order))  # every segment at each parameter in turn
+    p, d = cubic_points(np.tile(as_cubics(order, ctrl), (len(CHECK_AT), 1, 1)), t)
     for bumps in steps:  # the exact map: one bump list after the other
         d = np.einsum("nij,nj->ni", _jacobians(p, bumps, two_rho2), d)
         p = _bumped(p, bumps, two_rho2)
-    q, e = _points_and_tangents(as_cubics(order, bent), CHECK_AT)
+    q, e = cubic_points(np.tile(as_cubics(order, bent), (len(CHECK_AT), 1, 1)), t)
     turn = np.abs(np.arctan2(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0], (d * e).sum(axis=1)))
     bad = (np.hypot(*(p - q).T) > distance) | (turn > angle)
     return bad.reshape(len(CHECK_AT), -1).any(axis=0)
