@@ -82,6 +82,23 @@ def test_a_dent_beyond_the_shape_limit_is_undone():
     assert out[1] is not b  # unlimited: keeps its dent
 
 
+def test_a_dent_beyond_the_shape_limit_keeps_the_part_that_fits():
+    from repulsionpak.verify.repairs import rest_distortion
+
+    a, b = bar_with_tip(20, 40), square(84.0, 33.0)
+    full, _ = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP, frozen=np.array([False, True]))
+    bent = rest_distortion(a, a, full[0].art)
+    assert bent > 1e-4
+    limit = 0.5 * bent
+    out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP, rest=[a, b], limits=np.array([limit, np.inf]),
+                    frozen=np.array([False, True]))
+    assert res.reverted == (0,) and out[0] is not a  # over its limit, yet bent
+    assert rest_distortion(a, a, out[0].art) <= limit
+    # about half of the way: the contact is partly cleared, not as far as unlimited
+    d0, d1 = (shapely.distance(x.art, b.art) for x in (a, full[0]))
+    assert d0 + 0.25 * (d1 - d0) < shapely.distance(out[0].art, b.art) < d1 - 0.1 * (d1 - d0)
+
+
 def test_off_or_nothing_to_do_returns_the_same_objects():
     a, b = bar_with_tip(20, 40), square(120.0, 33.0)
     out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP)

@@ -52,6 +52,23 @@ def test_overlap_and_close_pairs_are_separated_keeping_shapes():
         assert shapely.oriented_envelope(g1).area == pytest.approx(g1.area, rel=1e-9)
 
 
+def test_a_move_that_only_presses_the_neighbour_behind_it_is_not_made():
+    # four bars in a row between the walls: 1.8 apart at the right, the floor (4.5) apart
+    # elsewhere, and no room left at the ends; moving the close pair apart would press
+    # their neighbours, and theirs, into the walls: the pair's own element shrinks
+    def bar(x):
+        pts = np.array([[x, 30], [x + 21, 30], [x + 21, 70], [x, 70]], dtype=float)
+        return PlacedArt("bar.svg", "primary", (ArtPath((pts,), (True,), Style()),))
+
+    xs = [2.5, 28.1, 53.7, 76.5]  # gaps 4.6, 4.6, 1.8; the last bar ends at the right margin
+    placed = [bar(x) for x in xs]
+    out, v = verify_and_repair(placed, CONTAINER, gap=5, margin=2.5, min_gap=4.5)
+    assert v.ok
+    check(out, 5, 2.5, 4.5)
+    assert 1 not in v.shrunk  # neither moved nor scaled
+    assert sum(g.area for g in geoms(out)) > 0.92 * sum(g.area for g in geoms(placed))
+
+
 def test_art_outside_or_within_the_margin_is_brought_in():
     placed = [square(-5, 40), square(80, 79.5)]
     out, v = verify_and_repair(placed, CONTAINER, gap=4, margin=3, min_gap=3.6)

@@ -394,14 +394,21 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
         """The step that takes element i its need (plus the slack) along its push (length ln)."""
         return push[i] * min(1.0 + slack / need[i], (need[i] + slack) / ln)
 
+    def undo(moves, mark_stuck):
+        for i, step in moves:
+            shift[i] -= step
+            stuck[i] |= mark_stuck
+            place(i)
+
     def keep_helpful(moved, before, mark_stuck):
-        """Undo the moves that did not lower their own element's need below ``before``."""
+        """Undo the moves that did not lower their own element's need below ``before``,
+        then the others too if together they did not lower the sum of every need (in a
+        jam, a move clears its own contact by pressing the neighbour behind it)."""
         after = check()[0]
-        for i, step in moved:
-            if after[i] >= before[i]:
-                shift[i] -= step
-                stuck[i] |= mark_stuck
-                place(i)
+        kept = [(i, step) for i, step in moved if after[i] < before[i]]
+        undo([(i, step) for i, step in moved if after[i] >= before[i]], mark_stuck)
+        if kept and check()[0].sum() >= before.sum():
+            undo(kept, mark_stuck)
 
     stopped = False
     for r in range(rounds if repair else 0):
