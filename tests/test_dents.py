@@ -121,7 +121,9 @@ def test_bent_curves_are_flattened_as_they_are_written(tmp_path):
     disc = PlacedArt(str(f), "primary", tuple(refined(a.transformed(lambda p: np.asarray(p) * 0.4 + [10.0, 10.0]), tol)
                                               for a in el.paths), tolerance=tol)  # r = 20 about (30, 30)
     wall = poly([[51.0, 0.0], [80, 0], [80, 60], [51.0, 60]])  # 1.0 from the disc
-    out, _ = dent([disc, wall], CONTAINER, GAP, 0.5, 0.9 * GAP)
+    # a broad contact (the disc is closer than the floor to the wall over ~6 gaps): bumps
+    # two gaps wide clear it in the three rounds
+    out, _ = dent([disc, wall], CONTAINER, GAP, 0.5, 0.9 * GAP, radius=2.0)
     bent = out[0].paths[0]
     assert shapely.distance(out[0].art, out[1].art) >= 0.9 * GAP
     exact = shapely.LinearRing(flatten_subpath(bent.source.curves[0], 1e-6))
@@ -180,7 +182,7 @@ def test_a_dent_in_segments_longer_than_the_bump_stays_local(tmp_path):
         disc = PlacedArt(str(f), "primary", tuple(refined(a.transformed(lambda p: np.asarray(p) * 1.2 + 10.0), tol)
                                                   for a in el.paths), tolerance=tol)  # r = 60 about (70, 70)
         wall = poly([[wall_x, 0.0], [200, 0], [200, 150], [wall_x, 150]])
-        (bent, _), _ = dent([disc, wall], box, GAP, 0.5, 0.9 * GAP, frozen=np.array([False, True]))
+        (bent, _), _ = dent([disc, wall], box, GAP, 0.5, 0.9 * GAP, radius=2.0, frozen=np.array([False, True]))
         assert shapely.distance(bent.art, wall.art) >= 0.9 * GAP
         pts = shapely.get_coordinates(bent.art.exterior)
         r = np.hypot(pts[:, 0] - 70.0, pts[:, 1] - 70.0)

@@ -12,11 +12,13 @@ still too close afterwards is left to the moves and shrinks.
 Notes
 -----
 A bump moves every point ``p`` of an element's art by ``v · exp(-|p − c|² / (2ρ²))``:
-the contact point ``c`` by ``v``, points a few ρ away not at all. With ``|v|`` at most
-half a gap and ρ two gaps, the map stretches the art by at most ~15 % locally and cannot
-fold it. Curves are bent by moving their control points (a segment too long to follow
-the bump that way is split first, :func:`_bent_curves`) and flattened again as the writer
-writes them, so the checks measure what is written. On the heart with 30 animals (seeds
+the contact point ``c`` by ``v``, points a few ρ away not at all. It stretches the art
+by at most 0.61 |v|/ρ locally and folds it only from |v| = 1.65 ρ: with |v| at most half
+a gap and ρ one gap (``VerifyParams.dent_radius``), 30 %, and a round's bumps on one
+stretch of outline would have to add up to over three of them to fold it. Curves are
+bent by moving their control points (a segment too long to follow the bump that way is
+split first, :func:`_bent_curves`) and flattened again as the writer writes them, so the
+checks measure what is written. On the heart with 30 animals (seeds
 1–3) the repair's shrinking cost 0.016–0.025 of the container's area; the dents give back
 0.009–0.018 of it (``docs/algorithm.md``).
 """
@@ -344,7 +346,7 @@ def _edge_bumps(geoms: np.ndarray, exact: np.ndarray, inner, frozen: np.ndarray,
 
 
 def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float, *,
-         rounds: int = 3, radius: float = 2.0, push: float = 0.5, budget: float = 3.0,
+         rounds: int = 3, radius: float = 1.0, push: float = 0.5, budget: float = 3.0,
          slack: float = 0.06, frozen: np.ndarray | None = None, rest: list[PlacedArt] | None = None,
          limits: np.ndarray | None = None, distortions: np.ndarray | None = None
          ) -> tuple[list[PlacedArt], DentResult]:
