@@ -50,8 +50,9 @@ class DentResult:
 
     ``violations[r]``: pairs too close plus elements too near the edge found in round r
     (after the first, among the elements the round before bent; then the rounds that go
-    on from the elements unbent for their shape limit); ``dented``: indices of the elements returned bent;
-    ``reverted``: those kept unbent because the dents bent them beyond their shape limit."""
+    on from the elements bent back to their shape limit); ``dented``: indices of the
+    elements returned bent; ``reverted``: those whose dents bent them beyond their shape
+    limit, returned with the share of their bumps that fits it (or unbent)."""
 
     violations: tuple[int, ...]
     dented: tuple[int, ...]
@@ -378,13 +379,13 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
     rest, limits : optional
         Each element's undeformed art and shape limit, as for
         :func:`~repulsionpak.verify.straighten`: an element the dents bend beyond its
-        limit gets its art back, and the rounds go on from it, frozen, so that its
-        neighbours give way alone.
+        limit keeps the largest share of its bumps that fits it (:func:`_within_limit`),
+        and the rounds go on from it, frozen, so that its neighbours give way alone.
     distortions : (n,) array, optional
         Each element's distortion as it comes (:func:`~repulsionpak.verify.straighten`
         returns them): with ``limits``, an element stops bending once its bumps
         (:data:`SWEEP` × |v|ρ of area each) would take it past its limit, and its
-        neighbours give way alone, so that few elements are bent past it and unbent.
+        neighbours give way alone, so that few elements are bent past it and bent back.
 
     Returns
     -------

@@ -3,7 +3,8 @@
 :func:`verify_and_repair` runs them on the art of every element, measuring with
 :mod:`repulsionpak.verify.checks`. An element that breaks a promise is first *moved*
 away from what it is too close to (local separation, a few rounds: a moved element may
-make room for, or crowd, its neighbours), then *shrunk* by just enough (both are
+make room for, or crowd, its neighbours; a round's moves stay only if they lower the sum
+of what every element needs), then *shrunk* by just enough (both are
 similarities: its shape is untouched) about its own centroid, or about the point of it
 that moves its contacts away with clearly less shrink
 (:func:`~repulsionpak.verify.checks._shrink_centre`). Of two primaries too close, the
