@@ -99,6 +99,24 @@ def test_a_dent_beyond_the_shape_limit_keeps_the_part_that_fits():
     assert d0 + 0.25 * (d1 - d0) < shapely.distance(out[0].art, b.art) < d1 - 0.1 * (d1 - d0)
 
 
+def test_parts_of_an_art_a_hair_apart_are_measured_after_a_bump_pushes_one_across():
+    # a wide bar and a spike whose tip is a hair above the bar's top edge, as the strokes
+    # of an emoji meet: a bump at the spike's top moves the tip down more than the bar's
+    # far corners move the edge, and the bumped outline crosses itself (GEOS then failed
+    # on the dents' next measure: "side location conflict")
+    from repulsionpak.verify.dents import _bumped_outline
+
+    bar = np.array([[10.0, 40], [110, 40], [110, 50], [10, 50]])
+    spike = np.array([[55.0, 62], [65, 62], [60, 50 + 1e-9]])
+    art = PlacedArt("p.svg", "primary", (ArtPath((bar, spike), (True, True), Style()),))
+    assert art.art.is_valid
+    moved = _bumped_outline(art.art, [(np.array([60.0, 62.0]), np.array([0.0, -1.0]))], 2.0 * 4.0 ** 2)
+    assert moved.is_valid and moved.area > 0.99 * art.art.area
+    lid = square(40.0, 63.0)  # 1.0 above the spike's top: a bump pushes the spike down
+    out, _ = dent([art, lid], CONTAINER, GAP, 1.0, 0.9 * GAP, radius=2.0)
+    assert shapely.distance(out[0].art, out[1].art) > 1.0 + 0.5  # bent away, no GEOS error
+
+
 def test_off_or_nothing_to_do_returns_the_same_objects():
     a, b = bar_with_tip(20, 40), square(120.0, 33.0)
     out, res = dent([a, b], CONTAINER, GAP, 1.0, 0.9 * GAP)
