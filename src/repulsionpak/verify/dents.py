@@ -428,8 +428,9 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
     room = np.full(n, np.inf)  # the distortion each element may still take
     if limits is not None and distortions is not None:
         room = np.asarray(limits, float) - np.asarray(distortions, float)
-    args = (target, inner, rounds, radius * gap, push * gap, budget * gap, eps, room)
-    two_rho2 = 2.0 * (radius * gap) ** 2
+    rho = radius * gap
+    args = (target, inner, rounds, rho, push * gap, budget * gap, eps, room)
+    two_rho2 = 2.0 * rho ** 2  # as _rounds bends: _within_limit bends again with the same bumps
     out, counts, steps = _rounds(list(placed), np.arange(n), frozen, *args)
     over = _over_limit(placed, out, rest, limits)
     if over:  # bent back to their limit and frozen, the rounds go on: their neighbours give way alone

@@ -407,8 +407,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
         jam, a move clears its own contact by pressing the neighbour behind it)."""
         after = check()[0]
         kept = [(i, step) for i, step in moved if after[i] < before[i]]
-        undo([(i, step) for i, step in moved if after[i] >= before[i]], mark_stuck)
-        if kept and check()[0].sum() >= before.sum():
+        unhelpful = [(i, step) for i, step in moved if after[i] >= before[i]]
+        undo(unhelpful, mark_stuck)
+        if kept and (check()[0] if unhelpful else after).sum() >= before.sum():
             undo(kept, mark_stuck)
 
     stopped = False
