@@ -159,8 +159,9 @@ def test_bend_points_and_streamline_curvature(tmp_path):
 
 @pytest.fixture(scope="module")
 def ring_packings(tmp_path_factory):
-    """A long ellipse packed along a circular flow, with and without flow_bend, seeds 1 and 2
-    (a copy's bend also depends on its contacts: one seed's dozen copies can miss by chance)."""
+    """A long ellipse packed along a circular flow, with and without flow_bend, seeds 1–4
+    (a copy's bend also depends on its contacts: without flow_bend, the share of copies
+    bent along the flow was 0.83, 0.83, 0.67 and 0.50 on these seeds)."""
     import dataclasses
 
     from repulsionpak import load_container, load_elements, pack
@@ -176,7 +177,7 @@ def ring_packings(tmp_path_factory):
     for bend in (False, True):
         els = [dataclasses.replace(x, controls=ElementControls(flow_bend=bend)) for x in e]
         out[bend] = (els, [pack(c, els, Params(seed=seed, placement=PlacementParams(count=12)), flow=field)
-                           for seed in (1, 2)])
+                           for seed in (1, 2, 3, 4)])
     return field, out
 
 

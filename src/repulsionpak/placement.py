@@ -88,6 +88,33 @@ def blue_noise(region, count: int, rng: np.random.Generator, candidates_per_poin
     return pts[chosen]
 
 
+def wide_part(region, radius: float):
+    """The part of ``region`` covered by discs of ``radius`` inside it (its morphological
+    opening): the tips and slits narrower than 2·``radius`` left out.
+
+    Parameters
+    ----------
+    region : shapely geometry
+        A polygonal area.
+    radius : float
+        The disc's radius; <= 0 returns ``region``.
+
+    Returns
+    -------
+    shapely geometry
+        The opening by the largest of ``radius``, ``radius``/2, ``radius``/4 ... that keeps
+        at least half of ``region``'s area; ``region`` itself when none does (a band
+        narrower than the disc everywhere).
+    """
+    floor = 1e-3 * np.sqrt(region.area)
+    while radius > floor:
+        opened = shapely.buffer(shapely.buffer(region, -radius), radius)
+        if not opened.is_empty and opened.area >= 0.5 * region.area:
+            return opened
+        radius *= 0.5
+    return region
+
+
 @dataclass(frozen=True, eq=False)
 class Placement:
     """Initial transforms of the placed elements: x = shrink · R(angle) · v + position."""
@@ -112,7 +139,9 @@ def place(templates: Sequence[Template], assignment: np.ndarray, region, params:
           rng: np.random.Generator, angle_fn=None, positions: np.ndarray | None = None,
           orient=None) -> Placement:
     """Blue-noise positions, random orientations, and a common shrink so the skins cover
-    ``initial_fraction`` of the container without overlapping each other (sec. 4).
+    ``initial_fraction`` of the container without overlapping each other (sec. 4). The
+    positions lie where the container is at least ``start_width`` final element radii
+    wide (:func:`wide_part`).
     ``angle_fn(angles)`` (designer controls) may replace the random orientations; given
     ``positions`` ((count, 2), e.g. :func:`repulsionpak.sizing.spread`'s) replace the blue noise;
     ``orient(positions, angles)`` (a flow field: :class:`repulsionpak.flow.hook.Orienter`)
@@ -125,6 +154,8 @@ def place(templates: Sequence[Template], assignment: np.ndarray, region, params:
         inner = shapely.buffer(region, -0.5 * mean_r)
         if inner.is_empty or inner.area < 0.2 * region.area:
             inner = region
+        final_r = float(np.mean([templates[i].radius for i in assignment]))
+        inner = wide_part(inner, 0.5 * params.start_width * final_r)
         positions = blue_noise(inner, count, rng, params.candidates_per_point)
     positions = np.asarray(positions, float)
     angles = rng.uniform(0.0, 2 * np.pi, count) if params.rotate else np.zeros(count)
