@@ -11,7 +11,7 @@ from repulsionpak.params import Params
 from repulsionpak.placement import wide_part
 from repulsionpak.types import ArtPath, Container, Element, Style
 
-#: a crescent: the unit disc minus a disc shifted right; its horns end at HORN_TIPS
+#: a crescent: a disc of radius 100 minus one of 80 shifted right; its horns end at HORN_TIPS
 OUTER = shapely.Point(0, 0).buffer(100.0, 256)
 INNER = shapely.Point(45.0, 0).buffer(80.0, 256)
 CRESCENT = shapely.difference(OUTER, INNER)
@@ -55,9 +55,8 @@ def test_a_band_narrower_than_the_disc_everywhere_is_opened_by_a_smaller_one():
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_no_element_starts_where_the_container_is_narrower_than_it(seed):
-    """Farthest-point sampling takes the extremes first: without the start width, the
-    first points went to the tips of the horns (width under 10 for an element that grows
-    to a disc of radius ~12)."""
+    """Farthest-point sampling takes the extremes first: without the start width, seed 1
+    started an element where the crescent is 7 wide, for a final radius of 14."""
     elements = [disc_element("disc", 5.0)]
     params = Params(seed=seed, gap=2.0).with_(placement__count=20, placement__follow_room=False)
     templates, placement, _ = prepare(Container("crescent.svg", CRESCENT), elements, params,
