@@ -468,3 +468,18 @@ def test_a_reflex_corner_poking_into_a_long_element_pushes_it_off_the_corner():
     assert v.ok and not v.dropped
     assert v.shrunk[0] > 0.77
     assert region.boundary.distance(geoms(out)[0]) >= 2.5 - 1e-6
+
+
+def test_an_element_stuck_in_a_neck_is_put_where_there_is_room():
+    """Moves and shrinks are local: a square squeezed into a neck narrower than it (with
+    the margin on both sides) cannot leave it; it is put whole into the room elsewhere
+    rather than dropped."""
+    room = shapely.box(0, 0, 60, 60)
+    neck = shapely.box(59, 27, 100, 33)  # 6 wide: a square of 10 at half size and two margins of 2 do not fit
+    container = shapely.union(room, neck)
+    placed = [square(5, 5, side=20), square(75, 25, side=10, source="stuck.svg")]
+    out, v = verify_and_repair(placed, container, gap=4, margin=2, min_gap=3.6)
+    assert v.ok and v.dropped == [] and len(out) == 2
+    g = geoms(out)
+    assert room.contains(g[1]) and g[1].area >= 0.99 * 100  # whole, in the room
+    assert container.exterior.distance(g[1]) >= 2 - 1e-6 and g[0].distance(g[1]) >= 3.6 - 1e-6

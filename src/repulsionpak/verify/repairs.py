@@ -9,10 +9,12 @@ similarities: its shape is untouched) about its own centroid, or about the point
 that moves its contacts away with clearly less shrink
 (:func:`~repulsionpak.verify.checks._shrink_centre`). Of two primaries too close, the
 smaller one shrinks, until it has shrunk half-way to ``min_scale``: then the other one
-does. An element that would have to shrink below ``min_scale`` (half that for secondary
-elements, which are small by nature) is *dropped*, with a warning naming it. Then every
-element *grows* back into the room left around it (:func:`_inflate`) and lonely elements
-*gather* towards their nearest neighbour (:func:`_gather`). What remains is verified
+does. A primary that would have to shrink below ``min_scale``, or that still breaks a
+promise after the rounds, is *put where there is room* (:func:`_rescue`: whole, or at
+least at ``min_scale``, in one of the largest free parts); one that fits nowhere (and a
+secondary below half ``min_scale``: small by nature) is *dropped*, with a warning naming
+it. Then every element *grows* back into the room left around it (:func:`_inflate`) and
+lonely elements *gather* towards their nearest neighbour (:func:`_gather`). What remains is verified
 once more, exactly, and reported; the CLI exits non-zero if anything is still violated
 (on valid input it never is). Before all this, :func:`straighten` replaces a copy bent
 beyond its limit by its unbent, similar copy.
@@ -137,6 +139,70 @@ def _moved(g, scale: float, angle: float, centre, dx: float, dy: float):
     if angle:
         g = shapely.affinity.rotate(g, angle, origin=tuple(centre), use_radians=True)
     return shapely.affinity.translate(g, dx, dy)
+
+
+#: the free parts (largest first) where :func:`_rescue` looks for room for an element
+RESCUE_PARTS = 4
+
+
+def _rescue(i, geoms, base, alive, scale, shift, angle, centre, region, target, margin, lowest, eps,
+            max_turn=None):
+    """Put element ``i`` (not alive: the rounds could not keep it) where there is room.
+
+    The free space is the container shrunk by ``margin`` minus every alive outline
+    dilated by ``target``; in each of its :data:`RESCUE_PARTS` largest parts the element
+    is centred on the part's largest inscribed circle, turned as it is or by a multiple of
+    30° (within ``max_turn[i]`` radians of no turn, when given) and scaled (about its
+    centroid, bisection) to the largest share in [``lowest``, 1] of its size in ``base``
+    that the part contains. The largest fit is taken: ``scale``, ``shift``, ``angle`` and
+    ``geoms`` are updated and ``alive[i]`` set. Returns whether it fitted.
+
+    Notes
+    -----
+    Moves and shrinks are local: an element squeezed into a neck of the container (a
+    logo between the GitHub mark's tail and its rim) or into the tip of a crescent's horn
+    cannot leave it, while room for it may be left elsewhere (the leftover fill then put
+    small copies there). Only the rounds' outlines are used; the final check is exact."""
+    # a buffer of 4 segments a quarter circle is inscribed in the true one: widened to cover it
+    reach = target / np.cos(np.pi / 16)
+    others = [shapely.buffer(geoms[j], reach, quad_segs=4) for j in np.flatnonzero(alive) if j != i]
+    free = shapely.buffer(region, -margin)
+    if others:
+        free = shapely.difference(free, shapely.union_all(others))
+    parts = [q for q in getattr(free, "geoms", [free]) if isinstance(q, shapely.Polygon) and not q.is_empty]
+    parts.sort(key=lambda q: -q.area)
+    need_area = lowest ** 2 * base[i].area  # the element at its smallest
+    turns = angle[i] + np.radians(30.0) * np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6])
+    if max_turn is not None:
+        turns = turns[np.abs(turns) <= max_turn[i] + 1e-12]
+    best = None
+    for part in parts[:RESCUE_PARTS]:
+        if part.area < need_area:
+            break
+        shapely.prepare(part)
+        circle = shapely.maximum_inscribed_circle(part, eps)
+        dx, dy = np.asarray(circle.coords[0]) - centre[i]
+        for turn in turns:
+            def fits(s):
+                return part.contains(_moved(base[i], s, turn, centre[i], dx, dy))
+
+            lo, hi = lowest if best is None else max(lowest, best[0]), 1.0
+            if lo > hi or not fits(lo):
+                continue
+            if fits(hi):
+                lo = hi
+            else:
+                for _ in range(10):
+                    mid = 0.5 * (lo + hi)
+                    lo, hi = (mid, hi) if fits(mid) else (lo, mid)
+            if best is None or lo > best[0]:
+                best = (lo, dx, dy, turn)
+    if best is None:
+        return False
+    scale[i], shift[i], angle[i] = best[0], (best[1], best[2]), best[3]
+    geoms[i] = _moved(base[i], scale[i], angle[i], centre[i], shift[i][0], shift[i][1])
+    alive[i] = True
+    return True
 
 
 #: the most the skins' extra width (``grow_reach``) lets the final growth scale an element
@@ -467,6 +533,17 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                     place(i)
             if moved:
                 keep_helpful(moved, need, False)
+    if repair and not stopped:  # a primary the rounds could not keep may fit elsewhere
+        need = check()[0]  # (asks eps more of every distance: the exact check may pass below it)
+        for i in np.flatnonzero((~alive | (need > eps)) & (rank > 0)):
+            if exact[i].is_empty or (fixed is not None and fixed[i]):
+                continue
+            was = alive[i], scale[i], shift[i].copy(), angle[i]
+            alive[i] = False
+            if not _rescue(i, geoms, base, alive, scale, shift, angle, centre, region, w_gap + eps,
+                           w_margin + eps, float(lowest[i]), eps, max_turn):
+                alive[i], scale[i], shift[i], angle[i] = was
+                place(i)
     if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach, memo=memo)
