@@ -145,17 +145,23 @@ def _moved(g, scale: float, angle: float, centre, dx: float, dy: float):
 RESCUE_PARTS = 4
 
 
-def _rescue(i, geoms, base, alive, scale, shift, angle, centre, region, target, margin, lowest, eps,
-            max_turn=None):
+def _dilated(g, target: float):
+    """Outline ``g`` dilated by at least ``target``: a buffer of 4 segments a quarter
+    circle is inscribed in the true one, so it is widened to cover it."""
+    return shapely.buffer(g, target / np.cos(np.pi / 16), quad_segs=4)
+
+
+def _rescue(i, geoms, base, scale, shift, angle, centre, room, lowest, eps, max_turn=None):
     """Put element ``i`` (not alive: the rounds could not keep it) where there is room.
 
-    The free space is the container shrunk by ``margin`` minus every alive outline
-    dilated by ``target``; in each of its :data:`RESCUE_PARTS` largest parts the element
-    is centred on the part's largest inscribed circle, turned as it is or by a multiple of
-    30° (within ``max_turn[i]`` radians of no turn, when given) and scaled (about its
-    centroid, bisection) to the largest share in [``lowest``, 1] of its size in ``base``
-    that the part contains. The largest fit is taken: ``scale``, ``shift``, ``angle`` and
-    ``geoms`` are updated and ``alive[i]`` set. Returns whether it fitted.
+    ``room`` is the free space: the container shrunk by the margin minus every alive
+    outline dilated by the gap floor (:func:`_dilated`). In each of its
+    :data:`RESCUE_PARTS` largest parts the element is centred on the part's largest
+    inscribed circle, turned as it is or by a multiple of 30° (within ``max_turn[i]``
+    radians of no turn, when given) and scaled (about its centroid, bisection) to the
+    largest share in [``lowest``, 1] of its size in ``base`` that the part contains. The
+    largest fit is taken: ``scale``, ``shift``, ``angle`` and ``geoms`` are updated.
+    Returns whether it fitted.
 
     Notes
     -----
@@ -163,13 +169,7 @@ def _rescue(i, geoms, base, alive, scale, shift, angle, centre, region, target, 
     logo between the GitHub mark's tail and its rim) or into the tip of a crescent's horn
     cannot leave it, while room for it may be left elsewhere (the leftover fill then put
     small copies there). Only the rounds' outlines are used; the final check is exact."""
-    # a buffer of 4 segments a quarter circle is inscribed in the true one: widened to cover it
-    reach = target / np.cos(np.pi / 16)
-    others = [shapely.buffer(geoms[j], reach, quad_segs=4) for j in np.flatnonzero(alive) if j != i]
-    free = shapely.buffer(region, -margin)
-    if others:
-        free = shapely.difference(free, shapely.union_all(others))
-    parts = [q for q in getattr(free, "geoms", [free]) if isinstance(q, shapely.Polygon) and not q.is_empty]
+    parts = [q for q in getattr(room, "geoms", [room]) if isinstance(q, shapely.Polygon) and not q.is_empty]
     parts.sort(key=lambda q: -q.area)
     need_area = lowest ** 2 * base[i].area  # the element at its smallest
     turns = angle[i] + np.radians(30.0) * np.array([0, 1, -1, 2, -2, 3, -3, 4, -4, 5, -5, 6])
@@ -201,7 +201,6 @@ def _rescue(i, geoms, base, alive, scale, shift, angle, centre, region, target, 
         return False
     scale[i], shift[i], angle[i] = best[0], (best[1], best[2]), best[3]
     geoms[i] = _moved(base[i], scale[i], angle[i], centre[i], shift[i][0], shift[i][1])
-    alive[i] = True
     return True
 
 
@@ -535,15 +534,23 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 keep_helpful(moved, need, False)
     if repair and not stopped:  # a primary the rounds could not keep may fit elsewhere
         need = check()[0]  # (asks eps more of every distance: the exact check may pass below it)
-        for i in np.flatnonzero((~alive | (need > eps)) & (rank > 0)):
-            if exact[i].is_empty or (fixed is not None and fixed[i]):
-                continue
-            was = alive[i], scale[i], shift[i].copy(), angle[i]
-            alive[i] = False
-            if not _rescue(i, geoms, base, alive, scale, shift, angle, centre, region, w_gap + eps,
-                           w_margin + eps, float(lowest[i]), eps, max_turn):
-                alive[i], scale[i], shift[i], angle[i] = was
-                place(i)
+        lost = [i for i in np.flatnonzero((~alive | (need > eps)) & (rank > 0))
+                if not exact[i].is_empty and (fixed is None or not fixed[i])]
+        if lost:  # the room the others leave, measured once; then each one's in turn
+            others = np.ones(n, bool)
+            others[lost] = False
+            room = shapely.difference(shapely.buffer(region, -(w_margin + eps)), shapely.union_all(
+                [_dilated(geoms[j], w_gap + eps) for j in np.flatnonzero(alive & others)]))
+            for i in lost:
+                was = alive[i], scale[i], shift[i].copy(), angle[i]
+                alive[i] = False
+                near = [_dilated(geoms[j], w_gap + eps) for j in lost if j != i and alive[j]]
+                free = shapely.difference(room, shapely.union_all(near)) if near else room
+                if _rescue(i, geoms, base, scale, shift, angle, centre, free, float(lowest[i]), eps, max_turn):
+                    alive[i] = True
+                else:
+                    alive[i], scale[i], shift[i], angle[i] = was
+                    place(i)
     if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
         _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach, memo=memo)
