@@ -14,10 +14,10 @@ promise after the rounds, is *put where there is room* (:func:`_rescue`: whole, 
 least at ``min_scale``, in one of the largest free parts); one that fits nowhere (and a
 secondary below half ``min_scale``: small by nature) is *dropped*, with a warning naming
 it. Then every element *grows* back into the room left around it (:func:`_inflate`) and
-lonely elements *gather* towards their nearest neighbour (:func:`_gather`). What remains is verified
-once more, exactly, and reported; the CLI exits non-zero if anything is still violated
-(on valid input it never is). Before all this, :func:`straighten` replaces a copy bent
-beyond its limit by its unbent, similar copy.
+lonely elements *gather* towards their nearest neighbour (:func:`_gather`). What remains
+is verified once more, exactly, and reported; the CLI exits non-zero if anything is
+still violated (on valid input it never is). Before all this, :func:`straighten` replaces
+a copy bent beyond its limit by its unbent, similar copy.
 """
 
 from __future__ import annotations
@@ -546,7 +546,8 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                 alive[i] = False
                 near = [_dilated(geoms[j], w_gap + eps) for j in lost if j != i and alive[j]]
                 free = shapely.difference(room, shapely.union_all(near)) if near else room
-                if _rescue(i, geoms, base, scale, shift, angle, centre, free, float(lowest[i]), eps, max_turn):
+                if _rescue(i, geoms, base, scale, shift, angle, centre, free, float(lowest[i]), eps,
+                           max_turn):
                     alive[i] = True
                 else:
                     alive[i], scale[i], shift[i], angle[i] = was
