@@ -299,7 +299,7 @@ def test_dotted_art_is_dilated_dot_by_dot_in_the_pocket_fill(tmp_path, monkeypat
     offset curve together (100 dots whose buffers overlap: 16x slower than part by part,
     and the pocket fill of a 253-copy dotted packing spent 20 s there). The copies still
     keep the gap from every dot and the margin from the edge."""
-    import repulsionpak.holes as holes
+    from repulsionpak.geometry.dilate import MANY_PARTS
 
     (tmp_path / "dots.svg").write_text(_dots_svg(8, 5))
     (tmp_path / "disc.svg").write_text(scenes.element_svg("disc"))
@@ -308,7 +308,7 @@ def test_dotted_art_is_dilated_dot_by_dot_in_the_pocket_fill(tmp_path, monkeypat
     cont = load_container(tmp_path / "strip.svg")
     dots = load_element(tmp_path / "dots.svg")
     art = art_area(dots.paths)
-    many = getattr(holes, "MANY_PARTS", 16)
+    many = MANY_PARTS
     assert len(art.geoms) == 40 > many
     placed = [PlacedArt(dots.source, "primary", dots.paths, stroke_scale=1.0, deformation=0.0)]
     parts_buffered: list[int] = []
@@ -329,13 +329,13 @@ def test_dotted_art_is_dilated_dot_by_dot_in_the_pocket_fill(tmp_path, monkeypat
 
 
 def test_dilated_covers_the_same_region_as_a_whole_buffer():
-    """_dilated: art of few parts is buffered whole (the same vertices as before), art of
+    """dilated: art of few parts is buffered whole (the same vertices as before), art of
     many parts part by part: the union is the same region."""
-    from repulsionpak.holes import _dilated
+    from repulsionpak.geometry.dilate import dilated
 
     dots = shapely.union_all([shapely.Point(x, y).buffer(3.0) for x in range(0, 100, 10) for y in range(0, 50, 10)])
     pair = shapely.MultiPolygon([shapely.box(0, 0, 5, 5), shapely.box(20, 0, 25, 5)])
-    out = _dilated([pair, shapely.Polygon(), dots], 4.0)
+    out = dilated([pair, shapely.Polygon(), dots], 4.0)
     assert shapely.equals_exact(out[0], pair.buffer(4.0, quad_segs=4), 0.0)
     assert len(out) == 1 + 50 and all(shapely.get_num_geometries(g) == 1 for g in out[1:])
     whole = dots.buffer(4.0, quad_segs=4)

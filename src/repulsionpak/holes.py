@@ -27,6 +27,7 @@ import shapely
 
 from .types import ElementControls
 from .art_area import art_area
+from .geometry.dilate import covering, dilated, dilation
 from .geometry.robust import overlay
 from .geometry.robust import union_all as robust_union_all
 from .params import RenderParams
@@ -322,40 +323,6 @@ def fill_holes(placed: list[PlacedArt], library: HoleLibrary, gap: float, rng: n
     return out
 
 
-#: art of more parts than this (dots, lettering) is dilated part by part (:func:`_dilated`)
-MANY_PARTS = 16
-
-
-def _dilated(geoms: Sequence, reach: float) -> list:
-    """``geoms`` (the non-empty ones) each dilated by ``reach`` (4 segments per quarter
-    circle), to be united. A geometry of more than :data:`MANY_PARTS` polygons is dilated
-    part by part, its parts' buffers going into the union one by one: GEOS buffers a
-    multipolygon as one outline, noding all its parts' offset curves together, which
-    grows much faster than its parts (a copy of 100 dots whose buffers overlap: 80 ms,
-    against 5 ms part by part; 20 s of a 253-copy packing's pocket fill). The union is
-    the same region; art of few parts is buffered whole, as before (same vertices)."""
-    whole, parts = [], []
-    for g in geoms:
-        if g.is_empty:
-            continue
-        n = shapely.get_num_geometries(g)
-        (parts if n > MANY_PARTS else whole).append(g)
-    out = list(shapely.buffer(np.asarray(whole, dtype=object), reach, quad_segs=4)) if whole else []
-    if parts:
-        pieces = shapely.get_parts(np.asarray(parts, dtype=object))
-        pieces = pieces[~shapely.is_empty(pieces)]
-        out += list(shapely.buffer(pieces, reach, quad_segs=4))
-    return out
-
-
-def _dilation(g, reach: float):
-    """``g`` dilated by ``reach`` as one geometry (:func:`_dilated`: art of many parts
-    part by part, then united; else ``g.buffer(reach, quad_segs=4)`` itself)."""
-    if shapely.get_num_geometries(g) <= MANY_PARTS:
-        return g.buffer(reach, quad_segs=4)
-    return robust_union_all(_dilated([g], reach))
-
-
 def _shells(g):
     """``g`` with its holes filled (the union of its polygons' outer rings); ``g`` itself
     when it has none."""
@@ -387,11 +354,9 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     fill stops once it is spent (:class:`FillBudget`)."""
     keep = 1.005 * gap
     eps = 0.01 * gap
-    # a buffer with 4 segments per quarter circle is inscribed in the true one (its chords
-    # come within cos(π/16) ≈ 0.98 of the radius at corners): widen it to cover it
-    reach = (keep + eps) / math.cos(math.pi / 16)
+    reach = covering(keep + eps)  # 4-segment buffers that cover the true dilation
     geoms = [shapely.simplify(p.art if into_holes else _shells(p.art), eps) for p in placed]
-    taken = robust_union_all(_dilated(geoms, reach))
+    taken = robust_union_all(dilated(geoms, reach))
     free = overlay(shapely.difference, shapely.buffer(region, -(1.005 * margin)), taken)
     if free.is_empty:
         return []
@@ -409,7 +374,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
                 continue
             copy, g = got
             out.append(copy)
-            rest = overlay(shapely.difference, part, _dilation(g if into_holes else _shells(g), reach))
+            rest = overlay(shapely.difference, part, dilation(g if into_holes else _shells(g), reach))
             todo += [q for q in getattr(rest, "geoms", [rest])
                      if isinstance(q, shapely.Polygon) and not q.is_empty and q.area >= least]
             todo.sort(key=lambda q: -q.area)

@@ -150,11 +150,10 @@ def place(templates: Sequence[Template], assignment: np.ndarray, region, params:
     skin_total = sum(templates[i].skin_area for i in assignment)
     shrink = float(np.sqrt(params.initial_fraction * region.area / skin_total))
     if positions is None:
-        mean_r = float(np.mean([templates[i].radius for i in assignment])) * shrink
-        inner = shapely.buffer(region, -0.5 * mean_r)
+        final_r = float(np.mean([templates[i].radius for i in assignment]))  # mean final radius
+        inner = shapely.buffer(region, -0.5 * (final_r * shrink))  # half a placed radius in
         if inner.is_empty or inner.area < 0.2 * region.area:
             inner = region
-        final_r = float(np.mean([templates[i].radius for i in assignment]))
         inner = wide_part(inner, 0.5 * params.start_width * final_r)
         positions = blue_noise(inner, count, rng, params.candidates_per_point)
     positions = np.asarray(positions, float)

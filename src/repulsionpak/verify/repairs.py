@@ -30,6 +30,9 @@ import numpy as np
 import shapely
 
 from ..art_area import _polygonal
+from ..geometry.dilate import covering, dilated
+from ..geometry.robust import overlay
+from ..geometry.robust import union_all as robust_union_all
 from ..render.placed import refined, similarity_matrix
 from ..types import PlacedArt
 from .checks import Rough, Verification, _check, _near_pairs, _nearest, _pair_distances, _shrink_centre, distortion
@@ -145,17 +148,11 @@ def _moved(g, scale: float, angle: float, centre, dx: float, dy: float):
 RESCUE_PARTS = 4
 
 
-def _dilated(g, target: float):
-    """Outline ``g`` dilated by at least ``target``: a buffer of 4 segments a quarter
-    circle is inscribed in the true one, so it is widened to cover it."""
-    return shapely.buffer(g, target / np.cos(np.pi / 16), quad_segs=4)
-
-
 def _rescue(i, geoms, base, scale, shift, angle, centre, room, lowest, eps, max_turn=None):
     """Put element ``i`` (not alive: the rounds could not keep it) where there is room.
 
     ``room`` is the free space: the container shrunk by the margin minus every alive
-    outline dilated by the gap floor (:func:`_dilated`). In each of its
+    outline dilated by the gap floor (:func:`~repulsionpak.geometry.dilate.dilated`). In each of its
     :data:`RESCUE_PARTS` largest parts the element is centred on the part's largest
     inscribed circle, turned as it is or by a multiple of 30° (within ``max_turn[i]``
     radians of no turn, when given) and scaled (about its centroid, bisection) to the
@@ -197,6 +194,10 @@ def _rescue(i, geoms, base, scale, shift, angle, centre, room, lowest, eps, max_
                     lo, hi = (mid, hi) if fits(mid) else (lo, mid)
             if best is None or lo > best[0]:
                 best = (lo, dx, dy, turn)
+            if best is not None and best[0] >= 1.0:  # whole: nothing fits larger
+                break
+        if best is not None and best[0] >= 1.0:
+            break
     if best is None:
         return False
     scale[i], shift[i], angle[i] = best[0], (best[1], best[2]), best[3]
@@ -539,13 +540,14 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
         if lost:  # the room the others leave, measured once; then each one's in turn
             others = np.ones(n, bool)
             others[lost] = False
-            room = shapely.difference(shapely.buffer(region, -(w_margin + eps)), shapely.union_all(
-                [_dilated(geoms[j], w_gap + eps) for j in np.flatnonzero(alive & others)]))
+            reach = covering(w_gap + eps)
+            room = overlay(shapely.difference, inner, robust_union_all(
+                dilated([geoms[j] for j in np.flatnonzero(alive & others)], reach)))
             for i in lost:
                 was = alive[i], scale[i], shift[i].copy(), angle[i]
                 alive[i] = False
-                near = [_dilated(geoms[j], w_gap + eps) for j in lost if j != i and alive[j]]
-                free = shapely.difference(room, shapely.union_all(near)) if near else room
+                near = dilated([geoms[j] for j in lost if j != i and alive[j]], reach)
+                free = overlay(shapely.difference, room, robust_union_all(near)) if near else room
                 if _rescue(i, geoms, base, scale, shift, angle, centre, free, float(lowest[i]), eps,
                            max_turn):
                     alive[i] = True
