@@ -81,11 +81,11 @@ def limit_deformation(x, x_rest, elem_vstart, moving, limit, keep):
     projection, 0.09 with the kept vertices; no limit at all: 0.01) — gap violations the
     final repair then resolved by shrinking.
 
-    The cap is continuous: once the kept deviation passed half the budget, scaling every
-    vertex alike again pushed the kept ones back into their neighbours a little every
-    step. In a jam of bent S shapes that ratchet slowly drove one's arm across another's
-    (their skins overlapping by 22 % of the smaller after 2,400 iterations), and the
-    repair dropped one of them.
+    The cap is continuous. Scaling every vertex alike once the kept deviation passes its
+    share pushes the kept ones back into their neighbours a little every step, and in a
+    jam, where contacts hold much of the budget, that ratchet slowly drove the arm of one
+    bent S shape across another's (their skins overlapping by 22 % of the smaller after
+    2,400 iterations); the repair then dropped one of them.
     """
     M = elem_vstart.shape[0] - 1
     hit = np.zeros(M, np.int64)
