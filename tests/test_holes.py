@@ -308,8 +308,7 @@ def test_dotted_art_is_dilated_dot_by_dot_in_the_pocket_fill(tmp_path, monkeypat
     cont = load_container(tmp_path / "strip.svg")
     dots = load_element(tmp_path / "dots.svg")
     art = art_area(dots.paths)
-    many = MANY_PARTS
-    assert len(art.geoms) == 40 > many
+    assert len(art.geoms) == 40 > MANY_PARTS
     placed = [PlacedArt(dots.source, "primary", dots.paths, stroke_scale=1.0, deformation=0.0)]
     parts_buffered: list[int] = []
     buffer = shapely.buffer
@@ -322,7 +321,7 @@ def test_dotted_art_is_dilated_dot_by_dot_in_the_pocket_fill(tmp_path, monkeypat
     lib = HoleLibrary.of([load_element(tmp_path / f"{library}.svg")])  # dots: the copies have 40 parts too
     extra = fill_pockets(placed, lib, cont.region, 10.0, 5.0, np.random.default_rng(0), min_radius=5.0)
     monkeypatch.undo()
-    assert parts_buffered and max(parts_buffered) <= many
+    assert parts_buffered and max(parts_buffered) <= MANY_PARTS
     geoms = [art_area(e.paths, e.stroke_scale) for e in extra]
     assert len(geoms) >= (10 if library == "disc" else 2)  # the strip right of the dots is filled
     _assert_gap_and_margin(cont, geoms + [art])

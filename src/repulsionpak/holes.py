@@ -27,7 +27,7 @@ import shapely
 
 from .types import ElementControls
 from .art_area import art_area
-from .geometry.dilate import covering, dilated, dilation
+from .geometry.dilate import covering, dilation, room_left
 from .geometry.robust import overlay
 from .geometry.robust import union_all as robust_union_all
 from .params import RenderParams
@@ -356,8 +356,7 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     eps = 0.01 * gap
     reach = covering(keep + eps)  # 4-segment buffers that cover the true dilation
     geoms = [shapely.simplify(p.art if into_holes else _shells(p.art), eps) for p in placed]
-    taken = robust_union_all(dilated(geoms, reach))
-    free = overlay(shapely.difference, shapely.buffer(region, -(1.005 * margin)), taken)
+    free = room_left(shapely.buffer(region, -(1.005 * margin)), geoms, reach)
     if free.is_empty:
         return []
     parts = [q for q in getattr(free, "geoms", [free]) if isinstance(q, shapely.Polygon)]

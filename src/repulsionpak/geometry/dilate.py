@@ -2,7 +2,7 @@
 
 The pocket fills (:mod:`repulsionpak.holes`) and the repair's search for room
 (:mod:`repulsionpak.verify.repairs`) take every element's art dilated by the gap out of
-the free space. Buffers of 4 segments a quarter circle are cheap but inscribed in the
+the free space (:func:`room_left`). Buffers of 4 segments a quarter circle are cheap but inscribed in the
 true dilation; :func:`covering` gives the distance to buffer by so that they cover it.
 """
 
@@ -14,9 +14,9 @@ from collections.abc import Sequence
 import numpy as np
 import shapely
 
-from .robust import union_all
+from .robust import overlay, union_all
 
-__all__ = ["MANY_PARTS", "covering", "dilated", "dilation"]
+__all__ = ["MANY_PARTS", "covering", "dilated", "dilation", "room_left"]
 
 #: art of more parts than this (dots, lettering) is dilated part by part (:func:`dilated`)
 MANY_PARTS = 16
@@ -57,3 +57,13 @@ def dilation(g, reach: float):
     if shapely.get_num_geometries(g) <= MANY_PARTS:
         return g.buffer(reach, quad_segs=4)
     return union_all(dilated([g], reach))
+
+
+def room_left(space, geoms: Sequence, reach: float):
+    """``space`` less every geometry of ``geoms`` dilated by ``reach`` (:func:`dilated`,
+    united and subtracted by the robust overlay); ``space`` itself when ``geoms`` has
+    nothing to dilate."""
+    taken = dilated(geoms, reach)
+    if not taken:
+        return space
+    return overlay(shapely.difference, space, union_all(taken))

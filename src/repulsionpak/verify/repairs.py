@@ -30,9 +30,7 @@ import numpy as np
 import shapely
 
 from ..art_area import _polygonal
-from ..geometry.dilate import covering, dilated
-from ..geometry.robust import overlay
-from ..geometry.robust import union_all as robust_union_all
+from ..geometry.dilate import covering, room_left
 from ..render.placed import refined, similarity_matrix
 from ..types import PlacedArt
 from .checks import Rough, Verification, _check, _near_pairs, _nearest, _pair_distances, _shrink_centre, distortion
@@ -152,7 +150,7 @@ def _rescue(i, geoms, base, scale, shift, angle, centre, room, lowest, eps, max_
     """Put element ``i`` (not alive: the rounds could not keep it) where there is room.
 
     ``room`` is the free space: the container shrunk by the margin minus every alive
-    outline dilated by the gap floor (:func:`~repulsionpak.geometry.dilate.dilated`). In each of its
+    outline dilated by the gap floor (:func:`~repulsionpak.geometry.dilate.room_left`). In each of its
     :data:`RESCUE_PARTS` largest parts the element is centred on the part's largest
     inscribed circle, turned as it is or by a multiple of 30° (within ``max_turn[i]``
     radians of no turn, when given) and scaled (about its centroid, bisection) to the
@@ -194,7 +192,7 @@ def _rescue(i, geoms, base, scale, shift, angle, centre, room, lowest, eps, max_
                     lo, hi = (mid, hi) if fits(mid) else (lo, mid)
             if best is None or lo > best[0]:
                 best = (lo, dx, dy, turn)
-            if best is not None and best[0] >= 1.0:  # whole: nothing fits larger
+            if best[0] >= 1.0:  # whole: nothing fits larger
                 break
         if best is not None and best[0] >= 1.0:
             break
@@ -541,13 +539,11 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
             others = np.ones(n, bool)
             others[lost] = False
             reach = covering(w_gap + eps)
-            room = overlay(shapely.difference, inner, robust_union_all(
-                dilated([geoms[j] for j in np.flatnonzero(alive & others)], reach)))
+            room = room_left(inner, [geoms[j] for j in np.flatnonzero(alive & others)], reach)
             for i in lost:
                 was = alive[i], scale[i], shift[i].copy(), angle[i]
                 alive[i] = False
-                near = dilated([geoms[j] for j in lost if j != i and alive[j]], reach)
-                free = overlay(shapely.difference, room, robust_union_all(near)) if near else room
+                free = room_left(room, [geoms[j] for j in lost if j != i and alive[j]], reach)
                 if _rescue(i, geoms, base, scale, shift, angle, centre, free, float(lowest[i]), eps,
                            max_turn):
                     alive[i] = True
