@@ -3,7 +3,7 @@
 ``python -m repulsionpak.warmup`` is the warm-up process a first run starts
 (:func:`repulsionpak._jit.warmup.start` with :data:`WORKLOAD`): it compiles the
 simulation's specialisations in reverse order of first use, the pocket fill's fitting
-kernel, the render kernels, then the simulation's parallel builds (``--parallel``: only
+kernel and the dents' bump map, the render kernels, then the simulation's parallel builds (``--parallel``: only
 those). ``--write-signatures`` records the simulation's specialisations into
 ``warmup_signatures.json`` (:mod:`repulsionpak._jit.signatures`).
 
@@ -170,6 +170,17 @@ def _warm_misfit() -> None:
     fit_scales(*args)
 
 
+def _warm_dents() -> None:
+    """The dents' bump map and its Jacobian (:mod:`repulsionpak.verify.dents`), which the
+    verification calls between the simulations and the renderer."""
+    from .verify.dents import _bumped, _jacobians
+
+    bumps = [(np.zeros(2), np.array([0.1, 0.0]))]
+    pts = np.array([[0.0, 0.0], [1.0, 0.0]])
+    _bumped(pts, bumps, 2.0)
+    _jacobians(pts, bumps, 2.0)
+
+
 def _arc():
     th = np.linspace(0.0, 0.5 * np.pi, 9)
     return np.column_stack([np.cos(th), np.sin(th)]), np.column_stack([-np.sin(th), np.cos(th)]), th
@@ -180,7 +191,7 @@ WORKLOAD = jit.Workload(
     entry="repulsionpak.warmup",
     modules=("repulsionpak.sim.runner",),  # imports, and so registers, every kernel a run calls
     record=simulation_specialisations,
-    after_simulation=(("_warm_misfit", _warm_misfit),),
+    after_simulation=(("_warm_misfit", _warm_misfit), ("_warm_dents", _warm_dents)),
     # the curve fitter first (the largest, ~70% of the render kernels' compilation), then
     # the two small ones in reverse order of use (jit.wait compiles them from the other end)
     render=(("_warm_fit", _warm_fit), ("_warm_flatten", _warm_flatten), ("_warm_tps", _warm_tps)),

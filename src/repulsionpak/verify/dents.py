@@ -26,10 +26,12 @@ checks measure what is written. On the heart with 30 animals (seeds
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from numba import njit
 
 from ..geometry.curves import as_cubics, cubic_points
 from ..geometry.pairwise import distances
@@ -59,15 +61,62 @@ class DentResult:
     reverted: tuple[int, ...]
 
 
+def _packed(bumps: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """A bump list as one (B, 4) array of rows (centre x, y, vector x, y), as the
+    kernels take it."""
+    out = np.empty((len(bumps), 4))
+    for k, (c, v) in enumerate(bumps):
+        out[k, :2] = c
+        out[k, 2:] = v
+    return out
+
+
+@njit(cache=True)
+def _bump_points(pts, cv, two_rho2):
+    """``pts`` (n, 2) moved by the sum of the bumps ``cv`` (B, 4): each bump's weight is
+    taken at the unmoved point."""
+    out = pts.copy()
+    for i in range(pts.shape[0]):
+        px = pts[i, 0]
+        py = pts[i, 1]
+        for k in range(cv.shape[0]):
+            dx = px - cv[k, 0]
+            dy = py - cv[k, 1]
+            w = math.exp(-(dx * dx + dy * dy) / two_rho2)
+            out[i, 0] += w * cv[k, 2]
+            out[i, 1] += w * cv[k, 3]
+    return out
+
+
+@njit(cache=True)
+def _bump_jacobians(pts, cv, two_rho2):
+    """(n, 2, 2) Jacobian of the bump map ``cv`` (B, 4) at ``pts`` (n, 2)."""
+    n = pts.shape[0]
+    jac = np.zeros((n, 2, 2))
+    f = -2.0 / two_rho2
+    for i in range(n):
+        jac[i, 0, 0] = 1.0
+        jac[i, 1, 1] = 1.0
+        px = pts[i, 0]
+        py = pts[i, 1]
+        for k in range(cv.shape[0]):
+            dx = px - cv[k, 0]
+            dy = py - cv[k, 1]
+            fw = f * math.exp(-(dx * dx + dy * dy) / two_rho2)
+            gx = fw * dx
+            gy = fw * dy
+            jac[i, 0, 0] += cv[k, 2] * gx
+            jac[i, 0, 1] += cv[k, 2] * gy
+            jac[i, 1, 0] += cv[k, 3] * gx
+            jac[i, 1, 1] += cv[k, 3] * gy
+    return jac
+
+
 def _bumped(points: np.ndarray, bumps: list[tuple[np.ndarray, np.ndarray]], two_rho2: float) -> np.ndarray:
     """``points`` (..., 2) moved by the sum of the bumps (centre, vector)."""
     pts = np.asarray(points, dtype=float)
-    flat = pts.reshape(-1, 2)
-    out = flat.copy()
-    for c, v in bumps:
-        w = np.exp(-((flat - c) ** 2).sum(axis=1) / two_rho2)
-        out += w[:, None] * v
-    return out.reshape(pts.shape)
+    flat = np.ascontiguousarray(pts.reshape(-1, 2))
+    return _bump_points(flat, _packed(bumps), float(two_rho2)).reshape(pts.shape)
 
 
 def _bumped_outline(geom, bumps: list, two_rho2: float):
@@ -89,14 +138,8 @@ def _bumped_outline(geom, bumps: list, two_rho2: float):
 
 def _jacobians(points: np.ndarray, bumps: list, two_rho2: float) -> np.ndarray:
     """(n, 2, 2) Jacobian of the bump map at ``points`` (n, 2)."""
-    jac = np.zeros((len(points), 2, 2))
-    jac[:, 0, 0] = jac[:, 1, 1] = 1.0
-    for c, v in bumps:
-        d = points - c
-        w = np.exp(-(d ** 2).sum(axis=1) / two_rho2)
-        grad = (-2.0 / two_rho2) * w[:, None] * d  # ∇w
-        jac += v[None, :, None] * grad[:, None, :]
-    return jac
+    pts = np.ascontiguousarray(points, dtype=float)
+    return _bump_jacobians(pts, _packed(bumps), float(two_rho2))
 
 
 def _bend(order: np.ndarray, ctrl: np.ndarray, bumps: list, two_rho2: float) -> np.ndarray:
