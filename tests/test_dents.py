@@ -226,3 +226,31 @@ def test_a_container_narrower_than_twice_the_margin_bends_nothing_at_its_edge():
     a = poly([[10, 1.0], [60, 1.0], [60, 2.0], [10, 2.0]])
     (out,), res = dent([a], shapely.box(0, 0, 200, 3), GAP, 2.0, 0.9 * GAP)
     assert out is a and res.dented == ()
+
+
+def test_the_bump_map_and_its_jacobian_are_the_gaussian_sum_and_its_derivative():
+    """The compiled bump map: a point moves by Σ v·exp(−|p − c|²/2ρ²) (weights taken at
+    the unmoved point), and the Jacobian is that map's derivative (central differences)."""
+    from repulsionpak.verify.dents import _bumped, _jacobians
+
+    rho = 1.7
+    two_rho2 = 2.0 * rho ** 2
+    bumps = [(np.array([0.0, 0.0]), np.array([0.5, -0.2])), (np.array([1.0, 2.0]), np.array([-0.3, 0.4]))]
+    pts = np.array([[0.0, 0.0], [rho, 0.0], [1.0, 2.0], [0.3, -0.8], [40.0, 40.0]])
+    moved = _bumped(pts, bumps, two_rho2)
+    want = pts.copy()
+    for c, v in bumps:
+        want += np.exp(-((pts - c) ** 2).sum(axis=1) / two_rho2)[:, None] * v
+    assert np.allclose(moved, want, rtol=0, atol=1e-14)
+    assert np.allclose(moved[1] - pts[1], 0.5 * np.exp(-0.5) * np.array([1.0, -0.4])
+                       + np.exp(-((rho - 1.0) ** 2 + 4.0) / two_rho2) * np.array([-0.3, 0.4]), atol=1e-14)
+    assert np.array_equal(moved[4], pts[4])  # far from every bump: unmoved (to the last bit)
+    assert _bumped(pts.reshape(5, 1, 2), bumps, two_rho2).shape == (5, 1, 2)  # any leading shape
+    jac = _jacobians(pts, bumps, two_rho2)
+    h = 1e-6
+    for k in range(2):
+        e = np.zeros(2)
+        e[k] = h
+        fd = (_bumped(pts + e, bumps, two_rho2) - _bumped(pts - e, bumps, two_rho2)) / (2 * h)
+        assert np.allclose(jac[:, :, k], fd, atol=1e-8)
+    assert np.allclose(jac[4], np.eye(2), rtol=0, atol=1e-200)
