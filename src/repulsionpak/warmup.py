@@ -3,9 +3,9 @@
 ``python -m repulsionpak.warmup`` is the warm-up process a first run starts
 (:func:`repulsionpak._jit.warmup.start` with :data:`WORKLOAD`): it compiles the
 simulation's specialisations in reverse order of first use, the pocket fill's fitting
-kernel and the dents' bump map, the render kernels, then the simulation's parallel builds (``--parallel``: only
-those). ``--write-signatures`` records the simulation's specialisations into
-``warmup_signatures.json`` (:mod:`repulsionpak._jit.signatures`).
+kernel and the dents' bump map, the render kernels, then the simulation's parallel
+builds (``--parallel``: only those). ``--write-signatures`` records the simulation's
+specialisations into ``warmup_signatures.json`` (:mod:`repulsionpak._jit.signatures`).
 
 Which specialisations? The simulation's are recorded by running a few iterations of a
 tiny packing with every simulation kernel replaced by its plain Python function (the

@@ -74,7 +74,14 @@ def _packed(bumps: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
 @njit(cache=True)
 def _bump_points(pts, cv, two_rho2):
     """``pts`` (n, 2) moved by the sum of the bumps ``cv`` (B, 4): each bump's weight is
-    taken at the unmoved point."""
+    taken at the unmoved point.
+
+    Notes
+    -----
+    Compiled because the dents call it thousands of times on a few points each (every
+    bent segment's ends, then its samples while it is split): as numpy expressions that
+    was one temporary array per bump and call. The sums run in numpy's order, so the
+    packings are the same to the bit."""
     out = pts.copy()
     for i in range(pts.shape[0]):
         px = pts[i, 0]
