@@ -231,7 +231,7 @@ def test_a_container_narrower_than_twice_the_margin_bends_nothing_at_its_edge():
 def test_the_bump_map_and_its_jacobian_are_the_gaussian_sum_and_its_derivative():
     """The compiled bump map: a point moves by Σ v·exp(−|p − c|²/2ρ²) (weights taken at
     the unmoved point), and the Jacobian is that map's derivative (central differences)."""
-    from repulsionpak.verify.dents import _bumped, _jacobians
+    from repulsionpak.verify.dents import _bumped, _bumped_with_jacobians
 
     rho = 1.7
     two_rho2 = 2.0 * rho ** 2
@@ -246,7 +246,7 @@ def test_the_bump_map_and_its_jacobian_are_the_gaussian_sum_and_its_derivative()
                        + np.exp(-((rho - 1.0) ** 2 + 4.0) / two_rho2) * np.array([-0.3, 0.4]), atol=1e-14)
     assert np.array_equal(moved[4], pts[4])  # far from every bump: unmoved (to the last bit)
     assert _bumped(pts.reshape(5, 1, 2), bumps, two_rho2).shape == (5, 1, 2)  # any leading shape
-    jac = _jacobians(pts, bumps, two_rho2)
+    jac = _bumped_with_jacobians(pts, bumps, two_rho2)[1]
     h = 1e-6
     for k in range(2):
         e = np.zeros(2)

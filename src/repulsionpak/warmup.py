@@ -173,12 +173,12 @@ def _warm_misfit() -> None:
 def _warm_dents() -> None:
     """The dents' bump map and its Jacobian (:mod:`repulsionpak.verify.dents`), which the
     verification calls between the simulations and the renderer."""
-    from .verify.dents import _bumped, _jacobians
+    from .verify.dents import _bumped, _bumped_with_jacobians
 
     bumps = [(np.zeros(2), np.array([0.1, 0.0]))]
     pts = np.array([[0.0, 0.0], [1.0, 0.0]])
     _bumped(pts, bumps, 2.0)
-    _jacobians(pts, bumps, 2.0)
+    _bumped_with_jacobians(pts, bumps, 2.0)
 
 
 def _arc():

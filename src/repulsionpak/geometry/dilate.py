@@ -2,8 +2,9 @@
 
 The pocket fills (:mod:`repulsionpak.holes`) and the repair's search for room
 (:mod:`repulsionpak.verify.repairs`) take every element's art dilated by the gap out of
-the free space (:func:`room_left`). Buffers of 4 segments a quarter circle are cheap but inscribed in the
-true dilation; :func:`covering` gives the distance to buffer by so that they cover it.
+the free space (:func:`room_left`). Buffers of 4 segments a quarter circle are cheap but
+inscribed in the true dilation; :func:`covering` gives the distance to buffer by so that
+they cover it.
 """
 
 from __future__ import annotations

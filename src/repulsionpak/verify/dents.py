@@ -96,9 +96,11 @@ def _bump_points(pts, cv, two_rho2):
 
 
 @njit(cache=True)
-def _bump_jacobians(pts, cv, two_rho2):
-    """(n, 2, 2) Jacobian of the bump map ``cv`` (B, 4) at ``pts`` (n, 2)."""
+def _bump_map(pts, cv, two_rho2):
+    """``pts`` (n, 2) moved by the bumps ``cv`` (B, 4), as :func:`_bump_points`, and the
+    map's (n, 2, 2) Jacobian there: both from one weight per point and bump."""
     n = pts.shape[0]
+    out = pts.copy()
     jac = np.zeros((n, 2, 2))
     f = -2.0 / two_rho2
     for i in range(n):
@@ -109,14 +111,17 @@ def _bump_jacobians(pts, cv, two_rho2):
         for k in range(cv.shape[0]):
             dx = px - cv[k, 0]
             dy = py - cv[k, 1]
-            fw = f * math.exp(-(dx * dx + dy * dy) / two_rho2)
+            w = math.exp(-(dx * dx + dy * dy) / two_rho2)
+            out[i, 0] += w * cv[k, 2]
+            out[i, 1] += w * cv[k, 3]
+            fw = f * w
             gx = fw * dx
             gy = fw * dy
             jac[i, 0, 0] += cv[k, 2] * gx
             jac[i, 0, 1] += cv[k, 2] * gy
             jac[i, 1, 0] += cv[k, 3] * gx
             jac[i, 1, 1] += cv[k, 3] * gy
-    return jac
+    return out, jac
 
 
 def _bumped(points: np.ndarray, bumps: list[tuple[np.ndarray, np.ndarray]], two_rho2: float) -> np.ndarray:
@@ -143,10 +148,11 @@ def _bumped_outline(geom, bumps: list, two_rho2: float):
     return out
 
 
-def _jacobians(points: np.ndarray, bumps: list, two_rho2: float) -> np.ndarray:
-    """(n, 2, 2) Jacobian of the bump map at ``points`` (n, 2)."""
+def _bumped_with_jacobians(points: np.ndarray, bumps: list, two_rho2: float) -> tuple[np.ndarray, np.ndarray]:
+    """``points`` (n, 2) moved by the bumps (:func:`_bumped`) and the (n, 2, 2) Jacobian
+    of the bump map at them."""
     pts = np.ascontiguousarray(points, dtype=float)
-    return _bump_jacobians(pts, _packed(bumps), float(two_rho2))
+    return _bump_map(pts, _packed(bumps), float(two_rho2))
 
 
 def _bend(order: np.ndarray, ctrl: np.ndarray, bumps: list, two_rho2: float) -> np.ndarray:
@@ -159,8 +165,7 @@ def _bend(order: np.ndarray, ctrl: np.ndarray, bumps: list, two_rho2: float) -> 
     start = ctrl[:, 0]
     end = ctrl[np.arange(n), order]
     ends = np.concatenate([start, end])
-    moved = _bumped(ends, bumps, two_rho2)
-    jac = _jacobians(ends, bumps, two_rho2)
+    moved, jac = _bumped_with_jacobians(ends, bumps, two_rho2)
     f0, f1, j0, j1 = moved[:n], moved[n:], jac[:n], jac[n:]
     h0 = f0 + np.einsum("nij,nj->ni", j0, ctrl[:, 1] - start)  # first handle, from the start
     out = np.empty_like(ctrl)
@@ -195,8 +200,8 @@ def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, steps: lis
     t = np.repeat(CHECK_AT, len(order))  # every segment at each parameter in turn
     p, d = cubic_points(np.tile(as_cubics(order, ctrl), (len(CHECK_AT), 1, 1)), t)
     for bumps in steps:  # the exact map: one bump list after the other
-        d = np.einsum("nij,nj->ni", _jacobians(p, bumps, two_rho2), d)
-        p = _bumped(p, bumps, two_rho2)
+        p, jac = _bumped_with_jacobians(p, bumps, two_rho2)
+        d = np.einsum("nij,nj->ni", jac, d)
     q, e = cubic_points(np.tile(as_cubics(order, bent), (len(CHECK_AT), 1, 1)), t)
     turn = np.abs(np.arctan2(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0], (d * e).sum(axis=1)))
     bad = (np.hypot(*(p - q).T) > distance) | (turn > angle)
