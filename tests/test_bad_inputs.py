@@ -396,6 +396,20 @@ def test_bowtie_container_is_repaired_with_a_warning(tmp_path):
     assert out.exists()
 
 
+def test_a_run_warns_about_its_container_once():
+    """Without a gap the container is read twice (for the default gap, then at the gap's
+    tolerance): only the read the run uses warns, so a file's problem is told once."""
+    from repulsionpak.inputs import run_container
+    from repulsionpak.params import Params
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        cont, params = run_container(BAD / "container_bowtie.svg", Params())
+    told = [str(w.message) for w in seen if "cross themselves" in str(w.message)]
+    assert len(told) == 1, told
+    assert params.gap > 0 and cont.tolerance == pytest.approx(params.gap * 0.001)
+
+
 @pytest.mark.parametrize("kind", ["image", "filter"])
 @pytest.mark.parametrize("loader", [load_element, load_container])
 def test_unsupported_content_is_skipped_with_a_warning(tmp_path, kind, loader):

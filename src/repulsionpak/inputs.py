@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 
 import shapely
@@ -138,8 +139,12 @@ def run_container(container: Container | str | os.PathLike, params: Params) -> t
     """
     if isinstance(container, (str, os.PathLike)):
         path = container
-        tol = None if params.gap is None else CONTAINER_TOLERANCE * params.gap
-        cont = _read_container(path, tol, params)
+        if params.gap is None:  # read once for the gap: the read at the gap's tolerance below warns
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)
+                cont = _read_container(path, None, params)
+        else:
+            cont = _read_container(path, CONTAINER_TOLERANCE * params.gap, params)
     elif isinstance(container, Container):
         path, cont = container.path, container
     else:
