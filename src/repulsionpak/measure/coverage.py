@@ -22,6 +22,7 @@ from shapely.geometry import Polygon
 
 from ..errors import ParameterError
 from ..art_area import _polygonal
+from ..geometry.edges import Edges
 from ..geometry.robust import overlay
 from ..geometry.robust import union_all as robust_union_all
 from ..types import PlacedArt
@@ -149,14 +150,13 @@ def edge_distances(container_region, art_geoms: Sequence) -> list[float | None]:
     region = _polygonal(container_region)
     if region.is_empty:
         raise ParameterError("the container has no area")
-    boundary = region.boundary
     shapely.prepare(region)
     out: list[float | None] = []
     geoms = [_polygonal(g) for g in art_geoms]
     arr = np.array(geoms, dtype=object) if geoms else np.empty(0, dtype=object)
     if len(arr) == 0:
         return out
-    d = shapely.distance(arr, boundary)
+    d = Edges(region).distance(arr)  # indexed: a detailed container's edge costs what is near
     inside = shapely.contains_properly(region, arr)
     for g, di, ok in zip(geoms, d, inside):
         if g.is_empty:

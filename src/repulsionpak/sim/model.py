@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 import shapely
 
+from ..geometry.edges import Edges
 from ..geometry.edt import distance_transform
 from ..placement import Placement, placed_vertices
 from ..preprocess import Template
@@ -69,9 +70,7 @@ def container_field(region, h: float, margin: float, max_cells: int = 2_000_000)
     d_out = distance_transform(~inside, h)
     d = np.where(inside, d_in, d_out).ravel()
     near = np.flatnonzero(d < 6.0 * h)  # EDT overestimates by up to ~1.5 h
-    boundary = region.boundary
-    shapely.prepare(boundary)
-    d[near] = shapely.distance(boundary, shapely.points(px[near], py[near]))
+    d[near] = Edges(region).distance_xy(px[near], py[near], 8.0 * h)
     sd = np.where(inside.ravel(), -d, d).reshape(ny, nx)
     return Field(np.ascontiguousarray(sd), float(minx), float(miny), float(h))
 

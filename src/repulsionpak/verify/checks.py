@@ -24,6 +24,7 @@ import numpy as np
 import shapely
 from shapely.ops import polylabel
 
+from ..geometry.edges import Edges
 from ..geometry.pairwise import distances
 from ..geometry.robust import overlay
 
@@ -64,15 +65,16 @@ def distortion(art, copy) -> float:
     return float(overlay(shapely.symmetric_difference, art, copy).area / art.area)
 
 
-def _edge_distance(region_boundary, region, g) -> float:
-    """Distance from ``g`` to the container's edge; negative when ``g`` is not inside:
-    minus the depth of its deepest point outside."""
+def _edge_distance(edges: Edges, region, g) -> float:
+    """Distance from ``g`` to the container's edge (``edges``, the boundary of
+    ``region``); negative when ``g`` is not inside: minus the depth of its deepest point
+    outside."""
     if shapely.contains(region, g):
-        return float(shapely.distance(region_boundary, g))
+        return edges.distance(g)
     out = shapely.get_coordinates(overlay(shapely.difference, g, region))
     if len(out) == 0:
         return 0.0
-    return -float(np.max(shapely.distance(region_boundary, shapely.points(out))))
+    return -float(np.max(edges.distance(shapely.points(out))))
 
 
 def _edge_poke(boundary, g, margin: float):
@@ -165,7 +167,7 @@ class Rough:
         return i[keep], j[keep]
 
 
-def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exact_edges=False,
+def _check(geoms, alive, region, edges, min_gap, margin, tol, inner=None, exact_edges=False,
            fixed=None, rank=None, contacts=None, weak=None, memo=None, rough=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
@@ -297,7 +299,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
     for i in near:
         i = int(i)
         g = geoms[i]
-        e = _edge_distance(boundary, region, g)
+        e = _edge_distance(edges, region, g)
         emin = min(emin, e)
         if e >= margin - tol:
             continue
@@ -309,7 +311,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
         deficit = margin - e + tol
         c = centre(i)
         if e >= 0:
-            line = np.asarray(shapely.shortest_line(g, boundary).coords)
+            line = np.asarray(edges.shortest_line(g).coords)
             pt, u = line[0], line[0] - line[1]
         else:  # the art's point farthest outside
             coords = np.asarray(shapely.get_coordinates(overlay(shapely.difference, g, region)))
@@ -322,7 +324,7 @@ def _check(geoms, alive, region, boundary, min_gap, margin, tol, inner=None, exa
             # the snake shrank four rounds for nothing before a shrink about a better
             # point, to 0.665 in all, and the margin's deficit measured from the art's
             # points outside missed the corner's depth in the art.)
-            poke = _edge_poke(boundary, g, margin)
+            poke = _edge_poke(edges.boundary, g, margin)
             if poke is not None:
                 pt, u, depth = poke
                 deficit = max(deficit, depth + margin + tol)

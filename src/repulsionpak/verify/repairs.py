@@ -31,6 +31,7 @@ import shapely
 
 from ..art_area import _polygonal
 from ..geometry.dilate import covering, room_left
+from ..geometry.edges import Edges
 from ..render.placed import refined, similarity_matrix
 from ..types import PlacedArt
 from .checks import Rough, Verification, _check, _near_pairs, _nearest, _pair_distances, _shrink_centre, distortion
@@ -207,7 +208,7 @@ def _rescue(i, geoms, base, scale, shift, angle, centre, room, lowest, eps, max_
 REACH_MAX_SCALE = 2.0
 
 
-def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target, margin,
+def _inflate(geoms, base, alive, scale, shift, centre, region, edges, target, margin,
              max_scale, tol, rounds, inner=None, fixed=None, reach=0.0, memo=None):
     """Grow every element about its centroid into the room around it, never closer than
     ``target`` to another element nor ``margin`` to the edge, and no bigger than
@@ -238,7 +239,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
             break
         arr = np.array([geoms[i] for i in idx], dtype=object)
         q = np.flatnonzero(can)
-        edge = shapely.distance(boundary, arr[q])  # inside: the rounds before made sure
+        edge = edges.distance(arr[q])  # inside: the rounds before made sure
         # a round grows an element by at most 1.5 targets: neighbours farther than 4
         # targets cannot limit it
         slack = np.full(len(idx), np.inf)
@@ -266,7 +267,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, boundary, target,
             geoms[i] = _moved(base[i], scale[i], 0.0, centre[i], shift[i][0], shift[i][1])
 
 
-def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, target, threshold,
+def _gather(geoms, base, alive, scale, shift, angle, centre, region, edges, target, threshold,
             margin, tol, rounds=6, fixed=None, max_turn=None):
     """Close the gaps wider than ``threshold``: each element whose nearest neighbour is
     farther than ``threshold`` moves towards it until the two are ``target`` apart,
@@ -324,7 +325,7 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, t
             u = (q - p) / max(float(np.hypot(*(q - p))), 1e-300)
             budget = d - target - tol
             g = moved_copy(i, budget, u, 0.0)
-            ok = float(shapely.distance(boundary, g)) - margin > tol
+            ok = edges.distance(g) - margin > tol
             step, v, turn = budget, u, 0.0
             if not ok and i not in stuck:  # turned: the step and the turn share the travel budget
                 c = np.asarray(shapely.get_coordinates(geoms[i])) - (centre[i] + shift[i])
@@ -336,7 +337,7 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, t
                         if max_turn is not None and abs(angle[i] + turn) > max_turn[i]:
                             continue
                         g = moved_copy(i, step, v, turn)
-                        if float(shapely.distance(boundary, g)) - margin > tol:
+                        if edges.distance(g) - margin > tol:
                             ok = True
                             break
                     if ok:
@@ -413,7 +414,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     returned art even when the rounds are stopped.
     """
     region = _polygonal(region)
-    boundary = region.boundary
+    edges = Edges(region)  # the container's edge, indexed: distances cost what is near
     shapely.prepare(region)
     tol = 1e-9 * max(1.0, float(np.ptp(np.asarray(region.bounds))))
     n = len(placed)
@@ -452,7 +453,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     memo: dict = {}  # pair distances of the rounds' outlines: a round changes a few copies
 
     def check(exact_edges=False, contacts=None):
-        return _check(geoms, alive, region, boundary, w_gap, w_margin, tol, inner, exact_edges, fixed, rank,
+        return _check(geoms, alive, region, edges, w_gap, w_margin, tol, inner, exact_edges, fixed, rank,
                       contacts, scale < halfway, memo)
 
     def move(i, ln):
@@ -551,17 +552,17 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
                     alive[i], scale[i], shift[i], angle[i] = was
                     place(i)
     if repair and grow_to > 0 and not stopped:  # give back the room the repair (or the simulation) left
-        _inflate(geoms, base, alive, scale, shift, centre, region, boundary, grow_to + 2 * eps,
+        _inflate(geoms, base, alive, scale, shift, centre, region, edges, grow_to + 2 * eps,
                  w_margin, max_scale, tol, rounds=8, inner=inner, fixed=fixed, reach=grow_reach, memo=memo)
         if gather > grow_to:
-            _gather(geoms, base, alive, scale, shift, angle, centre, region, boundary, grow_to + 2 * eps,
+            _gather(geoms, base, alive, scale, shift, angle, centre, region, edges, grow_to + 2 * eps,
                     gather + 2 * eps, w_margin, tol, fixed=fixed, max_turn=max_turn)
     # final verification, exact, on what is returned; the rounds' outlines (each within
     # eps of its exact one, scaled as it is) tell which pairs need no exact measure
     rough = Rough(geoms, eps * scale, memo)
     geoms = [transform(exact[i], i) for i in range(n)]
     final: dict = {}  # a second check after drops measures no pair again
-    need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin, tol,
+    need, rel, push, counts, dmin, emin = _check(geoms, alive, region, edges, min_gap, margin, tol,
                                                  exact_edges=True, fixed=fixed, rank=rank, memo=final,
                                                  rough=rough)
     if repair:  # anything still violating after the rounds is dropped (never a pinned copy)
@@ -569,7 +570,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
             if fixed is None or not fixed[i]:
                 alive[i] = False
         if (need > 0).any():
-            need, rel, push, counts, dmin, emin = _check(geoms, alive, region, boundary, min_gap, margin,
+            need, rel, push, counts, dmin, emin = _check(geoms, alive, region, edges, min_gap, margin,
                                                          tol, exact_edges=True, fixed=fixed, rank=rank,
                                                          memo=final, rough=rough)
     dropped = [(int(i), placed[i].source) for i in range(n) if not alive[i] and not exact[i].is_empty]
