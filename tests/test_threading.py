@@ -1,7 +1,9 @@
 """The threading layer: a run always ends, whatever threading library the machine has.
 
 numba prefers TBB where ``libtbb`` is installed (the test extras install the PyPI ``tbb``
-package, so CI has it). With TBB, a parallel kernel run on a thread other than the main
+package, so CI has it; its library lands in the environment's ``lib`` folder, which the
+children here put on the loader's path, as a conda environment or Debian's ``libtbb12``
+would). With TBB, a parallel kernel run on a thread other than the main
 one while TBB sees a single core makes the interpreter hang at exit in ``tbb::finalize``
 (numba issue #10556). These tests run that situation in a child process pinned to one
 core and require it to exit.
@@ -44,9 +46,15 @@ _OFF_MAIN_THREAD = textwrap.dedent("""
 """)
 
 
+#: where the PyPI ``tbb`` package puts ``libtbb.so.12``; numba's TBB pool has no run path,
+#: so the loader finds it there only when told (a system ``libtbb12`` needs no telling)
+_ENV_LIB = os.path.join(sys.prefix, "lib")
+
+
 def _child_env(**extra) -> dict:
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_THREADING_LAYER")}
     env["NUMBA_NUM_THREADS"] = "2"
+    env["LD_LIBRARY_PATH"] = os.pathsep.join(p for p in (_ENV_LIB, env.get("LD_LIBRARY_PATH")) if p)
     env.update(extra)
     return env
 
@@ -56,11 +64,10 @@ def _one_core():
 
 
 def _tbb_available() -> bool:
-    try:
-        from numba.np.ufunc import tbbpool  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    """Whether numba's TBB layer loads in a child started as the tests here start them."""
+    res = subprocess.run([sys.executable, "-c", "from numba.np.ufunc import tbbpool"], env=_child_env(),
+                         capture_output=True, text=True, timeout=120)
+    return res.returncode == 0
 
 
 @pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="needs Linux CPU affinity")
