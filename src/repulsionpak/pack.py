@@ -24,6 +24,7 @@ from .room import room_of
 from .sim.art import placed_art, rest_art
 from .sim.model import Model, SimFrame, State, build_model
 from .sim.phase import bend_limits, neighbour_cell
+from .sim.relocate import Relocator
 from .sim.runner import Simulator, Snapshot
 from .sizing import UNEVEN_SHARE, is_even, narrow_share, plan_sizes
 from .types import Container, Element, PlacedArt
@@ -60,6 +61,32 @@ def primary_model(region, templates: Sequence[Template], placement: Placement, g
     model.inset_extra = max(0.0, margin_of(params, gap) - params.preprocess.skin_offset * gap) / frame.unit
     model.bend_limit[:] = bend_limits(templates, model.template_index, params.sim)
     return model, state, frame
+
+
+def primary_relocator(model: Model, region, frame: SimFrame, params: Params, filled: bool) -> Relocator | None:
+    """The moves at convergence of the primary phase (:mod:`repulsionpak.sim.relocate`),
+    or None: ``sim.relocations`` of them (None: :data:`RELOCATIONS_UNFILLED` when the pockets
+    are not ``filled``, else none). Pinned, rigid and turn-limited elements stay where the
+    simulation takes them, and a run following a flow field is not moved at all: their place
+    and angle are the designer's."""
+    n = params.sim.relocations
+    if n is None:
+        n = 0 if filled else RELOCATIONS_UNFILLED
+    if n <= 0 or model.flow is not None:
+        return None
+    movable = ~model.frozen
+    if model.rot_on is not None:
+        movable &= ~model.rot_on
+    if model.rigid is not None:
+        movable &= ~model.rigid
+    region_sim = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    return Relocator(region_sim, movable, n, turn=params.placement.rotate,
+                     inset=params.preprocess.skin_offset * model.gap)
+
+
+#: moves at convergence when nothing fills the pockets: the heart with 30 animals gained
+#: 0.016 art area with 3, 0.019 with 5 (every one of 12 seeds), 0.020 with 6
+RELOCATIONS_UNFILLED = 5
 
 
 def checked_gap(container: Container, elements: Sequence[Element], params: Params) -> float:
@@ -272,6 +299,8 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
     t1 = time.perf_counter()
     sim = Simulator(model, state, params.sim, phase="primary")
     sim.templates = templates
+    sim.relocator = primary_relocator(model, container.region, frame, params,
+                                      filled=bool(secondary) or params.secondary.auto)
     warmup.compile_forward(serial=sim.threads() == 1)  # first run: this process's share of the kernels
     res = sim.run_resumable((resume or {}).get("primary"),
                             None if on_checkpoint is None else lambda st: on_checkpoint({"primary": st}),
@@ -283,7 +312,8 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
                       seconds={"preprocess": t1 - t0, "primary": t2 - t1, "secondary": 0.0},
                       stopped_by={"primary": res.stopped_by}, area_fraction_meshes=res.area_fraction,
                       asked=asked, elements=tuple(elements), secondary=given_secondary,
-                      sources=inputs.sources if sources is None else sources, flow=flow)
+                      sources=inputs.sources if sources is None else sources, flow=flow,
+                      moves=[] if sim.relocator is None else list(sim.relocator.moves))
     user_cap = params.secondary.max_count  # a bound on every secondary copy, the fills' too
     auto = not secondary and params.secondary.auto  # pockets get copies of the primaries
     if auto:

@@ -95,6 +95,9 @@ class Packing:
     secondary: tuple[Element, ...] = ()
     sources: dict = field(default_factory=dict)
     flow: object | None = None  # the flow field the elements followed (repulsionpak.flow.FlowField)
+    #: the primary phase's moves into voids: (element, iteration, kept, iterations it ran)
+    #: (repulsionpak.sim.relocate)
+    moves: list = field(default_factory=list)
     _cache: dict = field(default_factory=dict, repr=False)
 
     def __setattr__(self, name: str, value) -> None:

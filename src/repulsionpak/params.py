@@ -232,6 +232,14 @@ class SimParams:
     min_iterations: int = _doc(300, "iterations", "Never stop before this many iterations.")
     max_iterations: int = _doc(20000, "iterations", "Bound on the iterations of each phase before it "
                                "settles (the settle_iterations follow).")
+    relocations: int | None = _doc(
+        None, "moves", "Beyond the paper: where the run would stop, the element whose skin has the "
+        "smallest inscribed circle is moved into the largest void (turned to fit it) and the run grows on; "
+        "at the next convergence the move is kept if the meshes cover more, else undone. At most this "
+        "many moves. None: 5 when the pockets are not filled (--no-pocket-fill), 0 when they are "
+        "(pocket copies fill the voids). Pinned, rigid and turn-limited elements and flow runs are "
+        "not moved. The heart with 30 animals and no pocket fill, seeds 1-12: art area 0.535 -> 0.554, "
+        "Q_s ratio 0.523 -> 0.493, primary iterations +50 % (docs/algorithm.md).")
     settle_iterations: int = _doc(
         100, "iterations", "Extra iterations without growth after stopping, to resolve the last overlaps. "
         "The overlaps growth leaves are resolved within the first few dozen; those left then stay "
@@ -538,6 +546,7 @@ class Params:
             (s.contact_depth >= 0, "sim.contact_depth must be >= 0 (× gap)"),
             (s.requery_every >= 1, "sim.requery_every must be >= 1"),
             (s.threads >= 0, "sim.threads must be >= 0 (0 = automatic)"),
+            (s.relocations is None or s.relocations >= 0, "sim.relocations must be >= 0"),
             (s.max_iterations >= 1, "sim.max_iterations must be >= 1"),
             (s.stop_window <= 1_000_000, "sim.stop_window must be <= 1000000"),
             (min(s.min_iterations, s.settle_iterations, s.relax_passes) >= 0,

@@ -28,7 +28,7 @@ def report_dict(packing, metrics: dict, seconds: dict | None = None, not_written
         ``n_primary``, ``n_secondary``, ``n_vertices``, ``iterations``, ``seconds``,
         ``area_fraction``, ``overlap_area``, ``gap``, ``gap_stats``, ``seed``,
         ``outside_area``, ``edge``, ``distortion``, the primaries' own measures,
-        ``partial``, ``stopped_by``, ``invariants``, ``inputs`` and ``params`` (as
+        ``moves`` (kept and undone moves into voids), ``partial``, ``stopped_by``, ``invariants``, ``inputs`` and ``params`` (as
         resolved for the run: its gap and margin).
     """
     params, g = packing.asked or packing.params, packing.gap
@@ -44,6 +44,11 @@ def report_dict(packing, metrics: dict, seconds: dict | None = None, not_written
         # the primaries without the pocket copies, and the smallest copy (evaluate())
         **{k: metrics[k] for k in ("area_fraction_primary", "scp_ratio_primary", "median_primary_size",
                                    "smallest_secondary_rel")},
+        # the primaries moved into voids where the run converged (sim.relocations)
+        # (an undone move's iterations are not in ``iterations``: the run went on from before it)
+        "moves": {"kept": sum(1 for m in packing.moves if m[2]),
+                  "undone": sum(1 for m in packing.moves if not m[2]),
+                  "undone_iterations": sum(m[3] for m in packing.moves if not m[2])},
         "partial": packing.partial,
         "stopped_by": dict(packing.stopped_by, **({"outputs": "interrupted"} if not_written else {})),
         "invariants": packing.checks(metrics),

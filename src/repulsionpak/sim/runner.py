@@ -28,6 +28,7 @@ from .grid import Grid, bin_points
 from .integrate import (confined_contacts, count_inside, deep_contacts, euler_step, grow, growth_speed_caps,
                         growth_steps, skin_areas, window_change)
 from .model import Model, State
+from .relocate import Relocator
 from .selfintersect import relax_self_intersections
 from .shape import limit_deformation
 from .skinwidth import SKIN_RELAX, keep_skin_width
@@ -83,6 +84,8 @@ class Simulator:
     """Advance a packing. ``phase`` is a label ("primary"/"secondary") for snapshots."""
 
     templates: list | None = None  # the model's templates, set by pack() for snapshot renderers
+    #: moves of cramped elements into voids at convergence (:mod:`~repulsionpak.sim.relocate`)
+    relocator: Relocator | None = None
 
     def __init__(self, model: Model, state: State, params: SimParams, phase: str = "primary"):
         self.model, self.state, self.params, self.phase = model, state, params, phase
@@ -384,7 +387,11 @@ class Simulator:
                 if st.settle_left is None:
                     converged = (st.iteration >= p.min_iterations and len(hist) > w
                                  and min(rms, 2.0 * trend) < p.stop_epsilon)
+                    if converged and self.relocator is not None and self.relocator.at_convergence(self):
+                        converged = False  # a move into a void is being tried: growth goes on
                     if converged or st.iteration >= p.max_iterations:
+                        if self.relocator is not None:
+                            self.relocator.judge(self)  # a move still pending at the bound
                         st.stopped_by = "converged" if converged else "max_iterations"
                         st.settle_left = p.settle_iterations
                         self.begin_settle()
@@ -392,7 +399,8 @@ class Simulator:
                     if st.settle_left <= 0:
                         break
                     st.settle_left -= 1
-                if on_checkpoint is not None and checkpoint_every and st.iteration % checkpoint_every == 0:
+                if (on_checkpoint is not None and checkpoint_every and st.iteration % checkpoint_every == 0
+                        and (self.relocator is None or self.relocator.pending is None)):
                     on_checkpoint(self)
                 if should_stop is not None and should_stop():
                     st.stopped_by = "interrupted"
@@ -431,14 +439,19 @@ class Simulator:
 
     # -- checkpoints -------------------------------------------------------------------
     def snapshot_state(self) -> dict:
-        """The state as a checkpoint (:meth:`~repulsionpak.sim.model.State.saved`) and this
-        phase's label."""
-        return dict(self.state.saved(), phase=self.phase)
+        """The state as a checkpoint (:meth:`~repulsionpak.sim.model.State.saved`), this
+        phase's label and the moves' bookkeeping (:meth:`Relocator.saved`)."""
+        out = dict(self.state.saved(), phase=self.phase)
+        if self.relocator is not None:
+            out["relocate"] = self.relocator.saved()
+        return out
 
     def restore(self, saved: dict) -> None:
         """Continue from :meth:`snapshot_state` output (same model)."""
         self.state.load(saved, self.params.k_growth * self.params.dt)
         self.dt = self.state.dt  # the velocity caps follow the saved time step
+        if self.relocator is not None and "relocate" in saved:
+            self.relocator.load(saved["relocate"])
 
     # -- divergence --------------------------------------------------------------------
     def _check_exploded(self) -> None:
