@@ -111,6 +111,7 @@ class Relocator:
                 "moves": [list(m) for m in self.moves]}
 
     def load(self, saved: dict) -> None:
+        """Continue from :meth:`saved` output."""
         self.tries = int(saved["tries"])
         self.tried = np.zeros(len(self.tried), bool)
         self.tried[np.asarray(saved["tried"], np.int64)] = True
@@ -131,7 +132,9 @@ class Relocator:
         return self._move(sim)
 
     def judge(self, sim) -> None:
-        """Keep the pending move if the moving meshes cover more now, else undo it."""
+        """Keep the pending move if the moving skins, inset by their width, cover more now
+        and the moved element is no smaller than before; else put the state back as it
+        was when the move began."""
         p = self.pending
         if p is None:
             return
