@@ -143,3 +143,13 @@ def test_a_run_with_moves_resumes_exactly():
     again = pack(cont, els, _unfilled(), resume=mid)
     assert again.iterations == full.iterations and again.moves == full.moves
     np.testing.assert_array_equal(again.state.x, full.state.x)
+
+
+def test_the_designers_edit_ends_the_moves_and_keeps_the_pending_one():
+    rel = Relocator(shapely.box(0, 0, 10, 10), np.ones(3, bool), tries=4)
+    rel.pending = {"element": 1, "iteration": 500}
+    sim = SimpleNamespace(state=SimpleNamespace(iteration=620))
+    rel.stop(sim)
+    assert rel.pending is None and rel.tries == 0
+    assert rel.moves == [(1, 500, True, 120)]
+    assert rel.at_convergence(SimpleNamespace(state=sim.state, model=None)) is False

@@ -28,8 +28,9 @@ def report_dict(packing, metrics: dict, seconds: dict | None = None, not_written
         ``n_primary``, ``n_secondary``, ``n_vertices``, ``iterations``, ``seconds``,
         ``area_fraction``, ``overlap_area``, ``gap``, ``gap_stats``, ``seed``,
         ``outside_area``, ``edge``, ``distortion``, the primaries' own measures,
-        ``moves`` (kept and undone moves into voids), ``partial``, ``stopped_by``, ``invariants``, ``inputs`` and ``params`` (as
-        resolved for the run: its gap and margin).
+        ``moves`` (kept and undone moves into voids), ``partial``, ``stopped_by``,
+        ``invariants``, ``inputs`` and ``params`` (as resolved for the run: its gap and
+        margin).
     """
     params, g = packing.asked or packing.params, packing.gap
     rep = {

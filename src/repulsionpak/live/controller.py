@@ -311,6 +311,8 @@ class LiveController:
             return
         if sim is None or c == "noop" or cmd.get("index", 0) >= sim.model.n_elements:
             return
+        if sim.relocator is not None:  # the designer's edits end the automatic moves
+            sim.relocator.stop(sim)
         if c == "add":
             self._add_copy(cmd["index"], cmd["x"], cmd["y"])
             return

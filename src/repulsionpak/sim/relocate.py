@@ -5,9 +5,9 @@ converge with a small element wedged between large ones and, elsewhere, a void n
 neighbour can grow into. Where the run would settle, :class:`Relocator` lifts the element
 whose skin has the smallest inscribed circle into the largest void of the container (turned
 to fit it, shrunk if it must be to clear its new neighbours), lets the run go on growing,
-and at the next convergence keeps the move if the meshes then cover more of the container
-and the moved element is no smaller than before, else puts every vertex back where it was. A run
-makes at most ``tries`` moves; it settles when none is left or no element fits a void.
+and at the next convergence keeps the move if the skins then cover more of the container
+and the moved element is no smaller than before, else puts the whole state back as it was.
+A run makes at most ``tries`` moves; it settles when none is left or no element fits a void.
 
 Notes
 -----
@@ -95,7 +95,8 @@ class Relocator:
     inset: float = 0.0
     #: elements moved or found not to fit, never moved again
     tried: np.ndarray = field(default=None)
-    #: the move being tried: the state before it, its area, element and iteration
+    #: the move being tried: the state before it, the cover then, the element and its own
+    #: share of it, and the iteration it began
     pending: dict | None = None
     #: (element, iteration, kept, iterations it ran) of every move judged
     moves: list = field(default_factory=list)
@@ -117,6 +118,15 @@ class Relocator:
         self.tried[np.asarray(saved["tried"], np.int64)] = True
         self.moves = [tuple(m) for m in saved["moves"]]
         self.pending = None
+
+    def stop(self, sim) -> None:
+        """The designer took over (the live view's edits): a pending move stays as it is,
+        and no other is made (a state put back would undo the edit)."""
+        p = self.pending
+        if p is not None:
+            self.pending = None
+            self.moves.append((p["element"], p["iteration"], True, sim.state.iteration - p["iteration"]))
+        self.tries = 0
 
     # -- the run's hooks ---------------------------------------------------------------
     def at_convergence(self, sim) -> bool:
