@@ -85,7 +85,7 @@ def primary_relocator(model: Model, region, frame: SimFrame, params: Params, fil
 
 
 #: moves at convergence when nothing fills the pockets: the heart with 30 animals gained
-#: 0.0205 art area with 5 (every one of 12 seeds), the same with 8: the moves end where
+#: 0.021 art area with 5 (every one of 12 seeds), the same with 8: the moves end where
 #: no element fits the largest void
 RELOCATIONS_UNFILLED = 5
 

@@ -239,8 +239,8 @@ class SimParams:
         "moved element is no smaller, else the state is put back. At most this "
         "many moves. None: 5 when the pockets are not filled (--no-pocket-fill), 0 when they are "
         "(pocket copies fill the voids). Pinned, rigid and turn-limited elements and flow runs are "
-        "not moved. The heart with 30 animals and no pocket fill, seeds 1-12: art area 0.535 -> 0.555, "
-        "Q_s ratio 0.523 -> 0.492, primary iterations +48 % (docs/algorithm.md).")
+        "not moved. The heart with 30 animals and no pocket fill, seeds 1-12: art area 0.535 -> 0.556, "
+        "Q_s ratio 0.523 -> 0.491, primary iterations +50 % (docs/algorithm.md).")
     settle_iterations: int = _doc(
         100, "iterations", "Extra iterations without growth after stopping, to resolve the last overlaps. "
         "The overlaps growth leaves are resolved within the first few dozen; those left then stay "

@@ -172,7 +172,8 @@ class Relocator:
 
     def _move(self, sim) -> bool:
         """Move the untried element with the smallest inscribed circle that fits the
-        largest void (× :data:`VOID_RATIO`) there; False when none does."""
+        largest void (its circle × :data:`VOID_RATIO` within the void's, its skin clear of
+        the neighbours there at :data:`SMALLEST` of its size or more); False when none does."""
         m, st = sim.model, sim.state
         skins = _skin_polygons(m, st.x)
         void = largest_void(self.region, skins)
@@ -185,16 +186,30 @@ class Relocator:
             mic = shapely.maximum_inscribed_circle(skins[e], _TOLERANCE)
             inner[e] = mic.length
             circles[e] = shapely.get_coordinates(mic)[0]
-        order = [e for e in np.argsort(inner, kind="stable") if np.isfinite(inner[e])]
-        if not order or radius < VOID_RATIO * inner[order[0]]:
-            return False  # the smallest element does not fit: no other does
-        e = int(order[0])
-        self.tried[e] = True
-        self.pending = {"state": st.copy(),
-                        "cover": self.cover(sim, skins), "own": self._inner(skins[e]), "element": e,
-                        "iteration": st.iteration}
-        s0, s1 = m.elem_vstart[e], m.elem_vstart[e + 1]
-        ring = st.x[s0:s0 + m.elem_nskin[e]] - circles[e]
+        for e in np.argsort(inner, kind="stable"):
+            if not radius >= VOID_RATIO * inner[e]:
+                return False  # this element does not fit: no larger one does
+            e = int(e)
+            self.tried[e] = True
+            s0, s1 = m.elem_vstart[e], m.elem_vstart[e + 1]
+            fit = self._fit(skins, e, st.x[s0:s0 + m.elem_nskin[e]] - circles[e], centre)
+            if fit is None:
+                continue
+            angle, scale = fit
+            self.pending = {"state": st.copy(), "cover": self.cover(sim, skins), "own": self._inner(skins[e]),
+                            "element": e, "iteration": st.iteration}
+            st.x[s0:s1] = scale * (st.x[s0:s1] - circles[e]) @ _turn(angle) + centre
+            st.v[s0:s1] = 0.0
+            sim.update_contacts(full=True)
+            sim.mark_good()
+            return True
+        return False
+
+    def _fit(self, skins, e: int, ring: np.ndarray, centre: np.ndarray) -> tuple[float, float] | None:
+        """(angle, scale) that put skin ``e`` (its vertices ``ring``, about its inscribed
+        centre) at ``centre`` into the room the other skins leave: the turn that leaves least
+        of it outside, then the largest scale down to :data:`SMALLEST` at which nothing is;
+        None if there is none."""
         room = shapely.difference(self.region, shapely.union_all([s for k, s in enumerate(skins) if k != e]))
 
         def outside(t: float, scale: float) -> float:
@@ -202,23 +217,22 @@ class Relocator:
                                       room).area
 
         angle, best = 0.0, outside(0.0, 1.0)
-        if self.turn:  # the turn that leaves the least of the skin outside the void's room
+        if self.turn:
             for t in np.linspace(0.0, 2.0 * np.pi, TURNS, endpoint=False)[1:]:
                 out = outside(t, 1.0)
                 if out < best - 1e-9:
                     best, angle = out, t
-        scale = 1.0
-        if best > 0.0:  # shrunk to clear its neighbours: a mesh put into another one would
-            lo, hi = SMALLEST, 1.0  # not find its way out (its vertices have no side of entry)
-            for _ in range(12):
-                mid = 0.5 * (lo + hi)
-                lo, hi = (mid, hi) if outside(angle, mid) <= 0.0 else (lo, mid)
-            scale = lo
-        st.x[s0:s1] = scale * (st.x[s0:s1] - circles[e]) @ _turn(angle) + centre
-        st.v[s0:s1] = 0.0
-        sim.update_contacts(full=True)
-        sim.mark_good()
-        return True
+        if best <= 0.0:
+            return angle, 1.0
+        # shrunk to clear its neighbours: a mesh put into another one would not find its
+        # way out (its vertices have no side of entry)
+        if outside(angle, SMALLEST) > 0.0:
+            return None
+        lo, hi = SMALLEST, 1.0
+        for _ in range(12):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if outside(angle, mid) <= 0.0 else (lo, mid)
+        return angle, lo
 
 
 def _turn(t: float) -> np.ndarray:
