@@ -38,6 +38,7 @@ _TOLERANCE = 0.5
 
 
 def _skin_polygons(model, x) -> list:
+    """Each element's skin at positions ``x`` as a valid shapely polygon (sim units)."""
     out = []
     for e in range(model.n_elements):
         s0 = model.elem_vstart[e]
