@@ -17,6 +17,7 @@ from repulsionpak.pack import RELOCATIONS_UNFILLED, pack, prepare, primary_model
 from repulsionpak.params import Params, params_from_dict
 from repulsionpak.sim import relocate
 from repulsionpak.sim.relocate import Relocator, largest_void
+from repulsionpak.sim.model import SimFrame
 from repulsionpak.sim.runner import Simulator
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -39,7 +40,7 @@ def test_moves_only_where_nothing_fills_the_pockets_and_never_the_designers_elem
     frozen = np.array([False, True, False, False, False])
     model = SimpleNamespace(frozen=frozen, gap=5.0, rot_on=np.array([False, False, True, False, False]),
                             rigid=np.array([False, False, False, True, False]), flow=None)
-    region, frame = shapely.box(0, 0, 10, 10), SimpleNamespace(unit=0.01)
+    region, frame = shapely.box(0, 0, 10, 10), SimFrame(0.01)
     assert primary_relocator(model, region, frame, Params(), filled=True) is None
     r = primary_relocator(model, region, frame, Params(), filled=False)
     assert r.tries == RELOCATIONS_UNFILLED

@@ -52,7 +52,7 @@ def primary_model(region, templates: Sequence[Template], placement: Placement, g
     element size, the edge margin beyond the skin as an extra boundary inset, each
     element's bend limit."""
     frame = SimFrame.for_region(region)
-    region_sim = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    region_sim = frame.to_sim(region)
     cell = neighbour_cell(templates, placement.template_index, gap, params) / frame.unit
     model, state = build_model(templates, placement, frame, region_sim, cell_size=cell,
                                gap=gap / frame.unit, frozen=frozen)
@@ -79,8 +79,7 @@ def primary_relocator(model: Model, region, frame: SimFrame, params: Params, fil
         movable &= ~model.rot_on
     if model.rigid is not None:
         movable &= ~model.rigid
-    region_sim = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
-    return Relocator(region_sim, movable, n, turn=params.placement.rotate,
+    return Relocator(frame.to_sim(region), movable, n, turn=params.placement.rotate,
                      inset=params.preprocess.skin_offset * model.gap)
 
 

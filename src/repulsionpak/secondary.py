@@ -268,8 +268,7 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     base_index = len(packing.templates)
     placement = Placement(tindex + base_index, seeds, angles, shrink)
     all_templates = list(packing.templates) + templates
-    region_sim = shapely.affinity.scale(packing.container.region, 1 / packing.frame.unit,
-                                        1 / packing.frame.unit, origin=(0, 0))
+    region_sim = packing.frame.to_sim(packing.container.region)
 
     model, state = build_model(all_templates, placement, packing.frame, region_sim,
                                cell_size=neighbour_cell(all_templates, placement.template_index,

@@ -360,7 +360,7 @@ class LiveController:
             self._error("a copy must be placed inside the container")
             return
         n0, m0 = m.n_vertices, m.n_elements
-        region_sim = shapely.affinity.scale(self.container.region, 1 / self.unit, 1 / self.unit, origin=(0, 0))
+        region_sim = SimFrame(self.unit).to_sim(self.container.region)
         shrink = 1.0 / float(m.max_growth[src])  # the size it was placed at
         pl = Placement(np.array([m.template_index[src]]), np.array([[x, y]], float), np.zeros(1), np.array([shrink]))
         new_m, new_st = build_model(sim.templates, pl, SimFrame(self.unit), region_sim,

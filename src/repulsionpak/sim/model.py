@@ -34,6 +34,10 @@ class SimFrame:
         minx, miny, maxx, maxy = region.bounds
         return SimFrame(max(maxx - minx, maxy - miny) / 1000.0)
 
+    def to_sim(self, geom):
+        """``geom`` (container units) in simulation units."""
+        return shapely.affinity.scale(geom, 1 / self.unit, 1 / self.unit, origin=(0, 0))
+
 
 @dataclass(frozen=True, eq=False)
 class Field:

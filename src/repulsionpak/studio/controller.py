@@ -16,7 +16,7 @@ import numpy as np
 import shapely
 
 from ..live import LiveController
-from ..sim.model import container_field, reflex_corners
+from ..sim.model import SimFrame, container_field, reflex_corners
 from ..types import Container
 
 
@@ -210,7 +210,7 @@ class StudioController(LiveController):
         sim = self.sim
         if sim is not None and sim.phase == "primary" and not new.region.is_empty:
             m = sim.model
-            region_sim = shapely.affinity.scale(new.region, 1 / self.unit, 1 / self.unit, origin=(0, 0))
+            region_sim = SimFrame(self.unit).to_sim(new.region)
             self._raise_planned_sizes(float(region_sim.area))
             minx, miny, maxx, maxy = region_sim.bounds
             m.field = container_field(region_sim, m.gap / 3.0, 0.25 * max(maxx - minx, maxy - miny))
