@@ -272,6 +272,33 @@ def test_a_huge_mesh_is_mapped_through_a_subset_of_its_vertices(tmp_path, monkey
     assert paths and tol > 0
 
 
+def test_a_plan_too_large_to_hold_maps_chunk_by_chunk_to_the_same_art(tmp_path, monkeypatch):
+    """A plan whose weight matrices would pass ``MAP_BYTES`` (a 40,000-point outline's took
+    1.9 GB per template) keeps the spline and computes the weights a chunk at a time when
+    it maps a copy: the same samples, derivatives and written art, none of the matrices."""
+    from repulsionpak.render import deform
+
+    el = _element(tmp_path, DISC)
+    t = _template(el, 1.0)
+    held = deform.build_plan(t)
+    assert held.spline is None and held.W is not None
+    monkeypatch.setattr(deform, "MAP_BYTES", 0)
+    lean = deform.build_plan(t)
+    assert lean.W is None and lean.D is None and lean.spline is not None
+    bent = _bend(t.verts)
+    for a, b in zip(held.apply(bent), lean.apply(bent)):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * float(np.abs(a).max()))
+    idx = np.array([0, 5, len(held.points) - 1])
+    np.testing.assert_array_equal(held.weights(idx), lean.weights(idx))
+    from repulsionpak.render import placed
+
+    monkeypatch.setattr(placed, "map_plan", lambda *a, **k: lean)
+    lean_paths, _ = render_copy(t, bent, GAP)
+    monkeypatch.setattr(placed, "map_plan", lambda *a, **k: held)
+    held_paths, _ = render_copy(t, bent, GAP)
+    assert [path_data(p.source.curves) for p in lean_paths] == [path_data(p.source.curves) for p in held_paths]
+
+
 # --------------------------------------------------------------------------- fitting
 
 

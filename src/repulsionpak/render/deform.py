@@ -34,7 +34,7 @@ from ..geometry.curves import as_cubics, cubic_points
 from ..geometry.mesh import bind_points
 from ..types import CurveSubpath
 
-__all__ = ["MapPlan", "art_curves", "map_plan", "tps_weights", "linear_weights"]
+__all__ = ["MapPlan", "Spline", "art_curves", "map_plan", "tps_weights", "linear_weights"]
 
 #: samples are dense enough that the source curve is within this share of the element's
 #: size of the chords between them (a quarter of the default curve tolerance)
@@ -138,38 +138,86 @@ def tps_factors(rest: np.ndarray, points: np.ndarray, directions: np.ndarray | N
     (N + 3, N) the spline coefficients of each unit vertex: mapping a copy as
     ``B @ (C @ x)`` avoids ever forming the (P, N) product.
     """
-    rest = np.asarray(rest, dtype=float)
-    points = np.asarray(points, dtype=float)
-    n = len(rest)
-    c0 = rest.mean(axis=0)
-    s = float(np.ptp(rest, axis=0).max()) or 1.0
-    q = (rest - c0) / s
-    a = np.zeros((n + 3, n + 3))
-    a[:n, :n] = _kernel(((q[:, None, :] - q[None, :, :]) ** 2).sum(-1)) + smoothing * np.eye(n)
-    a[:n, n] = 1.0
-    a[:n, n + 1 :] = q
-    a[n, :n] = 1.0
-    a[n + 1 :, :n] = q.T
-    rhs = np.zeros((n + 3, n))
-    rhs[:n] = np.eye(n)
-    coef = _solve_system(a, rhs)  # (N+3, N): spline coefficients per unit vertex
-    if not np.all(np.isfinite(coef)):  # coincident centres: least-squares solution
-        coef = np.linalg.lstsq(a, rhs, rcond=None)[0]
-    W = np.empty((len(points), n + 3))
-    D = None if directions is None else np.empty((len(points), n + 3))
-    qq = (q * q).sum(axis=1)
-    for i in range(0, len(points), chunk):
-        p = (points[i : i + chunk] - c0) / s
-        r2 = np.maximum((p * p).sum(axis=1)[:, None] + qq[None, :] - 2.0 * (p @ q.T), 0.0)
-        b = np.concatenate([_kernel(r2), np.ones((len(p), 1)), p], axis=1)
+    spline = Spline.fit(rest, points, directions, smoothing)
+    W = np.empty((len(spline.points), spline.width))
+    D = None if directions is None else np.empty((len(spline.points), spline.width))
+    for i in range(0, len(spline.points), chunk):
+        b, db = spline.rows(slice(i, i + chunk))
         W[i : i + chunk] = b
         if D is not None:
-            d = np.asarray(directions[i : i + chunk], dtype=float) / s
-            proj = (p * d).sum(axis=1)[:, None] - d @ q.T  # (p - q_j) · d
-            g = _kernel_grad_factor(r2) * proj
-            db = np.concatenate([g, np.zeros((len(p), 1)), d], axis=1)
             D[i : i + chunk] = db
-    return W, D, coef
+    return W, D, spline.coef
+
+
+@dataclass(frozen=True, eq=False)
+class Spline:
+    """A thin-plate spline through a rest mesh's centres, and the samples it maps: the
+    kernel rows of any samples (:meth:`rows`) on demand, so that a plan too large to hold
+    its weight matrices (:data:`MAP_BYTES`) maps chunk by chunk (:meth:`apply`).
+
+    ``q`` (N, 2) are the centres scaled to the unit box about ``c0`` by ``s`` and ``coef``
+    (N + 3, N) the spline coefficients of each unit vertex (see :func:`tps_factors`);
+    ``points`` (P, 2) and ``directions`` (P, 2) or None the samples in rest coordinates."""
+
+    q: np.ndarray
+    c0: np.ndarray
+    s: float
+    coef: np.ndarray
+    points: np.ndarray
+    directions: np.ndarray | None
+
+    @classmethod
+    def fit(cls, rest: np.ndarray, points: np.ndarray, directions: np.ndarray | None = None,
+            smoothing: float = 0.0) -> "Spline":
+        """Solve the spline system of the centres ``rest`` (see :func:`tps_factors`)."""
+        rest = np.asarray(rest, dtype=float)
+        n = len(rest)
+        c0 = rest.mean(axis=0)
+        s = float(np.ptp(rest, axis=0).max()) or 1.0
+        q = (rest - c0) / s
+        a = np.zeros((n + 3, n + 3))
+        a[:n, :n] = _kernel(((q[:, None, :] - q[None, :, :]) ** 2).sum(-1)) + smoothing * np.eye(n)
+        a[:n, n] = 1.0
+        a[:n, n + 1 :] = q
+        a[n, :n] = 1.0
+        a[n + 1 :, :n] = q.T
+        rhs = np.zeros((n + 3, n))
+        rhs[:n] = np.eye(n)
+        coef = _solve_system(a, rhs)  # (N+3, N): spline coefficients per unit vertex
+        if not np.all(np.isfinite(coef)):  # coincident centres: least-squares solution
+            coef = np.linalg.lstsq(a, rhs, rcond=None)[0]
+        return cls(q, c0, s, coef, np.asarray(points, dtype=float),
+                   None if directions is None else np.asarray(directions, dtype=float))
+
+    @property
+    def width(self) -> int:
+        """Columns of a kernel row: the centres and the affine part."""
+        return len(self.q) + 3
+
+    def rows(self, idx) -> tuple[np.ndarray, np.ndarray | None]:
+        """Kernel rows ``(B[idx], DB[idx])`` of the samples ``idx`` (a slice or indices)."""
+        q = self.q
+        p = (self.points[idx] - self.c0) / self.s
+        qq = (q * q).sum(axis=1)
+        r2 = np.maximum((p * p).sum(axis=1)[:, None] + qq[None, :] - 2.0 * (p @ q.T), 0.0)
+        b = np.concatenate([_kernel(r2), np.ones((len(p), 1)), p], axis=1)
+        if self.directions is None:
+            return b, None
+        d = self.directions[idx] / self.s
+        proj = (p * d).sum(axis=1)[:, None] - d @ q.T  # (p - q_j) · d
+        g = _kernel_grad_factor(r2) * proj
+        return b, np.concatenate([g, np.zeros((len(p), 1)), d], axis=1)
+
+    def apply(self, x: np.ndarray, chunk: int = 4096) -> tuple[np.ndarray, np.ndarray]:
+        """``(B @ x, DB @ x)`` for spline-coefficient positions ``x`` (N + 3, 2), a chunk
+        of samples at a time (memory: chunk × (N + 3) numbers)."""
+        P = len(self.points)
+        q, g = np.empty((P, 2)), np.empty((P, 2))
+        for i in range(0, P, chunk):
+            b, db = self.rows(slice(i, i + chunk))
+            q[i : i + chunk] = b @ x
+            g[i : i + chunk] = db @ x
+        return q, g
 
 
 def linear_weights(rest: np.ndarray, tris: np.ndarray, points: np.ndarray,
@@ -221,18 +269,21 @@ class MapPlan:
     ``R @ verts`` (``R`` (K, N): the spline coefficients; None for the barycentric map).
     ``centres``: the mesh vertices the spline passes through when it is fitted on a
     subset of a large mesh (:data:`TPS_MAX_CENTRES`); ``R`` then applies to
-    ``verts[centres]``. None: every vertex.
+    ``verts[centres]``. None: every vertex. ``spline``: for a plan whose weights would
+    take more than :data:`MAP_BYTES`, the :class:`Spline` that computes them when the plan
+    is applied (``W`` and ``D`` are then None).
     """
 
     curves: tuple[tuple[CurveSubpath, ...], ...]
     seg_start: tuple[tuple[np.ndarray, ...], ...]
     t: np.ndarray
     points: np.ndarray
-    W: np.ndarray
-    D: np.ndarray
+    W: np.ndarray | None
+    D: np.ndarray | None
     smooth: bool
     R: np.ndarray | None = None
     centres: np.ndarray | None = None
+    spline: Spline | None = None
 
     def apply(self, verts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Mapped samples (P, 2) and their derivatives d/dt (P, 2) for deformed ``verts``."""
@@ -240,7 +291,14 @@ class MapPlan:
             x = verts
         else:
             x = self.R @ (verts if self.centres is None else verts[self.centres])
+        if self.spline is not None:
+            return self.spline.apply(x)
         return self.W @ x, self.D @ x
+
+    def weights(self, idx: np.ndarray) -> np.ndarray:
+        """The position weights of the samples ``idx`` (``W[idx]``), applied to
+        ``R @ verts`` as in :meth:`apply`."""
+        return self.W[idx] if self.spline is None else self.spline.rows(idx)[0]
 
 
 def _samples_per_segment(order: np.ndarray, cubic: np.ndarray, spacing: float, density: float,
@@ -300,14 +358,26 @@ def build_plan(template, smooth: bool = True, density: float = 8.0, smoothing: f
     points = np.concatenate(pts) if pts else np.zeros((0, 2))
     dirs = np.concatenate(ders) if ders else np.zeros((0, 2))
     t = np.concatenate(ts) if ts else np.zeros(0)
-    centres = None
+    centres, spline = None, None
     if smooth:
         if len(verts) > TPS_MAX_CENTRES:
             centres = spline_centres(verts, template.n_skin, TPS_MAX_CENTRES)
-        W, D, R = tps_factors(verts if centres is None else verts[centres], points, dirs, smoothing=smoothing)
+        rest = verts if centres is None else verts[centres]
+        if 2 * 8 * len(points) * (len(rest) + 3) > MAP_BYTES:
+            spline = Spline.fit(rest, points, dirs, smoothing)
+            W, D, R = None, None, spline.coef
+        else:
+            W, D, R = tps_factors(rest, points, dirs, smoothing=smoothing)
     else:
         (W, D), R = linear_weights(verts, tris, points, dirs), None
-    return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth, R, centres)
+    return MapPlan(tuple(curves_out), tuple(starts_out), t, points, W, D, smooth, R, centres, spline)
+
+
+#: the most memory a plan's weight matrices (position and derivative, samples × centres)
+#: may take; a larger plan (art of tens of thousands of samples: a traced outline, a line
+#: of text) computes its weights chunk by chunk each time it maps a copy. Held, a
+#: 40,000-point outline's took 1.9 GB per template (one per element and pocket scale)
+MAP_BYTES = 256 * 2**20
 
 
 #: the smooth map of a mesh with more vertices than this (an element hundreds of gaps

@@ -226,7 +226,7 @@ class FrameRenderer:
                 n += len(idx)
             paths.append((art.style, sp))
         idx = np.concatenate(rows) if rows else np.zeros(0, np.int64)
-        W = plan.W[idx]
+        W = plan.weights(idx)
         M = W if plan.R is None else W @ plan.R
         td = _TemplateDraw(np.ascontiguousarray(M), paths=paths, cols=plan.centres)
         self._templates[index] = td
