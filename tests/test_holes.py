@@ -343,10 +343,12 @@ def test_dilated_covers_the_same_region_as_a_whole_buffer():
 
 def test_a_finely_jagged_outline_is_dilated_in_steps_that_cover_the_whole_buffer():
     """dilated: an outline of thousands of teeth finer than the distance (fur, a noisy
-    trace) is dilated in steps (one buffer crosses its offset curves ~280,000 times here:
-    3 s and 780 MB; 40,000 points took 84 s and ~20 GB), each simplified before the next:
-    the result covers the whole buffer, within half a percent of the distance of it, with
-    few vertices; ordinary art stays one buffer."""
+    trace) is dilated in doubling steps (one buffer crosses its offset curves ~280,000
+    times here: 3 s and 780 MB; 40,000 points took 84 s and ~20 GB), each simplified
+    before the next: the result covers the whole buffer, with few vertices, and lies
+    within the true dilation but for the steps' simplifications (1 % of the distance;
+    the whole 4-segment buffer is inscribed in it, its chords up to 1 - cos(π/16), 1.9 %,
+    inside); ordinary art stays one buffer."""
     from repulsionpak.geometry import dilate
 
     n, reach = 8000, 4.6
@@ -357,7 +359,7 @@ def test_a_finely_jagged_outline_is_dilated_in_steps_that_cover_the_whole_buffer
     stepped = dilate.dilated([fur], reach)[0]
     whole = fur.buffer(reach, quad_segs=4)
     assert stepped.covers(whole)
-    assert shapely.hausdorff_distance(stepped.exterior, whole.exterior) <= 0.02 * reach
+    assert shapely.hausdorff_distance(stepped.exterior, whole.exterior) <= (0.01 + 0.019 + 0.003) * reach
     assert shapely.get_num_coordinates(stepped) < 0.1 * shapely.get_num_coordinates(whole)
     disc = shapely.Point(0, 0).buffer(40.0)
     assert dilate.crossings(disc, reach) < dilate.CROSSINGS
