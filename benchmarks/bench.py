@@ -1,6 +1,8 @@
 """Reproducible timings of repulsionpak (not part of the test run).
 
     python benchmarks/bench.py iteration [--plot docs/images/bench-scaling.png]  # ms/iteration vs vertices
+    python benchmarks/bench.py threads              # ms/iteration on one thread and on every core
+    python benchmarks/bench.py kernels              # where an iteration of 1,000 elements goes
     python benchmarks/bench.py preprocess           # preprocessing time per element
     python benchmarks/bench.py heart                # whole `repulsionpak pack` on ../shared/data, animals only (5 runs)
     python benchmarks/bench.py pockets              # the default command: pockets filled with small animals
@@ -88,7 +90,7 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
     rows = []
     for target in targets:
         sim, model, _, _ = _square_scene(max(4, int(target / 91)))
-        set_threads(sim.threads())
+        set_threads(sim.thread_range()[1])  # the most an automatic run may use (an idle machine: all)
         for _ in range(warmup):  # grow them a while so neighbours interact, then time
             sim.step()
         t0 = time.perf_counter()
@@ -96,7 +98,7 @@ def bench_iteration(targets=(1500, 12000, 50000, 100000), warmup=2500, steps=100
             sim.step()
         ms = (time.perf_counter() - t0) / steps * 1e3
         rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-        print(f"| {model.n_vertices} | {model.n_elements} | {sim.threads()} | {ms:.2f} | {rss:.0f} |", flush=True)
+        print(f"| {model.n_vertices} | {model.n_elements} | {sim.thread_range()[1]} | {ms:.2f} | {rss:.0f} |", flush=True)
         rows.append((model.n_vertices, ms))
     if plot:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -144,6 +146,62 @@ def bench_threads(counts=(4, 8, 16, 33, 130), warmup=600, steps=300) -> None:
         print(f"| {model.n_vertices} | {model.n_elements} | {best[1]:.3f} | {best[n]:.3f} | "
               f"{best[1] / best[n]:.2f} |", flush=True)
     set_threads(1)
+
+
+def bench_kernels(count=1000, warmup=2500, steps=100) -> None:
+    """Where an iteration of a large packing goes: ``count`` example elements in a square,
+    after ``warmup`` iterations, ``steps`` real iterations on one thread and on every core
+    with each part of :meth:`Simulator.step` timed as it runs (the force terms, the contact
+    query and its cheap follow-up, the constraints, growth, the self-intersection
+    relaxation, the Euler step, the areas)."""
+    import numba
+
+    from repulsionpak._jit.kernels import set_threads
+    from repulsionpak.sim import runner
+
+    sim, model, _, _ = _square_scene(count)
+    n = numba.config.NUMBA_NUM_THREADS
+    set_threads(n)
+    for _ in range(warmup):
+        sim.step()
+    spent: dict[str, float] = {}
+
+    def timed(name, f):
+        def wrapper(*args, **kwargs):
+            t0 = time.perf_counter()
+            try:
+                return f(*args, **kwargs)
+            finally:
+                spent[name] = spent.get(name, 0.0) + time.perf_counter() - t0
+        return wrapper
+
+    names = {"find_contacts": "contact query (full, grids rebuilt)",
+             "follow_contacts": "contact update (between full queries)",
+             "euler_step": "Euler step", "relax_self_intersections": "self-intersection relaxation",
+             "skin_areas": "areas"}
+    for fn, label in names.items():
+        setattr(runner, fn, timed(label, getattr(runner, fn)))
+    sim.terms = tuple(timed(f"force: {type(t).__name__}", t) for t in sim.terms)
+    for meth, label in (("_constrain", "constraints (inside, skin width, bends, controls)"),
+                        ("_grow", "growth"), ("_growth_rates", "growth rates")):
+        setattr(sim, meth, timed(label, getattr(sim, meth)))
+    rows = {}
+    for th in (n, 1):
+        set_threads(th)
+        for _ in range(5):  # (the other build's first call)
+            sim.step()
+        spent.clear()
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            sim.step()
+        rows[th] = {"the whole iteration": time.perf_counter() - t0, **spent}
+    set_threads(1)
+    print(f"{model.n_elements} elements, {model.n_vertices} vertices, after {warmup} iterations; "
+          f"ms per iteration")
+    print(f"| part | {n} threads | 1 thread |")
+    print("| --- | ---: | ---: |")
+    for name in sorted(rows[n], key=lambda k: -rows[n][k]):
+        print(f"| {name} | {rows[n][name] / steps * 1e3:.2f} | {rows[1].get(name, 0.0) / steps * 1e3:.2f} |")
 
 
 def bench_preprocess() -> None:
@@ -496,7 +554,7 @@ def bench_controls(seeds=(1, 2, 3)) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("what", choices=["iteration", "threads", "preprocess", "heart", "pockets", "secondary",
+    ap.add_argument("what", choices=["iteration", "threads", "kernels", "preprocess", "heart", "pockets", "secondary",
                                      "mesh", "firstrun", "freshinstall", "controls", "pockets-many", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
@@ -525,6 +583,8 @@ def main() -> None:
         bench_iteration(plot=a.plot)
     if a.what in ("threads", "all"):
         bench_threads()
+    if a.what in ("kernels", "all"):
+        bench_kernels()
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ itself (``window.repulsionpak.frames``: frames drawn into ``#stage``; ``received
 that arrived, the newest of which is drawn at each animation frame), with Chromium's
 main-thread times per drawn frame (``Performance.getMetrics``) and the page's own time
 writing the paths. The simulation's own iteration rate is printed beside them: a frame is
-sent at most once per iteration and at most 30 times a second (the live view's cap).
+sent at most once per iteration and at most 60 times a second (``studio.controller.MAX_FPS``).
 
     python benchmarks/studio_fps.py [--count 300] [--seconds 10] [--no-browser]
 """

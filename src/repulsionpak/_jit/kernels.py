@@ -22,7 +22,7 @@ so briefly that on a VM they sleep between two kernels of one iteration, and two
 ran the heart scene twice as *slowly* as one; :func:`set_threads` therefore sets
 ``GOMP_SPINCOUNT`` (:data:`GOMP_SPINCOUNT`) before numba starts its threading layer, unless
 the user chose ``OMP_WAIT_POLICY`` or ``GOMP_SPINCOUNT`` themselves. With it, two threads
-run an iteration 1.4× faster at 1,500 vertices and 1.7× at 3,000 (docs/benchmarks.md).
+run an iteration 1.55× faster at 1,500 vertices and 1.8× at 3,000 (docs/benchmarks.md).
 
 **Which threading layer.** numba prefers TBB where it finds ``libtbb`` (it comes with
 OpenCV, CGAL and conda environments). Importing this module makes the order OpenMP, then

@@ -154,7 +154,7 @@ class Model:
 #: ``sim.cell_size``): 6–8 on a jammed poster, at most 12, the median of them 10 gaps
 #: away. Every contact kernel reads these rows, (N, K) and (N, K, 2), on every step, so
 #: their width is memory traffic: at 24 the primary phase of 150 poster elements took
-#: ~16 % longer on one thread (``docs/benchmarks.md``)
+#: ~16 % longer on one thread (``docs/algorithm.md``, the table of changes)
 MAX_NEIGHBOURS = 12
 
 
