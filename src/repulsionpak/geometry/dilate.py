@@ -68,8 +68,7 @@ def _dilated_in_steps(g, reach: float):
     copy of 20,000 points in long thin teeth took 9 s. A step far below the teeth's size
     only blunts them, cheaply, and each later step, twice the last, meets an outline
     already rounded at half its size, so no step meets teeth much sharper than itself (the
-    27 copies of that packing: 170 s at once or in steps sized by :func:`crossings`, 9.7 s
-    doubling). Dilations add up (a disc of radius a, then one of b, is one of a + b), and
+    27 copies of that packing: 170 s in steps sized by :func:`crossings`, 9.7 s doubling). Dilations add up (a disc of radius a, then one of b, is one of a + b), and
     each 4-segment buffer covers the true dilation by cos(π/16) of its distance as one
     buffer does; a simplification may cut up to its tolerance into the outline, which is
     added to the next step, so the result covers what one buffer by ``reach`` would, and
