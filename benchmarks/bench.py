@@ -71,7 +71,7 @@ def _square_scene(count: int):
     rng = np.random.default_rng(1)
     templates, placement, gap = prepare(Container("bench", region), elements, params, rng)
     frame = SimFrame.for_region(region)
-    rs = shapely.affinity.scale(region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    rs = frame.to_sim(region)
     size = typical_size(templates, placement.template_index) / frame.unit
     model, state = build_model(templates, placement, frame, rs,
                                cell_size=max(params.sim.cell_size * size, 3 * gap / frame.unit),

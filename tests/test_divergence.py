@@ -20,7 +20,6 @@ from repulsionpak.params import params_from_dict
 from repulsionpak.sim.model import SimFrame, build_model
 from repulsionpak.sim.runner import Simulator
 from repulsionpak.types import ArtPath, Container, Element, Style
-import shapely
 
 
 def small_sim(max_iterations=400):
@@ -30,7 +29,7 @@ def small_sim(max_iterations=400):
                           "sim": {"max_iterations": max_iterations, "settle_iterations": 10}})
     templates, placement, gap = prepare(cont, [sq], p, np.random.default_rng(1))
     frame = SimFrame.for_region(cont.region)
-    rs = shapely.affinity.scale(cont.region, 1 / frame.unit, 1 / frame.unit, origin=(0, 0))
+    rs = frame.to_sim(cont.region)
     size = typical_size(templates, placement.template_index) / frame.unit
     model, state = build_model(templates, placement, frame, rs, cell_size=p.sim.cell_size * size,
                                gap=gap / frame.unit)

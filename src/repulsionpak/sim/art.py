@@ -92,8 +92,7 @@ def rest_art(templates: Sequence[Template], model: Model, elements: Sequence[int
 
 def skin_polygons(model: Model, state: State, frame: SimFrame) -> list[np.ndarray]:
     """Each copy's skin polygon (container units), for debug layers and checks."""
-    return [state.x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]] * frame.unit
-            for e in range(model.n_elements)]
+    return [ring * frame.unit for ring in model.skin_rings(state.x)]
 
 
 __all__ = ["element_vertices", "placed_art", "rest_art", "skin_polygons"]

@@ -147,6 +147,10 @@ class Model:
     def n_elements(self) -> int:
         return len(self.elem_nskin)
 
+    def skin_rings(self, x: np.ndarray) -> list[np.ndarray]:
+        """Each element's skin ring at positions ``x`` (N, 2), in order: views into ``x``."""
+        return [x[s:s + n] for s, n in zip(self.elem_vstart[:-1], self.elem_nskin)]
+
 
 #: the most neighbouring meshes a skin vertex keeps contact with (the nearest win; the
 #: farther ones, whose repulsion is the weakest, are dropped). A skin vertex sees the

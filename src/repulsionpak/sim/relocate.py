@@ -39,11 +39,7 @@ _TOLERANCE = 0.5
 
 def _skin_polygons(model, x) -> list:
     """Each element's skin at positions ``x`` as a valid shapely polygon (sim units)."""
-    out = []
-    for e in range(model.n_elements):
-        s0 = model.elem_vstart[e]
-        out.append(shapely.make_valid(shapely.Polygon(x[s0:s0 + model.elem_nskin[e]])))
-    return out
+    return [shapely.make_valid(shapely.Polygon(ring)) for ring in model.skin_rings(x)]
 
 
 def largest_void(region, skins) -> tuple[float, np.ndarray] | None:
