@@ -13,6 +13,8 @@
     python benchmarks/bench.py controls             # heart scene: free vs --rotation fixed vs --rigid (docs/controls.md)
     python benchmarks/bench.py pockets-many         # one detailed element (every shipped example on a sheet)
                                                     #   in a circle: the pocket fill's time and peak memory
+    python benchmarks/bench.py copies               # the stages after the simulation, per-copy work on
+                                                    #   one thread and on several (300 shipped elements)
     python benchmarks/bench.py all
 
 Fixed seeds; results are printed as Markdown table rows for docs/benchmarks.md.
@@ -552,10 +554,52 @@ def bench_controls(seeds=(1, 2, 3)) -> None:
         print(f"| {name} | {it:.0f} | {sm:.2f} | {ms:.3f} | {tt:.2f} | {100 * (tt / ref - 1):+.0f}% |", flush=True)
 
 
+def bench_copies(count: int = 300, runs: int = 3) -> None:
+    """The stages after the simulation with the per-copy work on one thread and on the
+    threads :func:`repulsionpak.threads.thread_map` takes (``count`` shipped elements in a
+    1000 x 1500 rectangle, default settings, in this process), alternately; the packing is
+    checked to be the same."""
+    import hashlib
+    import tempfile
+
+    import repulsionpak as rp
+    from repulsionpak import examples
+    from repulsionpak import threads as th
+    from repulsionpak.params import Params
+
+    default = th.MOST_WORKERS
+    rows: dict[str, list] = {"one thread": [], f"{th.worker_threads()} threads": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        rect = Path(tmp) / "poster.svg"
+        rect.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1500">'
+                        '<rect width="1000" height="1500"/></svg>')
+        for _ in range(runs):
+            for name, workers in zip(rows, (1, default)):
+                th.MOST_WORKERS = workers
+                try:
+                    p = rp.pack(str(rect), [str(f) for f in examples.element_files()],
+                                Params(seed=1).with_(placement__count=count))
+                finally:
+                    th.MOST_WORKERS = default
+                digest = hashlib.sha256(p.svg_text().encode()).hexdigest()[:12]
+                rows[name].append((p.seconds, digest))
+                print(f"{name}: " + ", ".join(f"{k} {v:.2f}" for k, v in p.seconds.items()) + f", svg {digest}",
+                      file=sys.stderr, flush=True)
+    digests = {d for v in rows.values() for _, d in v}
+    print(f"{count} shipped elements in a 1000 x 1500 rectangle, median of {runs} alternated runs; "
+          f"{'the same SVG on every run' if len(digests) == 1 else 'DIFFERENT SVGs: ' + ', '.join(digests)}")
+    print("| per-copy work | mapping the art (render) s | verify s | total in-process s |")
+    print("| --- | ---: | ---: | ---: |")
+    for name, v in rows.items():
+        med = {k: float(np.median([s[k] for s, _ in v])) for k in ("render", "verify", "total")}
+        print(f"| {name} | {med['render']:.2f} | {med['verify']:.2f} | {med['total']:.2f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "threads", "kernels", "preprocess", "heart", "pockets", "secondary",
-                                     "mesh", "firstrun", "freshinstall", "controls", "pockets-many", "all"])
+                                     "mesh", "firstrun", "freshinstall", "controls", "pockets-many", "copies",
+                                     "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
@@ -585,6 +629,8 @@ def main() -> None:
         bench_threads()
     if a.what in ("kernels", "all"):
         bench_kernels()
+    if a.what in ("copies", "all"):
+        bench_copies()
 
 
 if __name__ == "__main__":

@@ -7,7 +7,6 @@ in the user units of the file they came from.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from dataclasses import dataclass, field
 
@@ -230,6 +229,35 @@ class Container:
         return tuple(float(b) for b in self.region.bounds)  # type: ignore[return-value]
 
 
+class computed_once:
+    """A read-only attribute computed on first use and kept in the instance
+    (``functools.cached_property`` without its lock).
+
+    Notes
+    -----
+    Python 3.11's ``cached_property`` holds one lock per attribute of a class, for all its
+    instances: threads computing the art of different copies
+    (:func:`repulsionpak.threads.thread_map`) would take turns. Two threads asking for the
+    same copy's value at once may both compute it; they compute the same value.
+    """
+
+    def __init__(self, func):
+        self.func = func
+        self.__doc__ = func.__doc__
+        self.name = func.__name__
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj, objtype=None):
+        if obj is None:
+            return self
+        cache = obj.__dict__
+        if self.name not in cache:
+            cache[self.name] = self.func(obj)
+        return cache[self.name]
+
+
 @dataclass(frozen=True, eq=False)
 class PlacedArt:
     """One element as it appears in the finished packing (container user units).
@@ -258,7 +286,7 @@ class PlacedArt:
     #: a pinned copy (element controls): written with ``data-pinned="true"``
     pinned: bool = False
 
-    @functools.cached_property
+    @computed_once
     def art(self) -> shapely.Geometry:
         """The area its art covers (:func:`repulsionpak.art_area.art_area` of
         ``paths`` with ``stroke_scale``), computed once: the hole fill, the verification

@@ -74,7 +74,7 @@ def cubic_points(c: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return pts, der
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _flatten(order, ctrl, tol, closed):
     """Points of every segment, uniform pieces with chord error <= tol (h²/8 · max|B''|),
     without repeated points (:func:`_distinct`)."""

@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import shapely
 
-from ..threads import worker_threads
+from ..threads import warnings_kept, worker_threads
 
 __all__ = ["DENSE", "MIN_PAIRS", "PIECE", "dense_distance", "distances", "threads"]
 
@@ -140,7 +140,7 @@ def distances(a: np.ndarray, b: np.ndarray, workers: int | None = None) -> np.nd
         lo, hi = cuts[j], cuts[j + 1]
         out[lo:hi] = shapely.distance(a[lo:hi], b[lo:hi])
 
-    with ThreadPoolExecutor(k) as pool:
+    with warnings_kept(), ThreadPoolExecutor(k) as pool:  # (shapely swaps the warning filters)
         for done in [pool.submit(share, j) for j in range(k)]:
             done.result()  # (re-raises a thread's error here)
     return out

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +27,7 @@ from ..errors import ParameterError
 from ..art_area import _polygonal, art_area
 from ..geometry.overlap import OverlapGrid, intersection_areas, nelder_mead_sym, rings_of
 from ..geometry.robust import overlay
+from ..threads import thread_map
 
 __all__ = ["distortion", "distortions", "source_geometries", "distortion_summary", "frame_angle"]
 
@@ -295,10 +295,7 @@ def distortions(art_geoms: Sequence, names: Sequence[str],
         a = None if angles is None else angles[i]
         return _distortion(prepared[names[i]], art_geoms[i], angle=a, **kw)
 
-    if int(workers) == 1 or len(names) < 2:
-        return [one(i) for i in range(len(names))]
-    with ThreadPoolExecutor(int(workers)) as pool:
-        return list(pool.map(one, range(len(names))))
+    return thread_map(one, range(len(names)), workers=int(workers))
 
 
 def frame_angle(frame) -> float | None:

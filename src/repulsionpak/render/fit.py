@@ -457,7 +457,7 @@ def _fit_piece(order, q, g, t, lo, hi, tol, cos_tol, tsx, tsy, use_ts, tex, tey,
     count[0] = n_out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _fit_chain(order, seg_start, closed, q, g, t, tol, cos_tol, snap):
     n = len(order)
     straight = np.zeros(n, np.bool_)

@@ -38,7 +38,8 @@ from ..geometry.edges import Edges
 from ..geometry.pairwise import distances
 from ..render.placed import FIT_SHARE, refined
 from ..types import ArtPath, CurveSubpath, PlacedArt
-from .repairs import rest_distortion
+from ..threads import thread_map
+from .repairs import _art_of, rest_distortion
 
 __all__ = ["DentResult", "dent"]
 
@@ -72,7 +73,7 @@ def _packed(bumps: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _bump_points(pts, cv, two_rho2):
     """``pts`` (n, 2) moved by the sum of the bumps ``cv`` (B, 4): each bump's weight is
     taken at the unmoved point.
@@ -96,7 +97,7 @@ def _bump_points(pts, cv, two_rho2):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _bump_map(pts, cv, two_rho2):
     """``pts`` (n, 2) moved by the bumps ``cv`` (B, 4), as :func:`_bump_points`, and the
     map's (n, 2, 2) Jacobian there: both from one weight per point and bump."""
@@ -575,7 +576,7 @@ def _rounds(out, which, frozen, target, inner, inner_edges, rounds, rho, push, b
     swept = np.zeros(n)  # the distortion its bumps are estimated to add
     spent = np.zeros(n, bool)
     counts = []
-    exact = np.array([p.art for p in out], dtype=object)
+    exact = np.array(thread_map(_art_of, out), dtype=object)
     geoms = shapely.simplify(exact, eps, preserve_topology=False)  # for distances only
     steps: dict[int, list] = {}  # each element's bump lists, applied to its art at the end
     for _ in range(rounds):
@@ -603,7 +604,7 @@ def _rounds(out, which, frozen, target, inner, inner_edges, rounds, rho, push, b
         if not bent:  # what is still too close is between elements that may not bend further
             break
         which = np.array(sorted(bent))
-    for i, st in steps.items():
+    for i, st in steps.items():  # (mostly small numpy steps: threads only wait for each other)
         out[i] = _bent(out[i], st, two_rho2)
     return out, counts, steps
 
@@ -613,10 +614,6 @@ def _over_limit(placed, out, rest, limits) -> list[int]:
     :func:`~repulsionpak.verify.straighten` does, against ``rest`` moved onto ``placed``)."""
     if rest is None or limits is None:
         return []
-    over = []
-    for i, (p, q) in enumerate(zip(placed, out)):
-        if q is p or not np.isfinite(limits[i]):
-            continue
-        if rest_distortion(rest[i], p, q.art) > limits[i]:
-            over.append(i)
-    return over
+    which = [i for i, (p, q) in enumerate(zip(placed, out)) if q is not p and np.isfinite(limits[i])]
+    beyond = thread_map(lambda i: rest_distortion(rest[i], placed[i], out[i].art) > limits[i], which)
+    return [i for i, b in zip(which, beyond) if b]

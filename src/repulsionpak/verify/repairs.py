@@ -33,6 +33,7 @@ from ..art_area import _polygonal
 from ..geometry.dilate import covering, room_left
 from ..geometry.edges import Edges
 from ..render.placed import refined, similarity_matrix
+from ..threads import thread_map
 from ..types import PlacedArt
 from .checks import Rough, Verification, _check, _near_pairs, _nearest, _pair_distances, _shrink_centre, distortion
 
@@ -88,6 +89,11 @@ def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
     return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k, deformation=0.0, **extra)
 
 
+def _art_of(placed: PlacedArt):
+    """``placed.art`` (for :func:`~repulsionpak.threads.thread_map`)."""
+    return placed.art
+
+
 def rest_distortion(rest: PlacedArt, placed: PlacedArt, art=None) -> float:
     """The distortion of ``art`` (default ``placed.art``): its symmetric difference with
     the rest art ``rest`` moved onto ``placed`` by their similarity, over its area."""
@@ -114,9 +120,13 @@ def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarra
     The similar copy's art is its rest art (``rest[i].art``, measured once for the copies
     that share a rest object) moved by the similarity: the art of the moved paths up to
     rounding. A distortion within :data:`DECIDE_EXACTLY` of its limit is measured again
-    on the moved paths' own art, so the choice is the one that art gives."""
-    out, dist, replaced = [], np.zeros(len(placed)), []
-    for i, (p, r) in enumerate(zip(placed, rest)):
+    on the moved paths' own art, so the choice is the one that art gives. The copies are
+    measured on :func:`~repulsionpak.threads.thread_map`'s threads (GEOS overlays)."""
+    for r in {id(r): r for r in rest}.values():  # the shared rest arts once, before the threads
+        r.art  # noqa: B018
+
+    def one(i: int) -> tuple[PlacedArt, float, bool]:
+        p, r = placed[i], rest[i]
         d = rest_distortion(r, p)
         copy = None
         if abs(d - limits[i]) <= DECIDE_EXACTLY:
@@ -124,12 +134,13 @@ def straighten(placed: list[PlacedArt], rest: list[PlacedArt], limits: np.ndarra
             d = distortion(p.art, copy.art)
         if d > limits[i]:
             copy = similar_copy(r, p) if copy is None else copy
-            out.append(dataclasses.replace(copy, paths=tuple(refined(a, p.tolerance) for a in copy.paths)))
-            replaced.append(i)
-            d = 0.0
-        else:
-            out.append(p)
-        dist[i] = d
+            return dataclasses.replace(copy, paths=tuple(refined(a, p.tolerance) for a in copy.paths)), 0.0, True
+        return p, d, False
+
+    done = thread_map(one, range(len(placed)))
+    out = [o for o, _, _ in done]
+    dist = np.array([d for _, d, _ in done], dtype=float)
+    replaced = [i for i, (_, _, r) in enumerate(done) if r]
     return out, dist, replaced
 
 
@@ -418,7 +429,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     shapely.prepare(region)
     tol = 1e-9 * max(1.0, float(np.ptp(np.asarray(region.bounds))))
     n = len(placed)
-    exact = [p.art for p in placed]
+    exact = thread_map(_art_of, placed)
     centre = [np.asarray(g.centroid.coords[0]) if not g.is_empty else np.zeros(2) for g in exact]
     # the rounds work on outlines simplified by eps and ask eps more of every distance
     # (exact checks are the slow part with detailed art); the final check is exact
