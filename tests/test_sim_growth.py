@@ -148,3 +148,23 @@ def test_fast_growing_meshes_keep_up_with_their_growth():
     paper = _fast_lag(0.0)
     assert len(now) >= 1 and min(now) > 0.97
     assert len(paper) >= 1 and max(paper) < 0.9
+
+
+def test_without_pocket_fill_elements_with_room_grow_past_the_filled_cap():
+    """The growth cap (``sim.max_size``) is 1.3× the nominal size where pocket copies fill
+    the voids and 2× where nothing does: elements built to fill a tenth of the square
+    (``placement.target_fraction``) have room to grow to 2× (and no further) without the
+    pockets filled, to 1.3× with the cap given."""
+    from repulsionpak.params import MAX_SIZE_FILLED, MAX_SIZE_UNFILLED
+
+    p = scene_params(count=4, max_iterations=2500)
+    p = replace(p, placement=replace(p.placement, target_fraction=0.1))
+    assert p.sim.max_size is None and not p.secondary.auto
+    free = pack(CONTAINER, library(), p)
+    capped = pack(CONTAINER, library(), replace(p, sim=replace(p.sim, max_size=MAX_SIZE_FILLED)))
+    reach = [float(np.max(k.state.growth / k.model.max_growth)) for k in (free, capped)]
+    assert MAX_SIZE_FILLED + 0.2 < reach[0] <= MAX_SIZE_UNFILLED + 1e-9
+    assert reach[1] <= MAX_SIZE_FILLED + 1e-9
+    assert p.sim.growth_cap(filled=True) == MAX_SIZE_FILLED
+    assert p.sim.for_run(filled=False).max_size == MAX_SIZE_UNFILLED
+    assert replace(p.sim, max_size=1.5).for_run(filled=False).max_size == 1.5  # a given cap is kept

@@ -331,7 +331,7 @@ def _copies_within(fits: "_PocketFits", outlines, room: int, gap: float, p, min_
     """The pockets that get a copy, in seed order, and the copies' templates.
 
     A pocket whose fitted copy stays below ``min_size`` (:func:`art_size` at its nominal
-    scale × ``sim.max_size``: a copy may grow past its fit where its neighbours leave
+    scale × the growth cap, ``sim.max_size``: a copy may grow past its fit where its neighbours leave
     room; those that end below the floor are dropped after the verification) gets none.
     The copies' templates (one per element and size class) are built as they come, until
     the copies' mesh vertices pass ``room`` (the first copy always fits). Returns (the
@@ -344,7 +344,7 @@ def _copies_within(fits: "_PocketFits", outlines, room: int, gap: float, p, min_
     used = 0
     for k in range(fits.n):
         _, sc, i = fits(k)
-        if min_size > 0 and not np.sqrt(outlines[i].area) * sc * p.sim.max_size >= min_size:
+        if min_size > 0 and not np.sqrt(outlines[i].area) * sc * p.sim.growth_cap() >= min_size:
             continue
         b = int(np.round(np.log(sc) / np.log(SIZE_STEP)))
         if (i, b) not in key_index:

@@ -118,7 +118,7 @@ class Simulator:
         self.grow_steps = np.ones(m.n_elements, np.int64)  # growth steps per element this iteration
         self.n_fast = 0  # elements growing fast this iteration
         self.dt = params.dt
-        self.max_growth = m.max_growth * params.max_size
+        self.max_growth = m.max_growth * params.growth_cap()
         # fast growth ends this far along from the placed size to the largest
         self.fast_until = 1.0 + (self.max_growth - 1.0) * params.fast_growth_until
         self.far2 = (params.far_update * m.gap) ** 2

@@ -144,7 +144,7 @@ class StudioController(LiveController):
             added = sim is not None and n0 is not None and sim.model.n_elements > n0
             if added and self._room_scale != 1.0:
                 sim.model.max_growth[n0:] *= self._room_scale
-                sim.max_growth = sim.model.max_growth * sim.params.max_size
+                sim.max_growth = sim.model.max_growth * sim.params.growth_cap()
         finally:
             if "future" in cmd and not cmd["future"].done():
                 cmd["future"].set_result(n0 if added else None)
