@@ -271,9 +271,14 @@ def test_an_added_copy_is_undone_and_redone(session):
     session.cancel(wait=60)
 
 
-def test_painted_room_raises_the_planned_sizes(session):
+def test_painted_room_raises_the_planned_sizes(session, monkeypatch):
     """Painting doubles the container: every element's planned size grows by √2 and the
-    run, settling or not, grows again (the elements take the room)."""
+    run, settling or not, grows again (the elements take the room). The run has no pocket
+    fill, whose growth cap (2×) is set to the filled runs' 1.3× here: past that cap the
+    elements could have grown without the paint."""
+    import repulsionpak.params
+
+    monkeypatch.setattr(repulsionpak.params, "MAX_SIZE_UNFILLED", repulsionpak.params.MAX_SIZE_FILLED)
     session.use_examples("circle", ["apple", "fish"])
     for k, v in (("count", "10"), ("gap", "12"), ("seed", "3"), ("pocket_fill", False)):
         session.set_setting(k, v)

@@ -141,4 +141,6 @@ def warnings_kept():
     finally:
         for name, value in saved.items():
             setattr(warnings, name, value)
-        warnings._filters_mutated()
+        mutated = getattr(warnings, "_filters_mutated", None)  # (what catch_warnings calls)
+        if callable(mutated):
+            mutated()
