@@ -154,3 +154,48 @@ def test_the_designers_edit_ends_the_moves_and_keeps_the_pending_one():
     assert rel.pending is None and rel.tries == 0
     assert rel.moves == [(1, 500, True, 120)]
     assert rel.at_convergence(SimpleNamespace(state=sim.state, model=None)) is False
+
+
+def _square(cx, cy, h):
+    return np.array([[cx - h, cy - h], [cx + h, cy - h], [cx + h, cy + h], [cx - h, cy + h]], float)
+
+
+def test_the_only_element_of_an_island_is_not_moved_off_it():
+    """Two islands: the small one holds one small element, the large one two elements and
+    a wide void. The smallest element is the mover's first choice, but moved into the void
+    it would leave its island empty (issue 41: every island that can hold a primary keeps
+    one), so the next element goes instead; alone on the large island, it may move there."""
+    region = shapely.union(shapely.box(0, 0, 100, 100), shapely.box(200, 0, 1000, 600))
+    rings = [_square(50, 50, 12), _square(260, 60, 40), _square(350, 60, 40)]
+    x = np.vstack(rings)
+    starts = np.array([0, 4, 8, 12])
+
+    class Model:
+        n_elements = 3
+        elem_vstart = starts
+        elem_nskin = np.array([4, 4, 4])
+
+        def skin_rings(self, xs):
+            return [xs[s:s + 4] for s in starts[:-1]]
+
+    class State:
+        def __init__(self, xs):
+            self.x, self.v, self.moving, self.iteration = xs, np.zeros_like(xs), np.ones(3, bool), 0
+
+        def copy(self):
+            return State(self.x.copy())
+
+    def sim_with(xs):
+        return SimpleNamespace(model=Model(), state=State(xs), update_contacts=lambda full: None,
+                               mark_good=lambda: None)
+
+    sim = sim_with(x.copy())
+    mover = Relocator(region, np.ones(3, bool), tries=5)
+    assert mover._move(sim)
+    assert mover.pending["element"] == 1  # not element 0, the smaller one: its island's only one
+    assert np.allclose(sim.state.x[:4], rings[0])
+    # two elements on the small island: the smaller one, the most cramped, may leave it
+    shared = sim_with(np.vstack([_square(50, 50, 12), _square(20, 20, 8), rings[2]]))
+    mover = Relocator(region, np.ones(3, bool), tries=5)
+    assert mover._move(shared) and mover.pending["element"] == 1
+    assert shared.state.x[4:8, 0].min() > 200  # on the large island now

@@ -170,10 +170,24 @@ class Relocator:
         """One skin's share of :meth:`cover`."""
         return float(shapely.buffer(skin, -self.inset).area)
 
+    def _parts_of(self, points: np.ndarray) -> np.ndarray:
+        """(n,) the part of the container (a separate region: an island) each point (n, 2)
+        lies in, -1 for none."""
+        parts = shapely.get_parts(self.region)
+        out = np.full(len(points), -1, np.int64)
+        if len(parts) == 1:
+            out[shapely.contains_xy(parts[0], points[:, 0], points[:, 1])] = 0
+            return out
+        at, part = shapely.STRtree(parts).query(shapely.points(points), predicate="intersects")
+        out[at] = part
+        return out
+
     def _move(self, sim) -> bool:
         """Move the untried element with the smallest inscribed circle that fits the
         largest void (its circle × :data:`VOID_RATIO` within the void's, its skin clear of
-        the neighbours there at :data:`SMALLEST` of its size or more); False when none does."""
+        the neighbours there at :data:`SMALLEST` of its size or more); False when none does.
+        An element alone in its part of the container (an island) moves only within it:
+        moved away, it would leave that part empty."""
         m, st = sim.model, sim.state
         skins = _skin_polygons(m, st.x)
         void = largest_void(self.region, skins)
@@ -182,7 +196,12 @@ class Relocator:
         radius, centre = void
         inner = np.full(m.n_elements, np.inf)
         circles = {}
+        where = self._parts_of(np.vstack([shapely.get_coordinates(shapely.point_on_surface(skins)), centre[None]]))
+        part, void_part = where[:-1], where[-1]
+        alone = np.bincount(part[part >= 0], minlength=max(int(part.max(initial=-1)) + 1, 1))
         for e in np.flatnonzero(~self.tried & st.moving):
+            if part[e] >= 0 and alone[part[e]] == 1 and part[e] != void_part:
+                continue  # the only element of its island
             mic = shapely.maximum_inscribed_circle(skins[e], _TOLERANCE)
             inner[e] = mic.length
             circles[e] = shapely.get_coordinates(mic)[0]
