@@ -196,7 +196,12 @@ class Relocator:
         radius, centre = void
         inner = np.full(m.n_elements, np.inf)
         circles = {}
-        where = self._parts_of(np.vstack([shapely.get_coordinates(shapely.point_on_surface(skins)), centre[None]]))
+        inside = shapely.point_on_surface(np.asarray(skins, dtype=object))  # a point in each skin
+        at = np.full((len(skins) + 1, 2), np.nan)  # (an empty skin has none: NaN, in no part)
+        full = ~shapely.is_empty(inside)
+        at[:-1][full] = shapely.get_coordinates(inside[full])
+        at[-1] = centre
+        where = self._parts_of(at)
         part, void_part = where[:-1], where[-1]
         alone = np.bincount(part[part >= 0], minlength=max(int(part.max(initial=-1)) + 1, 1))
         for e in np.flatnonzero(~self.tried & st.moving):
