@@ -203,9 +203,9 @@ class Relocator:
         at[-1] = centre
         where = self._parts_of(at)
         part, void_part = where[:-1], where[-1]
-        alone = np.bincount(part[part >= 0], minlength=max(int(part.max(initial=-1)) + 1, 1))
+        per_part = np.bincount(part[part >= 0], minlength=max(int(part.max(initial=-1)) + 1, 1))
         for e in np.flatnonzero(~self.tried & st.moving):
-            if part[e] >= 0 and alone[part[e]] == 1 and part[e] != void_part:
+            if part[e] >= 0 and per_part[part[e]] == 1 and part[e] != void_part:
                 continue  # the only element of its island
             mic = shapely.maximum_inscribed_circle(skins[e], _TOLERANCE)
             inner[e] = mic.length
