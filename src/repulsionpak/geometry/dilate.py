@@ -86,15 +86,15 @@ def _buffered(geoms: np.ndarray, reach: float) -> list:
     """Each of ``geoms`` buffered by ``reach`` (4 segments a quarter circle), at once,
     but for the dense ones (:func:`crossings` above :data:`CROSSINGS`), which are
     dilated in steps."""
-    n = [crossings(g, reach) for g in geoms]
-    dense = [k for k, c in enumerate(n) if c > CROSSINGS]
+    # (the estimate is at most the squared vertex count: only large outlines are binned)
+    big = np.flatnonzero(shapely.get_num_coordinates(geoms).astype(np.float64) ** 2 > CROSSINGS)
+    dense = [k for k in big.tolist() if crossings(geoms[k], reach) > CROSSINGS]
     if not dense:
         return list(shapely.buffer(geoms, reach, quad_segs=4))
     out = [None] * len(geoms)
-    rest = [k for k in range(len(geoms)) if k not in set(dense)]
-    if rest:
-        for k, b in zip(rest, shapely.buffer(geoms[rest], reach, quad_segs=4)):
-            out[k] = b
+    rest = np.setdiff1d(np.arange(len(geoms)), dense)
+    for k, b in zip(rest.tolist(), shapely.buffer(geoms[rest], reach, quad_segs=4)):
+        out[k] = b
     for k in dense:
         out[k] = _dilated_in_steps(geoms[k], reach)
     return out

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -39,7 +40,7 @@ from ..geometry.pairwise import distances
 from ..render.placed import FIT_SHARE, refined
 from ..types import ArtPath, CurveSubpath, PlacedArt
 from ..threads import thread_map
-from .repairs import _art_of, rest_distortion
+from .repairs import rest_distortion
 
 __all__ = ["DentResult", "dent"]
 
@@ -576,7 +577,7 @@ def _rounds(out, which, frozen, target, inner, inner_edges, rounds, rho, push, b
     swept = np.zeros(n)  # the distortion its bumps are estimated to add
     spent = np.zeros(n, bool)
     counts = []
-    exact = np.array(thread_map(_art_of, out), dtype=object)
+    exact = np.array(thread_map(operator.attrgetter("art"), out), dtype=object)
     geoms = shapely.simplify(exact, eps, preserve_topology=False)  # for distances only
     steps: dict[int, list] = {}  # each element's bump lists, applied to its art at the end
     for _ in range(rounds):

@@ -23,6 +23,7 @@ a copy bent beyond its limit by its unbent, similar copy.
 from __future__ import annotations
 
 import dataclasses
+import operator
 import warnings
 from collections.abc import Callable
 
@@ -87,11 +88,6 @@ def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
     paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
     k = float(np.sqrt(abs(np.linalg.det(rot))))
     return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k, deformation=0.0, **extra)
-
-
-def _art_of(placed: PlacedArt):
-    """``placed.art`` (for :func:`~repulsionpak.threads.thread_map`)."""
-    return placed.art
 
 
 def rest_distortion(rest: PlacedArt, placed: PlacedArt, art=None) -> float:
@@ -429,7 +425,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     shapely.prepare(region)
     tol = 1e-9 * max(1.0, float(np.ptp(np.asarray(region.bounds))))
     n = len(placed)
-    exact = thread_map(_art_of, placed)
+    exact = thread_map(operator.attrgetter("art"), placed)
     centre = [np.asarray(g.centroid.coords[0]) if not g.is_empty else np.zeros(2) for g in exact]
     # the rounds work on outlines simplified by eps and ask eps more of every distance
     # (exact checks are the slow part with detailed art); the final check is exact
