@@ -186,6 +186,55 @@ def test_path_data_round_trips_through_svgelements():
     assert path_data([sub], 3).endswith("z") and path_data([sub], 3).count("l") == 1  # closing line -> z
 
 
+
+def _random_subpaths(rng) -> list[CurveSubpath]:
+    """1-3 subpaths of random segments, some snapped to a grid (horizontal, vertical and
+    zero-length lines, whole numbers), some closed by a line back to their start."""
+    subs = []
+    for _ in range(int(rng.integers(1, 4))):
+        n = int(rng.integers(1, 7))
+        size = 10.0 ** int(rng.integers(-3, 4))
+        pts = rng.normal(size=(n + 1, 2)) * size
+        if rng.random() < 0.5:
+            pts = np.round(pts, int(rng.integers(0, 3)))
+        order = rng.integers(1, 4, n)
+        ctrl = np.zeros((n, 4, 2))
+        for k in range(n):
+            a, b = pts[k], pts[k + 1]
+            u = rng.random()
+            b = a.copy() if u < 0.15 else np.array([b[0], a[1]]) if u < 0.3 else np.array([a[0], b[1]]) if u < 0.45 else b
+            pts[k + 1] = b
+            ctrl[k, 0], ctrl[k, 1:] = a, b
+            ctrl[k, 1:order[k]] = rng.normal(size=(order[k] - 1, 2)) * size
+        closed = bool(rng.random() < 0.6)
+        if closed and rng.random() < 0.5:
+            ctrl = np.concatenate([ctrl, [[pts[-1], pts[0], pts[0], pts[0]]]])
+            order = np.append(order, 1)
+        subs.append(CurveSubpath(order, ctrl, closed))
+    return subs
+
+
+def test_path_data_kernel_writes_the_reference_text():
+    """The kernel (one call a path) and the reference writer (one segment at a time in
+    Python) write the same characters: separators dropped before '-' and between '.5.5',
+    h / v / skipped zero lines, repeated commands, z, relative moves between subpaths."""
+    from repulsionpak.geometry.curves import _path_data_py
+
+    rng = np.random.default_rng(11)
+    texts = set()
+    for _ in range(400):
+        subs = _random_subpaths(rng)
+        for decimals in (0, 2, 4, 6):
+            for relative in (True, False):
+                d = path_data(subs, decimals, relative)
+                assert d == _path_data_py(subs, decimals, relative)
+                texts.add(d)
+    joined = "".join(texts)
+    for piece in ("h", "v", "H", "V", "q", "C", "z", "m", ".5.", "-.", " ."):  # every rule was exercised
+        assert piece in joined
+    huge = [CurveSubpath(np.array([1]), np.array([[[0.0, 0.0], [3e12, 1.0], [3e12, 1.0], [3e12, 1.0]]]), False)]
+    assert path_data(huge, 4) == _path_data_py(huge, 4, True)  # beyond exact units: the reference writes it
+
 def test_decimals_follow_the_tolerance():
     for tol in (1.0, 0.1, 0.013, 1e-4):
         d = decimals_for(tol)

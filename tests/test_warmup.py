@@ -209,7 +209,7 @@ def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_
     calls = []
     monkeypatch.setattr(warmup, "_current", Running())
     render = dict(WORKLOAD.render, _warm_tps=lambda: calls.append("tps"),
-                  _warm_flatten=lambda: calls.append("flatten"))
+                  _warm_flatten=lambda: calls.append("flatten"), _warm_path_data=lambda: calls.append("path"))
     monkeypatch.setattr(warmup, "_workload", dataclasses.replace(WORKLOAD, render=tuple(render.items())))
     monkeypatch.setattr(warmup, "_claims", str(tmp_path))
     checks = []
@@ -222,9 +222,9 @@ def test_wait_compiles_the_small_render_kernels_the_warm_up_has_not_claimed(tmp_
     warmup.wait()  # the warm-up still compiles the curve fitter
     # in the order the renderer calls them; then until the render kernels are cached, not
     # until the warm-up ends (it goes on with the parallel builds: it never ends here)
-    assert calls == ["tps", "flatten"]
+    assert calls == ["tps", "flatten", "path"]
     assert len(checks) >= 7
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["_warm_flatten", "_warm_tps"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["_warm_flatten", "_warm_path_data", "_warm_tps"]
     calls.clear()
     (tmp_path / "_warm_tps").unlink()
     warmup.wait()  # the warm-up claimed _flatten (it works from the other end): tps only

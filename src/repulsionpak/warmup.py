@@ -40,7 +40,7 @@ def _render_dispatchers() -> list:
     from .geometry import curves
     from .render import deform, fit
 
-    return [deform._solve, fit._fit_chain, curves._flatten]
+    return [deform._solve, fit._fit_chain, curves._flatten, curves._path_bytes]
 
 
 # -- the simulation's specialisations ---------------------------------------------------
@@ -156,6 +156,15 @@ def _warm_flatten() -> None:
     flatten_subpath(sub, 1e-3)
 
 
+def _warm_path_data() -> None:
+    from .geometry.curves import path_data
+    from .types import CurveSubpath
+
+    path_data([CurveSubpath(np.array([1, 3], np.int8),
+                            np.array([[[0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.0, 0.0]],
+                                      [[1.0, 0.0], [1.0, 0.5], [0.5, 1.0], [0.0, 1.0]]]), True)])
+
+
 def _warm_misfit() -> None:
     """The fitting kernels of the pocket fill and the size plan
     (:func:`repulsionpak.geometry.pockets.best_fit`, :func:`~repulsionpak.geometry.pockets.fit_scales`),
@@ -193,8 +202,9 @@ WORKLOAD = jit.Workload(
     record=simulation_specialisations,
     after_simulation=(("_warm_misfit", _warm_misfit), ("_warm_dents", _warm_dents)),
     # the curve fitter first (the largest, ~70% of the render kernels' compilation), then
-    # the two small ones in reverse order of use (jit.wait compiles them from the other end)
-    render=(("_warm_fit", _warm_fit), ("_warm_flatten", _warm_flatten), ("_warm_tps", _warm_tps)),
+    # the small ones in reverse order of use (jit.wait compiles them from the other end)
+    render=(("_warm_fit", _warm_fit), ("_warm_path_data", _warm_path_data), ("_warm_flatten", _warm_flatten),
+            ("_warm_tps", _warm_tps)),
     render_kernels=_render_dispatchers,
 )
 

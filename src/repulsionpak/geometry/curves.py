@@ -234,13 +234,9 @@ def _join(nums: list[str]) -> str:
     return "".join(out)
 
 
-def path_data(curves: Sequence[CurveSubpath], decimals: int = 4, relative: bool = True) -> str:
-    """Compact SVG path data of curve subpaths (coordinates rounded to ``decimals``).
-
-    Relative commands are computed from the rounded absolute coordinates, so they add up
-    exactly to the rounded curve (no drift). A closed subpath's final line back to its
-    start becomes ``z``.
-    """
+def _path_data_py(curves: Sequence[CurveSubpath], decimals: int, relative: bool) -> str:
+    """:func:`path_data` one segment at a time in Python: the reference the kernel
+    (:func:`_path_bytes`) matches, and the writer of coordinates too large for it."""
     parts: list[str] = []
     cur = np.zeros(2)
     last_cmd = ""
@@ -292,6 +288,187 @@ def path_data(curves: Sequence[CurveSubpath], decimals: int = 4, relative: bool 
             last_cmd = ""
             cur = start
     return "".join(parts)
+
+
+@njit(cache=True, nogil=True)
+def _put_units(buf, k, i, scale, decimals):
+    """Write the number ``i`` units of the last decimal (:func:`_nums`' text) at
+    ``buf[k:]``; returns the index after it."""
+    if i == 0:
+        buf[k] = 48
+        return k + 1
+    a = i
+    if i < 0:
+        buf[k] = 45
+        k += 1
+        a = -i
+    whole = a // scale
+    frac = a - whole * scale
+    if whole > 0:
+        n = 0
+        w = whole
+        while w > 0:
+            n += 1
+            w //= 10
+        w = whole
+        for j in range(n - 1, -1, -1):
+            buf[k + j] = 48 + w % 10
+            w //= 10
+        k += n
+    if frac > 0:
+        buf[k] = 46
+        k += 1
+        digits = decimals
+        while frac % 10 == 0:  # trailing zeros dropped
+            frac //= 10
+            digits -= 1
+        for j in range(digits - 1, -1, -1):
+            buf[k + j] = 48 + frac % 10
+            frac //= 10
+        k += digits
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _put_numbers(buf, k, units, lo, hi, first_sep, scale, decimals):
+    """Write ``units[lo:hi]`` as :func:`_join` does; ``first_sep``: whether the first
+    number needs its separator (a space unless it starts with '-'). Returns the index
+    after them."""
+    prev_dot = False
+    for j in range(lo, hi):
+        i = units[j]
+        whole_zero = i != 0 and abs(i) < scale
+        starts_minus = i < 0
+        starts_dot = whole_zero and not starts_minus
+        if j > lo:
+            if not (starts_minus or (starts_dot and prev_dot)):
+                buf[k] = 32
+                k += 1
+        elif first_sep and not starts_minus:
+            buf[k] = 32
+            k += 1
+        k = _put_units(buf, k, i, scale, decimals)
+        prev_dot = i % scale != 0 if i >= 0 else (-i) % scale != 0
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _path_bytes(ctrl, order, first, closed, relative, decimals):
+    """:func:`path_data` of subpaths whose segments are ``ctrl`` (N, 4, 2), rounded to
+    ``decimals`` already, and ``order`` (N,); subpath s has segments
+    ``first[s]:first[s + 1]``, closed where ``closed[s]``. Returns the ASCII bytes."""
+    n_seg = order.shape[0]
+    n_sub = closed.shape[0]
+    scale = 1
+    for _ in range(decimals):
+        scale *= 10
+    fscale = float(scale)
+    buf = np.empty((n_seg * 6 + n_sub * 2) * 26 + n_sub * 2 + 16, np.uint8)
+    units = np.empty(6, np.int64)
+    k = 0
+    last = 0  # the last command written (0: none)
+    cx = 0.0
+    cy = 0.0
+    for s in range(n_sub):
+        a = first[s]
+        b = first[s + 1]
+        sx = ctrl[a, 0, 0]
+        sy = ctrl[a, 0, 1]
+        rel = relative and s > 0
+        if rel:
+            units[0] = np.int64(np.rint((sx - cx) * fscale))
+            units[1] = np.int64(np.rint((sy - cy) * fscale))
+            buf[k] = 109  # m
+        else:
+            units[0] = np.int64(np.rint(sx * fscale))
+            units[1] = np.int64(np.rint(sy * fscale))
+            buf[k] = 77  # M
+        k = _put_numbers(buf, k + 1, units, 0, 2, False, scale, decimals)
+        last = 108 if rel else 76  # an implicit l after a move
+        cx = sx
+        cy = sy
+        n = b - a
+        if closed[s] and n > 1 and order[b - 1] == 1 and ctrl[b - 1, 1, 0] == sx and ctrl[b - 1, 1, 1] == sy:
+            n -= 1
+        px = sx
+        py = sy
+        for t in range(a, a + n):
+            o = order[t]
+            ox = px if relative else 0.0
+            oy = py if relative else 0.0
+            lo = 0
+            hi = 2 * o
+            if o == 1:
+                dx = ctrl[t, 1, 0] - px
+                dy = ctrl[t, 1, 1] - py
+                if dy == 0 and dx != 0:
+                    cmd = 104  # h
+                    units[0] = np.int64(np.rint((ctrl[t, 1, 0] - ox) * fscale))
+                    hi = 1
+                elif dx == 0 and dy != 0:
+                    cmd = 118  # v
+                    units[0] = np.int64(np.rint((ctrl[t, 1, 1] - oy) * fscale))
+                    hi = 1
+                elif dx == 0 and dy == 0:
+                    continue
+                else:
+                    cmd = 108  # l
+                    units[0] = np.int64(np.rint((ctrl[t, 1, 0] - ox) * fscale))
+                    units[1] = np.int64(np.rint((ctrl[t, 1, 1] - oy) * fscale))
+            else:
+                cmd = 113 if o == 2 else 99  # q, c
+                for j in range(o):
+                    units[2 * j] = np.int64(np.rint((ctrl[t, 1 + j, 0] - ox) * fscale))
+                    units[2 * j + 1] = np.int64(np.rint((ctrl[t, 1 + j, 1] - oy) * fscale))
+            if not relative:
+                cmd -= 32
+            if cmd == last:
+                k = _put_numbers(buf, k, units, lo, hi, True, scale, decimals)
+            else:
+                buf[k] = cmd
+                k = _put_numbers(buf, k + 1, units, lo, hi, False, scale, decimals)
+            last = cmd
+            px = ctrl[t, o, 0]
+            py = ctrl[t, o, 1]
+        if n > 0:
+            cx = px
+            cy = py
+        if closed[s]:
+            buf[k] = 122  # z
+            k += 1
+            last = 0
+            cx = sx
+            cy = sy
+    return buf[:k]
+
+
+def path_data(curves: Sequence[CurveSubpath], decimals: int = 4, relative: bool = True) -> str:
+    """Compact SVG path data of curve subpaths (coordinates rounded to ``decimals``).
+
+    Relative commands are computed from the rounded absolute coordinates, so they add up
+    exactly to the rounded curve (no drift). A closed subpath's final line back to its
+    start becomes ``z``.
+
+    Notes
+    -----
+    One kernel call writes the whole path (:func:`_path_bytes`): the writer formats every
+    coordinate of every copy, and one segment at a time in Python that was most of the SVG
+    writing. Coordinates whose units of the last decimal a double no longer holds exactly
+    are written by the reference implementation, :func:`_path_data_py` (the same text
+    elsewhere, ``tests/test_render_curves.py``).
+    """
+    if not curves:
+        return ""
+    ctrl = np.round(np.concatenate([np.asarray(c.ctrl, dtype=np.float64) for c in curves]), decimals)
+    # a difference of two coordinates is at most twice the largest in units
+    if not (2.0 * np.abs(ctrl).max(initial=0.0) * 10 ** decimals < _EXACT_UNITS) or not all(
+            len(c.order) for c in curves):
+        return _path_data_py(curves, decimals, relative)
+    order = np.concatenate([np.asarray(c.order, dtype=np.int64) for c in curves])
+    first = np.zeros(len(curves) + 1, np.int64)
+    np.cumsum([len(c.order) for c in curves], out=first[1:])
+    closed = np.array([bool(c.closed) for c in curves])
+    return _path_bytes(ctrl, order, first, closed, bool(relative), int(decimals)).tobytes().decode("ascii")
 
 
 def segment_count(curves: Sequence[CurveSubpath]) -> dict[str, int]:
