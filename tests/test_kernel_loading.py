@@ -97,3 +97,40 @@ def test_loading_a_cached_kernel_skips_the_lock_callbacks_and_restores_them(tmp_
     # dispatcher's own calls around it still do, and the callbacks are back afterwards
     assert int(quiet) < int(loud) / 3, (quiet, loud)
     assert restored == "True"
+
+
+#: the cached specialisations ``plain(int64)`` and ``plain2(int64)`` and the uncached
+#: ``plain3(float64)`` loaded ahead (``sys.argv[2]``: "on" or "off") within a block that
+#: lasts until the first two are loaded (at most 30 s; 1 s when off); then what each
+#: dispatcher holds and whether the loading thread is still alive
+_AHEAD = _IMPORT_PROBE + '''
+import threading, time
+from numba.core import types
+from repulsionpak._jit import signatures
+calls = [(mod.plain, (types.int64,)), (mod.plain2, (types.int64,)), (mod.plain3, (types.float64,))]
+signatures.load_signatures = lambda: list(calls)
+with loading.loading_ahead(enabled=sys.argv[2] == "on"):
+    end = time.monotonic() + (30 if sys.argv[2] == "on" else 1)
+    while time.monotonic() < end and not (mod.plain.overloads and mod.plain2.overloads):
+        time.sleep(0.01)
+    time.sleep(0.2)  # (time for a compile of plain3, were it attempted)
+alive = any(t.name == "repulsionpak-kernel-loading" for t in threading.enumerate())
+print([len(d.overloads) for d, _ in calls], alive)
+'''
+
+
+def test_loading_ahead_loads_the_cached_kernels_and_compiles_none(tmp_path):
+    (tmp_path / "probe.py").write_text(_THREE)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT / "src"))
+    warm = _IMPORT_PROBE + "\nmod.plain(1); mod.plain2(1)\n"  # caches plain and plain2 (int64)
+    subprocess.run([sys.executable, "-c", warm, str(tmp_path / "probe.py")], check=True, env=env, timeout=300)
+
+    def ahead(mode):
+        proc = subprocess.run([sys.executable, "-c", _AHEAD, str(tmp_path / "probe.py"), mode],
+                              capture_output=True, text=True, env=env, timeout=300)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout.strip().splitlines()[-1]
+
+    # the thread loaded both cached ones and compiled nothing; the block waited for it
+    assert ahead("on") == "[1, 1, 0] False"
+    assert ahead("off") == "[0, 0, 0] False"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 import time
@@ -203,6 +204,22 @@ def _check_arguments(container, elements, secondary, params) -> None:
                              f"got {type(params).__name__}")
 
 
+def _kernels_loaded_ahead(func: Callable) -> Callable:
+    """Decorator: installs the kernels compiled with the package, then runs ``func`` while
+    a second thread loads the simulation's kernels from numba's cache
+    (:func:`repulsionpak._jit.loading.loading_ahead`; not beside a warm-up process, which
+    shares the compiling with this one by claims)."""
+    @functools.wraps(func)
+    def wrapped(*args, **kwargs):
+        from ._jit import loading, prebuilt, warmup
+
+        prebuilt.install()  # kernels compiled when the package was built, if any (once)
+        with loading.loading_ahead(enabled=warmup.running() is None):
+            return func(*args, **kwargs)
+    return wrapped
+
+
+@_kernels_loaded_ahead
 @with_one_blas_thread
 def pack(container: Container | str | os.PathLike, elements: Sequence[Element] | Sequence[str | os.PathLike],
          params: Params = Params(), secondary: Sequence[Element] | Sequence[str | os.PathLike] = (),
@@ -254,9 +271,8 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
     secondary one; "mapping the art", "verifying", "filling pockets", "filling holes" after
     them): they take seconds on large scenes.
     """
-    from ._jit import prebuilt, warmup
+    from ._jit import warmup
 
-    prebuilt.install()  # kernels compiled when the package was built, if any (once)
     secondary = () if secondary is None else secondary
     _check_arguments(container, elements, secondary, params)
     params = params.validate()

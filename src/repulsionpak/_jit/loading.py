@@ -30,6 +30,9 @@ numba's unicode and character-sequence support: ~22 ms of every run). Only machi
 that hashes refers to them, and none of this package's kernels does; so a kernel's cache
 entry is read here and the module imported, before the entry's machine code is linked,
 only when the entry names the symbols (:func:`_needs_hash_secret`).
+
+:func:`loading_ahead` loads a run's kernels on a second thread while the first reads the
+inputs: most of a load is LLVM linking the machine code, which runs without the GIL.
 """
 
 from __future__ import annotations
@@ -37,8 +40,9 @@ from __future__ import annotations
 import contextlib
 import pickle
 import sys
+import threading
 
-__all__ = ["install", "installed"]
+__all__ = ["install", "installed", "loading_ahead"]
 
 #: functions defined in modules under this prefix load without the refresh
 _PACKAGE = __name__.split(".")[0] + "."
@@ -146,3 +150,61 @@ def install() -> bool:
 def installed() -> bool:
     """Whether :func:`install` put the lean loading in place."""
     return _original is not None
+
+
+def _cached(dispatcher, sig) -> bool:
+    """Whether numba's disk cache holds ``dispatcher``'s specialisation ``sig`` (reads
+    only its small index file)."""
+    cache = dispatcher._cache
+    return cache._index_key(sig, dispatcher.targetctx.codegen()) in cache._cache_file._load_index()
+
+
+def _load_all(calls, stop: threading.Event) -> None:
+    """Load each specialisation of ``calls`` that is cached and not loaded yet; compile
+    none (a kernel the cache lacks is compiled where it is first called)."""
+    try:
+        for dispatcher, sig in calls:
+            if stop.is_set():
+                return
+            if sig not in dispatcher.overloads and _cached(dispatcher, sig):
+                dispatcher.compile(sig)  # a load: numba looks in its cache first
+    except Exception:  # noqa: BLE001  (private numba API: the run loads what it needs)
+        return
+
+
+@contextlib.contextmanager
+def loading_ahead(enabled: bool = True):
+    """Within the block, a second thread loads the simulation's kernels from numba's disk
+    cache, from the last one a run calls to the first, while this thread reads and meshes
+    the inputs (and loads the first kernels itself as it calls them).
+
+    Parameters
+    ----------
+    enabled
+        False: nothing is loaded ahead (a warm-up process is compiling the kernels: the
+        two processes share that work by claims, :mod:`repulsionpak._jit.warmup`).
+
+    Notes
+    -----
+    Loading the ~35 specialisations of a packing takes ~0.25 s, most of it in LLVM,
+    which releases the GIL, so on a second core it overlaps the reading of the inputs.
+    numba's compiler lock orders the two threads: a kernel is loaded once, by whichever
+    comes first. Only serial builds are loaded (no threading layer is started off the
+    main thread), and the block waits for the thread at its end, however it ends.
+    """
+    thread = stop = None
+    if enabled:
+        from .signatures import load_signatures
+
+        calls = load_signatures()
+        if calls:
+            stop = threading.Event()
+            thread = threading.Thread(target=_load_all, args=(calls[::-1], stop),
+                                      name="repulsionpak-kernel-loading", daemon=True)
+            thread.start()
+    try:
+        yield
+    finally:
+        if thread is not None:
+            stop.set()
+            thread.join()
