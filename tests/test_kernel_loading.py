@@ -134,3 +134,51 @@ def test_loading_ahead_loads_the_cached_kernels_and_compiles_none(tmp_path):
     # the thread loaded both cached ones and compiled nothing; the block waited for it
     assert ahead("on") == "[1, 1, 0] False"
     assert ahead("off") == "[0, 0, 0] False"
+
+
+#: a kernel with a parallel build, in the probe module
+_PARALLEL = '''
+from numba import prange
+from repulsionpak._jit.kernels import parallel_kernel
+
+@parallel_kernel
+def twice(x):
+    for i in prange(x.shape[0]):
+        x[i] *= 2.0
+'''
+
+#: ``twice``'s parallel build run (and so cached) with two threads
+_RUN_PARALLEL = _IMPORT_PROBE + '''
+import numpy as np
+from repulsionpak._jit import kernels
+kernels.set_threads(2)
+x = np.ones(4)
+mod.twice(x)
+assert x.tolist() == [2.0] * 4
+'''
+
+#: the recorded specialisation ``twice(float64[:])``: how many specialisations its parallel
+#: build holds after a plain switch to two threads, and after a simulation's
+_SWITCH = _IMPORT_PROBE + '''
+from numba.core import types
+from repulsionpak._jit import kernels, signatures
+signatures.load_signatures = lambda: [(mod.twice.serial, (types.Array(types.float64, 1, "C"),))]
+kernels.set_threads(2)  # (as a run restoring the thread count it found)
+before = len(mod.twice.parallel.overloads)
+kernels.set_threads(1)
+kernels.set_threads(2, load=True)  # (as a simulation going to two threads)
+print(before, len(mod.twice.parallel.overloads))
+'''
+
+
+def test_the_first_switch_to_threads_loads_every_parallel_build(tmp_path):
+    """All at once, between two iterations: a kernel loaded on its first call inside the
+    thread governor's measurement made two threads look slower than one."""
+    (tmp_path / "probe.py").write_text(_PARALLEL)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT / "src"),
+               NUMBA_NUM_THREADS="2")
+    for script in (_RUN_PARALLEL, _SWITCH):
+        proc = subprocess.run([sys.executable, "-c", script, str(tmp_path / "probe.py")],
+                              capture_output=True, text=True, env=env, timeout=300)
+        assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["0", "1"]

@@ -212,18 +212,74 @@ def parallel_ready() -> bool:
     return parallel_cached() and threading_ok()
 
 
-def set_threads(n: int) -> int:
+def set_threads(n: int, load: bool = False) -> int:
     """``numba.set_num_threads(n)`` and select the parallel builds when ``n > 1``, the
-    serial ones otherwise. Returns the previous thread count."""
+    serial ones otherwise. Returns the previous thread count.
+
+    Parameters
+    ----------
+    n
+        The thread count.
+    load
+        With ``n > 1``, load every recorded parallel build now (:func:`load_parallel_builds`,
+        once per process): a simulation about to run on several threads asks for it.
+    """
     global _parallel
     _prepare_threading()
     old = numba.get_num_threads()
     numba.set_num_threads(n)
+    if load and n > 1:
+        load_parallel_builds()
     if (n > 1) != _parallel:
         _parallel = n > 1
         for k in KERNELS:
             k._select(_parallel)
     return old
+
+
+#: whether :func:`load_parallel_builds` ran in this process
+_parallel_loaded = False
+
+
+def load_parallel_builds() -> int:
+    """Load the parallel build of every specialisation a run calls (those recorded in the
+    warm-up's signature file, :mod:`repulsionpak._jit.signatures`) that numba's disk cache
+    holds; compiles none. Once per process; returns the number loaded.
+
+    Notes
+    -----
+    The simulation asks for this (``set_threads(n, load=True)``) when it first goes to
+    several threads, so that all the loads (~60 ms on the heart) fall between two
+    iterations. Loaded lazily, the kernels called only at a full neighbour query (every
+    ``sim.requery_every`` iterations) were loaded inside the thread governor's first
+    window on two threads, and the 6 ms load made two threads lose to one on the heart
+    (0.41 against 0.30 ms an iteration, when they take 0.2): the run then stayed on one
+    thread for 300-700 iterations.
+    """
+    global _parallel_loaded
+    if _parallel_loaded:
+        return 0
+    from .loading import cached
+    from .signatures import load_signatures
+
+    calls = load_signatures()
+    if calls is None:  # (not while the warm-up's recording stands in for the kernels)
+        return 0
+    _parallel_loaded = True
+    loaded = 0
+    try:
+        builds = {id(k.serial): k for k in KERNELS}
+        for dispatcher, sig in calls:
+            k = builds.get(id(dispatcher))
+            if k is None:
+                continue
+            par = k.parallel
+            if sig not in par.overloads and cached(par, sig):
+                par.compile(sig)  # a load: numba looks in its cache first
+                loaded += 1
+    except Exception:  # noqa: BLE001  (private numba API: each kernel loads on its first call)
+        pass
+    return loaded
 
 
 def uses_parallel_builds() -> bool:
@@ -256,6 +312,6 @@ def cache_is_cold(modules: Sequence[str] = ()) -> bool:
         return False
 
 
-__all__ = ["Kernel", "KERNELS", "parallel_kernel", "set_threads", "choose_threading_layer", "LAYER_PRIORITY",
+__all__ = ["Kernel", "KERNELS", "parallel_kernel", "set_threads", "load_parallel_builds", "choose_threading_layer", "LAYER_PRIORITY",
            "uses_parallel_builds", "cache_is_cold", "is_cached", "parallel_cached", "parallel_ready",
            "threading_ok", "GOMP_SPINCOUNT"]

@@ -42,7 +42,7 @@ import pickle
 import sys
 import threading
 
-__all__ = ["install", "installed", "loading_ahead"]
+__all__ = ["cached", "install", "installed", "loading_ahead"]
 
 #: functions defined in modules under this prefix load without the refresh
 _PACKAGE = __name__.split(".")[0] + "."
@@ -152,7 +152,7 @@ def installed() -> bool:
     return _original is not None
 
 
-def _cached(dispatcher, sig) -> bool:
+def cached(dispatcher, sig) -> bool:
     """Whether numba's disk cache holds ``dispatcher``'s specialisation ``sig`` (reads
     only its small index file)."""
     cache = dispatcher._cache
@@ -166,7 +166,7 @@ def _load_all(calls, stop: threading.Event) -> None:
         for dispatcher, sig in calls:
             if stop.is_set():
                 return
-            if sig not in dispatcher.overloads and _cached(dispatcher, sig):
+            if sig not in dispatcher.overloads and cached(dispatcher, sig):
                 dispatcher.compile(sig)  # a load: numba looks in its cache first
     except Exception:  # noqa: BLE001  (private numba API: the run loads what it needs)
         return

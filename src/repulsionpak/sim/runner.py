@@ -344,7 +344,7 @@ class Simulator:
         p, st = self.params, self.state
         self.refresh_growth()
         start, most = self.thread_range()
-        threads = set_threads(start)
+        threads = set_threads(start, load=True)
         # a chosen thread count is kept; an automatic one follows the machine's load
         gov = ThreadGovernor(most if p.threads == 0 else 1, start,
                              window=p.requery_every * -(-GOV_WINDOW // p.requery_every))
@@ -365,7 +365,7 @@ class Simulator:
                 a = self.step()
                 switch = gov.end()
                 if switch is not None:
-                    set_threads(switch)
+                    set_threads(switch, load=True)
                 if not math.isfinite(a) or (probe >= 0 and not math.isfinite(st.x[probe, 0])):
                     self._recover()
                     continue
