@@ -194,8 +194,10 @@ print(spent[1], spent[0])
 
 
 def bench_loading(runs: int = 3) -> None:
-    """Seconds spent making the kernels ready over a default heart run, each run a fresh
-    process (the kernels loaded from numba's warm cache)."""
+    """Seconds the run's own calls spent making kernels ready (a first call with new types:
+    a load from numba's warm cache) over a default heart run, each run a fresh process. The
+    kernels the second thread loads ahead (``_jit.loading.loading_ahead``) and the parallel
+    builds loaded at the switch to threads are not first calls and are not counted."""
     compiled_bytecode()
     seconds, kernels = [], 0
     for r in range(runs):
