@@ -595,11 +595,53 @@ def bench_copies(count: int = 300, runs: int = 3) -> None:
         print(f"| {name} | {med['render']:.2f} | {med['verify']:.2f} | {med['total']:.2f} |")
 
 
+def bench_svg(count: int = 300, runs: int = 3) -> None:
+    """Writing the packing SVG (``render.svg.packing_svg_string``) of ``count`` shipped
+    elements in a 1000 x 1500 rectangle, with the path data written by the kernel
+    (``geometry.curves.path_data``) and by the reference writer, one segment at a time in
+    Python (``curves._path_data_py``); best of ``runs``, the same text required."""
+    import tempfile
+
+    import repulsionpak as rp
+    import repulsionpak.render.svg as svg
+    from repulsionpak import examples
+    from repulsionpak.geometry import curves
+    from repulsionpak.params import Params
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rect = Path(tmp) / "poster.svg"
+        rect.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1500">'
+                        '<rect width="1000" height="1500"/></svg>')
+        p = rp.pack(str(rect), [str(f) for f in examples.element_files()], Params(seed=1).with_(placement__count=count))
+
+    def best(writer):
+        svg.path_data = writer
+        try:
+            times = []
+            for _ in range(runs):
+                t0 = time.perf_counter()
+                text = svg.packing_svg_string(p.container, p.placed, p.gap)
+                times.append(time.perf_counter() - t0)
+            return min(times), text
+        finally:
+            svg.path_data = curves.path_data
+
+    kernel, a = best(curves.path_data)
+    python, b = best(lambda c, decimals=4, relative=True: curves._path_data_py(c, decimals, relative))
+    if a != b:
+        raise SystemExit("the two writers wrote different SVGs")
+    print(f"{len(p.placed)} copies ({count} primaries) in a 1000 x 1500 rectangle, {len(a):,} characters, best of {runs}")
+    print("| path data written | seconds to write the SVG |")
+    print("| --- | ---: |")
+    print(f"| one segment at a time in Python (reference) | {python:.3f} |")
+    print(f"| one kernel call per path | {kernel:.3f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "threads", "kernels", "preprocess", "heart", "pockets", "secondary",
                                      "mesh", "firstrun", "freshinstall", "controls", "pockets-many", "copies",
-                                     "all"])
+                                     "svg", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     a = ap.parse_args()
     print(f"machine: {machine()}")
@@ -631,6 +673,8 @@ def main() -> None:
         bench_kernels()
     if a.what in ("copies", "all"):
         bench_copies()
+    if a.what in ("svg", "all"):
+        bench_svg()
 
 
 if __name__ == "__main__":
