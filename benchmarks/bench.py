@@ -630,7 +630,8 @@ def bench_svg(count: int = 300, runs: int = 3) -> None:
     python, b = best(lambda c, decimals=4, relative=True: curves._path_data_py(c, decimals, relative))
     if a != b:
         raise SystemExit("the two writers wrote different SVGs")
-    print(f"{len(p.placed)} copies ({count} primaries) in a 1000 x 1500 rectangle, {len(a):,} characters, best of {runs}")
+    print(f"{len(p.placed)} copies ({count} primaries) in a 1000 x 1500 rectangle, {len(a):,} characters, "
+          f"best of {runs}")
     print("| path data written | seconds to write the SVG |")
     print("| --- | ---: |")
     print(f"| one segment at a time in Python (reference) | {python:.3f} |")

@@ -202,7 +202,10 @@ def _random_subpaths(rng) -> list[CurveSubpath]:
         for k in range(n):
             a, b = pts[k], pts[k + 1]
             u = rng.random()
-            b = a.copy() if u < 0.15 else np.array([b[0], a[1]]) if u < 0.3 else np.array([a[0], b[1]]) if u < 0.45 else b
+            if u < 0.15:  # a zero-length line
+                b = a.copy()
+            elif u < 0.45:  # a horizontal or a vertical one
+                b = np.array([b[0], a[1]]) if u < 0.3 else np.array([a[0], b[1]])
             pts[k + 1] = b
             ctrl[k, 0], ctrl[k, 1:] = a, b
             ctrl[k, 1:order[k]] = rng.normal(size=(order[k] - 1, 2)) * size

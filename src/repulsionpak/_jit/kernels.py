@@ -312,6 +312,6 @@ def cache_is_cold(modules: Sequence[str] = ()) -> bool:
         return False
 
 
-__all__ = ["Kernel", "KERNELS", "parallel_kernel", "set_threads", "load_parallel_builds", "choose_threading_layer", "LAYER_PRIORITY",
-           "uses_parallel_builds", "cache_is_cold", "is_cached", "parallel_cached", "parallel_ready",
+__all__ = ["Kernel", "KERNELS", "parallel_kernel", "set_threads", "load_parallel_builds", "choose_threading_layer",
+           "LAYER_PRIORITY", "uses_parallel_builds", "cache_is_cold", "is_cached", "parallel_cached", "parallel_ready",
            "threading_ok", "GOMP_SPINCOUNT"]

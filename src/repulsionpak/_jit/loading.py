@@ -186,8 +186,9 @@ def loading_ahead(enabled: bool = True):
 
     Notes
     -----
-    Loading the ~35 specialisations of a packing takes ~0.25 s, most of it in LLVM,
-    which releases the GIL, so on a second core it overlaps the reading of the inputs.
+    Loading the ~35 specialisations of a packing takes ~0.15 s (65 ms of it the first
+    load, which sets up numba's runtime), most of it in LLVM, which releases the GIL, so
+    on a second core it overlaps the reading of the inputs.
     numba's compiler lock orders the two threads: a kernel is loaded once, by whichever
     comes first. Only serial builds are loaded (no threading layer is started off the
     main thread), and the block waits for the thread at its end, however it ends.
