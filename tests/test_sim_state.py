@@ -104,8 +104,12 @@ def test_terms_follow_the_parameters():
     no_fold = terms_of(dataclasses.replace(SimParams(), min_triangle_area=0.0))
     assert Inversion not in map(type, no_fold)
     p = SimParams()
-    assert default[0] == Repulsion(p.k_repulsion, p.soft)
+    assert default[0] == Repulsion(80.0, p.soft)  # k_repulsion None: the pockets' own strength
     assert Boundary(p.k_boundary, p.outside_block, p.boundary_inset) in default
+    # resolved for a run whose pockets stay empty, as pack() does: the stronger repulsion
+    assert terms_of(p.for_run(filled=False))[0] == Repulsion(320.0, p.soft)
+    assert terms_of(p.for_run(filled=True))[0] == Repulsion(80.0, p.soft)
+    assert terms_of(dataclasses.replace(p, k_repulsion=50.0).for_run(filled=False))[0] == Repulsion(50.0, p.soft)
 
 
 def test_a_state_saved_to_a_checkpoint_file_resumes_bit_identically(template, tmp_path):

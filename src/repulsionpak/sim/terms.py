@@ -162,7 +162,7 @@ def terms_of(p: SimParams) -> tuple:
     ``k_shape`` > 0, the unfolding force when ``min_triangle_area`` > 0, the corners'
     (for a container with reflex corners) and the elongated elements' alignment when
     ``k_align`` > 0."""
-    terms = [Repulsion(p.k_repulsion, p.soft), Edges(p.k_edge)]
+    terms = [Repulsion(p.repulsion(), p.soft), Edges(p.k_edge)]
     if p.k_shape > 0:
         terms.append(ShapeMatching(p.k_shape))
     terms += [Boundary(p.k_boundary, p.outside_block, p.boundary_inset), Overlap(p.k_overlap)]
