@@ -106,9 +106,14 @@ def test_terms_follow_the_parameters():
     p = SimParams()
     assert default[0] == Repulsion(80.0, p.soft)  # k_repulsion None: the pockets' own strength
     assert Boundary(p.k_boundary, p.outside_block, p.boundary_inset) in default
-    # resolved for a run whose pockets stay empty, as pack() does: the stronger repulsion
+    # resolved for a run whose pockets stay empty, as pack() does: the stronger repulsion at the
+    # default gap (10 simulation units) and above, following the gap squared below it, never
+    # below the pockets' 80
     assert terms_of(p.for_run(filled=False))[0] == Repulsion(320.0, p.soft)
-    assert terms_of(p.for_run(filled=True))[0] == Repulsion(80.0, p.soft)
+    assert p.for_run(filled=False, gap=20.0).k_repulsion == 320.0  # (above the default gap: kept)
+    assert p.for_run(filled=False, gap=7.0).k_repulsion == pytest.approx(156.8)
+    assert p.for_run(filled=False, gap=3.0).k_repulsion == 80.0
+    assert terms_of(p.for_run(filled=True, gap=20.0))[0] == Repulsion(80.0, p.soft)
     assert terms_of(dataclasses.replace(p, k_repulsion=50.0).for_run(filled=False))[0] == Repulsion(50.0, p.soft)
 
 

@@ -314,7 +314,7 @@ def pack(container: Container | str | os.PathLike, elements: Sequence[Element] |
         attach(model, flow, placement, ctrl, elements, pinned, frame.unit, params, templates)
     t1 = time.perf_counter()
     filled = bool(secondary) or params.secondary.auto  # the pockets get copies
-    sim = Simulator(model, state, params.sim.for_run(filled), phase="primary")
+    sim = Simulator(model, state, params.sim.for_run(filled, gap=model.gap), phase="primary")
     sim.templates = templates
     sim.relocator = primary_relocator(model, container.region, frame, params, filled=filled)
     warmup.compile_forward(serial=sim.threads() == 1)  # first run: this process's share of the kernels

@@ -117,11 +117,13 @@ class SimParams:
 
     k_repulsion: float | None = _doc(
         None, "paper units", "k_r, strength of the repulsion force (Eq. 2). None: 80 when the pockets "
-        "are filled; 320 when they are not (--no-pocket-fill), where only the primaries' own spacing "
-        "leaves the negative space even: 14 primaries-only scenes, area 0.6333 -> 0.6505, Q_s ratio "
-        "0.552 -> 0.536; the heart with 30 animals, seeds 1-27: +0.009. With the pockets filled it "
-        "made the main suite's area no higher and its Q_s ratio worse (0.395 -> 0.410, "
-        "docs/algorithm.md).")
+        "are filled; when they are not (--no-pocket-fill), where only the primaries' own spacing "
+        "leaves the negative space even, 320 at the default gap (1% of the container's larger side) "
+        "and above, following the gap squared below it and never below 80: 14 primaries-only scenes, area 0.6333 -> "
+        "0.6505, Q_s ratio 0.552 -> 0.536; the heart with 30 animals, seeds 1-27: +0.009. With the "
+        "pockets filled it made the main suite's area no higher and its Q_s ratio worse (0.395 -> "
+        "0.410), and at a third of the default gap 320 lowered 300 elements' area by 0.011-0.017 "
+        "(docs/algorithm.md).")
     k_edge: float = _doc(
         20.0, "paper units", "k_e, strength of the quadratic edge springs (Eq. 3). The paper's example "
         "is 40 (its authors' own parameter file uses 7 against k_r = 100); 20 deforms more and packs "
@@ -280,7 +282,7 @@ class SimParams:
             return float(self.max_size)
         return MAX_SIZE_FILLED if filled else MAX_SIZE_UNFILLED
 
-    def repulsion(self, filled: bool = True) -> float:
+    def repulsion(self, filled: bool = True, gap: float | None = None) -> float:
         """k_r, the repulsion's strength.
 
         Parameters
@@ -288,22 +290,43 @@ class SimParams:
         filled : bool
             Whether copies fill the pockets of this run (the pocket phase's own copies:
             True).
+        gap : float, optional
+            The run's gap in simulation units (the container's larger side is 1000);
+            None: the default gap, :data:`DEFAULT_GAP_SIM`.
 
         Returns
         -------
         float
-            ``k_repulsion``; for None :data:`K_REPULSION_FILLED` when the pockets are filled
-            and :data:`K_REPULSION_UNFILLED` when they are not.
+            ``k_repulsion``; for None :data:`K_REPULSION_FILLED` when the pockets are filled,
+            and when they are not :data:`K_REPULSION_UNFILLED` × (gap / the default gap)² for
+            gaps below the default one, at least :data:`K_REPULSION_FILLED`;
+            :data:`K_REPULSION_UNFILLED` at the default gap and above.
+
+        Notes
+        -----
+        Neighbouring skins lie about a gap apart, so the push between them, k_r/(d² + ς),
+        grows as the gap shrinks: k_r following the gap squared pushes them alike at any gap.
+        Measured: 320 packed the primaries denser than 80 at the default gap (10 units:
+        the heart, the shipped containers) and less densely at a third of it (300 elements
+        in a 1000 × 1500 rectangle, 3.1 units: art area 0.679 / 0.680 against 0.696 / 0.691).
+        Above the default gap nothing was measured, so the strength stays 320 there (raised
+        with the gap squared, 363 at the heart's 10.7 units, the alignment of a scene of bars
+        came apart).
         """
         if self.k_repulsion is not None:
             return float(self.k_repulsion)
-        return K_REPULSION_FILLED if filled else K_REPULSION_UNFILLED
+        if filled:
+            return K_REPULSION_FILLED
+        g = DEFAULT_GAP_SIM if gap is None else float(gap)
+        if g >= DEFAULT_GAP_SIM * (1.0 - 1e-6):  # (the default gap as computed: 10 up to rounding)
+            return K_REPULSION_UNFILLED
+        return max(K_REPULSION_FILLED, K_REPULSION_UNFILLED * (g / DEFAULT_GAP_SIM) ** 2)
 
-    def for_run(self, filled: bool) -> "SimParams":
+    def for_run(self, filled: bool, gap: float | None = None) -> "SimParams":
         """These parameters with ``max_size`` and ``k_repulsion`` resolved
         (:meth:`growth_cap`, :meth:`repulsion`) for a run whose pockets are ``filled`` or
-        not: what the primary phase's simulator is given."""
-        return dataclasses.replace(self, max_size=self.growth_cap(filled), k_repulsion=self.repulsion(filled))
+        not, at ``gap`` (simulation units): what the primary phase's simulator is given."""
+        return dataclasses.replace(self, max_size=self.growth_cap(filled), k_repulsion=self.repulsion(filled, gap))
 
 
 #: the growth cap (× nominal size) when the pockets are filled: an element that finds room
@@ -314,10 +337,12 @@ MAX_SIZE_FILLED = 1.3
 MAX_SIZE_UNFILLED = 2.0
 #: k_r when the pockets are filled (the strength the main suite is measured at)
 K_REPULSION_FILLED = 80.0
-#: k_r when nothing fills the pockets: elements kept further apart while they grow meet
-#: more evenly, and the voids they leave are smaller (the heart with 30 animals, seeds
-#: 1-27: art area 0.5654 -> 0.5742)
+#: k_r when nothing fills the pockets, at the default gap (:data:`DEFAULT_GAP_SIM`):
+#: elements kept further apart while they grow meet more evenly, and the voids they leave
+#: are smaller (the heart with 30 animals, seeds 1-27: art area 0.5654 -> 0.5742)
 K_REPULSION_UNFILLED = 320.0
+#: the default gap in simulation units: 1 % of the container's larger side (1000 units)
+DEFAULT_GAP_SIM = 10.0
 
 
 @dataclass(frozen=True)

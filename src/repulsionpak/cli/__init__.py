@@ -76,7 +76,7 @@ MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from
 RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE], limited:DEG or upright[:DEG] (see docs/controls.md).")]
 RigidOpt = Annotated[bool, typer.Option("--rigid", help="Elements never deform (rigid bodies).")]
 StiffnessOpt = Annotated[Optional[float], typer.Option(help="Multiplier of the spring constants of the elements.")]
-NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements); the primaries then fill the voids themselves: the most cramped are moved into the largest voids, elements grow up to 2x their planned size, and they repel each other 4x as strongly.")]
+NoPocketFillOpt = Annotated[bool, typer.Option("--no-pocket-fill", help="Without --secondary, leave the pockets empty (default: fill them with small copies of the elements); the primaries then fill the voids themselves: the most cramped are moved into the largest voids, elements grow up to 2x their planned size, and they repel each other more strongly.")]
 ContainerPaintOpt = Annotated[Optional[str], typer.Option(
     "--container-paint", metavar="outline|as-drawn|none",
     help="How the outputs draw the container: outline (default: its exact shape as a thin stroke, "
