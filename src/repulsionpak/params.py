@@ -120,7 +120,7 @@ class SimParams:
         "are filled; when they are not (--no-pocket-fill), where only the primaries' own spacing "
         "leaves the negative space even, 320 at the default gap (1% of the container's larger side) "
         "and above, following the gap squared below it and never below 80: 14 primaries-only scenes, area 0.6333 -> "
-        "0.6505, Q_s ratio 0.552 -> 0.536; the heart with 30 animals, seeds 1-27: +0.009. With the "
+        "0.6482, Q_s ratio 0.552 -> 0.540; the heart with 30 animals, seeds 1-27: +0.009. With the "
         "pockets filled it made the main suite's area no higher and its Q_s ratio worse (0.395 -> "
         "0.410), and at a third of the default gap 320 lowered 300 elements' area by 0.011-0.017 "
         "(docs/algorithm.md).")

@@ -259,27 +259,15 @@ def load_parallel_builds() -> int:
     global _parallel_loaded
     if _parallel_loaded:
         return 0
-    from .loading import cached
+    from .loading import load_cached
     from .signatures import load_signatures
 
     calls = load_signatures()
     if calls is None:  # (not while the warm-up's recording stands in for the kernels)
         return 0
     _parallel_loaded = True
-    loaded = 0
-    try:
-        builds = {id(k.serial): k for k in KERNELS}
-        for dispatcher, sig in calls:
-            k = builds.get(id(dispatcher))
-            if k is None:
-                continue
-            par = k.parallel
-            if sig not in par.overloads and cached(par, sig):
-                par.compile(sig)  # a load: numba looks in its cache first
-                loaded += 1
-    except Exception:  # noqa: BLE001  (private numba API: each kernel loads on its first call)
-        pass
-    return loaded
+    builds = {id(k.serial): k for k in KERNELS}
+    return load_cached([(builds[id(d)].parallel, sig) for d, sig in calls if id(d) in builds])
 
 
 def uses_parallel_builds() -> bool:

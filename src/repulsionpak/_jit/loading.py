@@ -42,7 +42,7 @@ import pickle
 import sys
 import threading
 
-__all__ = ["cached", "install", "installed", "loading_ahead"]
+__all__ = ["cached", "install", "installed", "load_cached", "loading_ahead"]
 
 #: functions defined in modules under this prefix load without the refresh
 _PACKAGE = __name__.split(".")[0] + "."
@@ -159,17 +159,22 @@ def cached(dispatcher, sig) -> bool:
     return cache._index_key(sig, dispatcher.targetctx.codegen()) in cache._cache_file._load_index()
 
 
-def _load_all(calls, stop: threading.Event) -> None:
-    """Load each specialisation of ``calls`` that is cached and not loaded yet; compile
-    none (a kernel the cache lacks is compiled where it is first called)."""
+def load_cached(calls, stop: threading.Event | None = None) -> int:
+    """Load each specialisation ``(dispatcher, argument types)`` of ``calls`` that numba's
+    disk cache holds and the dispatcher lacks; compile none (a kernel the cache lacks is
+    compiled where it is first called). Stops early once ``stop`` is set. Returns the
+    number loaded."""
+    loaded = 0
     try:
         for dispatcher, sig in calls:
-            if stop.is_set():
-                return
+            if stop is not None and stop.is_set():
+                break
             if sig not in dispatcher.overloads and cached(dispatcher, sig):
                 dispatcher.compile(sig)  # a load: numba looks in its cache first
+                loaded += 1
     except Exception:  # noqa: BLE001  (private numba API: the run loads what it needs)
-        return
+        pass
+    return loaded
 
 
 @contextlib.contextmanager
@@ -200,7 +205,7 @@ def loading_ahead(enabled: bool = True):
         calls = load_signatures()
         if calls:
             stop = threading.Event()
-            thread = threading.Thread(target=_load_all, args=(calls[::-1], stop),
+            thread = threading.Thread(target=load_cached, args=(calls[::-1], stop),
                                       name="repulsionpak-kernel-loading", daemon=True)
             thread.start()
     try:

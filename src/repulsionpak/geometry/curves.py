@@ -330,17 +330,16 @@ def _put_units(buf, k, i, scale, decimals):
 
 
 @njit(cache=True, nogil=True)
-def _put_numbers(buf, k, units, lo, hi, first_sep, scale, decimals):
-    """Write ``units[lo:hi]`` as :func:`_join` does; ``first_sep``: whether the first
+def _put_numbers(buf, k, units, count, first_sep, scale, decimals):
+    """Write ``units[:count]`` as :func:`_join` does; ``first_sep``: whether the first
     number needs its separator (a space unless it starts with '-'). Returns the index
     after them."""
     prev_dot = False
-    for j in range(lo, hi):
+    for j in range(count):
         i = units[j]
-        whole_zero = i != 0 and abs(i) < scale
         starts_minus = i < 0
-        starts_dot = whole_zero and not starts_minus
-        if j > lo:
+        starts_dot = 0 < i < scale  # ".5": no whole part
+        if j > 0:
             if not (starts_minus or (starts_dot and prev_dot)):
                 buf[k] = 32
                 k += 1
@@ -348,7 +347,7 @@ def _put_numbers(buf, k, units, lo, hi, first_sep, scale, decimals):
             buf[k] = 32
             k += 1
         k = _put_units(buf, k, i, scale, decimals)
-        prev_dot = i % scale != 0 if i >= 0 else (-i) % scale != 0
+        prev_dot = abs(i) % scale != 0
     return k
 
 
@@ -383,7 +382,7 @@ def _path_bytes(ctrl, order, first, closed, relative, decimals):
             units[0] = np.int64(np.rint(sx * fscale))
             units[1] = np.int64(np.rint(sy * fscale))
             buf[k] = 77  # M
-        k = _put_numbers(buf, k + 1, units, 0, 2, False, scale, decimals)
+        k = _put_numbers(buf, k + 1, units, 2, False, scale, decimals)
         last = 108 if rel else 76  # an implicit l after a move
         cx = sx
         cy = sy
@@ -396,19 +395,18 @@ def _path_bytes(ctrl, order, first, closed, relative, decimals):
             o = order[t]
             ox = px if relative else 0.0
             oy = py if relative else 0.0
-            lo = 0
-            hi = 2 * o
+            count = 2 * o  # the numbers written: 1 for h / v, 2 for l, 4 for q, 6 for c
             if o == 1:
                 dx = ctrl[t, 1, 0] - px
                 dy = ctrl[t, 1, 1] - py
                 if dy == 0 and dx != 0:
                     cmd = 104  # h
                     units[0] = np.int64(np.rint((ctrl[t, 1, 0] - ox) * fscale))
-                    hi = 1
+                    count = 1
                 elif dx == 0 and dy != 0:
                     cmd = 118  # v
                     units[0] = np.int64(np.rint((ctrl[t, 1, 1] - oy) * fscale))
-                    hi = 1
+                    count = 1
                 elif dx == 0 and dy == 0:
                     continue
                 else:
@@ -423,10 +421,10 @@ def _path_bytes(ctrl, order, first, closed, relative, decimals):
             if not relative:
                 cmd -= 32
             if cmd == last:
-                k = _put_numbers(buf, k, units, lo, hi, True, scale, decimals)
+                k = _put_numbers(buf, k, units, count, True, scale, decimals)
             else:
                 buf[k] = cmd
-                k = _put_numbers(buf, k + 1, units, lo, hi, False, scale, decimals)
+                k = _put_numbers(buf, k + 1, units, count, False, scale, decimals)
             last = cmd
             px = ctrl[t, o, 0]
             py = ctrl[t, o, 1]
