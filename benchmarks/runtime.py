@@ -7,8 +7,9 @@
     python benchmarks/runtime.py neighbour [--runs 2]
         the heart without pockets, a CPU-bound process started one second into the run:
         ms per primary iteration with automatic threads, with one thread and with two
-    python benchmarks/runtime.py poster
+    python benchmarks/runtime.py poster [--png]
         the shipped example elements, `--count 1000`, in a 2:3 rectangle: wall seconds, peak memory
+        (the packing SVG and its report; ``--png`` also renders the PNG preview, ~3 s more)
 
 Each prints Markdown table rows for docs/benchmarks.md, with the machine.
 """
@@ -148,8 +149,9 @@ def bench_neighbour(runs: int = 2) -> None:
         print(f"| {name} | {ms:.2f} | {ms / one:.2f} | {_median([x[1] for x in v]):.1f} |")
 
 
-def bench_poster(count: int = 1000) -> None:
-    """The shipped examples, ``count`` copies, in a 2:3 rectangle."""
+def bench_poster(count: int = 1000, png: bool = False) -> None:
+    """The shipped examples, ``count`` copies, in a 2:3 rectangle: the packing SVG and the
+    report, and with ``png`` the PNG preview too."""
     from repulsionpak import examples
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -158,8 +160,9 @@ def bench_poster(count: int = 1000) -> None:
                         '<rect width="1000" height="1500"/></svg>')
         out = Path(tmp) / "poster-out.svg"
         cmd = PACK + [str(rect), *map(str, examples.element_files()), "--count", str(count), "--seed", "1",
-                      "-o", str(out), "--report", str(out.with_suffix(".json")), "--png",
-                      str(out.with_suffix(".png")), "--quiet"]
+                      "-o", str(out), "--report", str(out.with_suffix(".json")), "--quiet"]
+        if png:
+            cmd += ["--png", str(out.with_suffix(".png"))]
         w, c, m, _ = timed(cmd)
         rep = json.loads(out.with_suffix(".json").read_text())
     print(f"machine: {machine()}")
@@ -219,6 +222,7 @@ def main() -> None:
     ap.add_argument("--cpp-dir", type=Path, help="the C++ build folder (build.sh OUTDIR)")
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--count", type=int, default=1000)
+    ap.add_argument("--png", action="store_true", help="poster: also render the PNG preview")
     a = ap.parse_args()
     if a.what == "cpp":
         if a.cpp_dir is None:
@@ -229,7 +233,7 @@ def main() -> None:
     elif a.what == "loading":
         bench_loading(a.runs)
     else:
-        bench_poster(a.count)
+        bench_poster(a.count, a.png)
 
 
 if __name__ == "__main__":
