@@ -177,9 +177,9 @@ def growth_steps(x, elem_vstart, elem_nskin, moving, nb_count, nb_d2, values, ox
     neighbour or of the edge it is back at the paper's rate, so contacts form as slowly
     as in the paper and the jam is the same kind of jam. Between full queries the contacts
     refresh every neighbour within ``sim.far_update`` (2 gaps) each step, so a clearance
-    below that is judged on current distances; the every-step point-in-mesh radius
-    (``Simulator.near2``, 1–2 gaps) is wider than the clearance, so an element is back at
-    the paper's rate and caps before it can reach a neighbour.
+    below that is judged on current distances, and an element is back at the paper's
+    rate and caps before it can reach a neighbour; the every-step point-in-mesh radius
+    (``Simulator.near2``) follows the fast growers' caps.
     """
     n_fast = 0
     clear2 = clear * clear
