@@ -189,6 +189,51 @@ def test_controller_moves_pins_removes_and_adds_between_iterations():
     assert layouts[-1]["pinned"] == [0] and layouts[-1]["removed"] == [1] and len(layouts[-1]["counts"]) == 6
 
 
+def test_a_dragged_element_knows_at_once_what_it_was_dropped_into():
+    """A drag is no velocity-capped step: the refresh between full queries follows only
+    small moves, so the move command queries the contacts anew. An element dropped onto
+    another has its skin vertices inside the other's mesh flagged before the next step."""
+    import dataclasses
+
+    import shapely
+
+    from repulsionpak.io import load_container, load_elements
+    from repulsionpak.live import LiveController
+    from repulsionpak.pack import pack
+    from repulsionpak.params import Params
+
+    cont = load_container(EX / "containers" / "circle.svg")
+    elems = load_elements([EX / "elements" / "apple.svg", EX / "elements" / "fish.svg"])
+    p = Params(gap=12.0, seed=3)
+    p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=5),
+                            sim=dataclasses.replace(p.sim, max_iterations=80, min_iterations=0),
+                            secondary=dataclasses.replace(p.secondary, auto=False))
+    ctl = LiveController(cont, 12.0, p.render)
+    ctl.publish = lambda kind, payload: None
+    seen = {}
+
+    def on_snapshot(snap):
+        if snap.iteration == 50 and not snap.done:  # iteration 50: between two full queries
+            m, st = snap.sim.model, snap.state
+            skin = [st.x[m.elem_vstart[e]:m.elem_vstart[e] + m.elem_nskin[e]] for e in (0, 1)]
+            dx, dy = (skin[1].mean(axis=0) - skin[0].mean(axis=0)) * ctl.unit
+            ctl.on_snapshot(snap)
+            ctl.submit({"cmd": "move", "index": 0, "dx": float(dx), "dy": float(dy)})
+            ctl.should_stop()  # the runner's call between two iterations applies the command
+            dropped = st.x[m.elem_vstart[0]:m.elem_vstart[0] + m.elem_nskin[0]]
+            other = shapely.Polygon(skin[1])
+            seen["truth"] = shapely.contains_xy(other, dropped[:, 0], dropped[:, 1])
+            seen["flags"] = st.inside[m.elem_vstart[0]:m.elem_vstart[0] + m.elem_nskin[0]].copy()
+        else:
+            ctl.on_snapshot(snap)
+
+    pack(cont, elems, p, on_snapshot=on_snapshot, should_stop=ctl.should_stop)
+    truth, flags = seen["truth"], seen["flags"]
+    assert truth.sum() >= 10  # the drop really overlaps
+    # flagged where the skin polygon says so (a vertex on the other's skin may go either way)
+    assert (truth == flags).mean() >= 0.95 and flags[truth].mean() >= 0.95
+
+
 def test_added_copy_keeps_its_sources_designer_controls():
     """A copy of a stiff, upright element (issue 12's controls) is stiff and upright too."""
     import dataclasses

@@ -323,6 +323,9 @@ class LiveController:
             st.x[a:b, 0] += cmd["dx"] / self.unit
             st.x[a:b, 1] += cmd["dy"] / self.unit
             st.v[a:b] = 0.0
+            # a drag is no velocity-capped step: its contacts are found anew, as after a
+            # relocation (the refresh between queries only follows small moves)
+            sim.update_contacts(full=True)
         elif c == "pin" and not m.frozen[i] and i not in self.removed:
             (self.pinned.add if cmd["pinned"] else self.pinned.discard)(i)
             sim.set_moving(i, not cmd["pinned"])
