@@ -807,6 +807,35 @@ def test_contact_update_tracks_the_full_query(template):
     np.testing.assert_allclose(d2[skin[has], 0], d2_f[skin[has], 0], rtol=1e-9, atol=1e-9)
 
 
+def test_the_point_in_mesh_radius_covers_capped_steps(template):
+    """The runner's radii between full queries (``Simulator.near2``: NEAR_STEPS capped
+    steps; ``far2``): a square driven into another at its velocity cap, one capped step
+    per update and no full query, has exactly the inside flags a full query gives at every
+    step: entries are caught the step they happen."""
+    from repulsionpak.sim.contacts import follow_contacts
+    from repulsionpak.sim.runner import NEAR_STEPS
+
+    model, state = two_square_model(template, (30, 50), (62, 50), angle1=0.3)
+    sim = Simulator(model, state, SimParams())
+    x = state.x
+    a0, a1 = model.elem_vstart[0], model.elem_vstart[1]
+    b0, b1 = model.elem_vstart[1], model.elem_vstart[2]
+    skin_a = np.arange(a0, a0 + model.elem_nskin[0])
+    step = float(sim.vmax[0]) * sim.dt  # the farthest a vertex of A moves in one step
+    assert np.sqrt(sim.near2) == pytest.approx(NEAR_STEPS * float(sim.vmax.max()) * sim.dt)
+    x[a0:a1, 0] += x[b0:b1, 0].min() - 3 * step - x[skin_a, 0].max()  # three steps short of B
+    sim.update_contacts(True)
+    entered = 0
+    for _ in range(60):
+        x[a0:a1, 0] += step
+        follow_contacts(model, state, sim.near2, sim.far2)
+        walked = state.inside[skin_a].copy()
+        sim.update_contacts(True)  # what a full query says (and the state the next step follows)
+        np.testing.assert_array_equal(walked, state.inside[skin_a])
+        entered = max(entered, int(walked.sum()))
+    assert entered >= 3  # the drive really went in
+
+
 def test_a_vertex_deep_in_a_mesh_is_pulled_out_the_side_it_came_in_by(template):
     """A square pushed step by step two thirds of the way across another: the vertices of
     its leading edge, past the other's middle, are nearest to its far side, and pulling
