@@ -41,10 +41,10 @@ from .threadgov import ThreadGovernor
 #: every neighbour's distance each step (within ``sim.far_update``), and in one step a
 #: vertex and a skin close in by at most two such steps under the Euler update; the rest
 #: is room for the constraints' corrections. A vertex farther out was outside the mesh a
-#: step ago and cannot have crossed its skin since. (The radius was 4 × 32 steps, the
-#: reach between full queries: every refreshed pair was tested, half of the refresh's
-#: time on a jam of 300 elements. At 8 steps the heart's inside flags differed from it in
-#: 5 vertex-steps of about 9 million, each caught by the next full query.)
+#: step ago and cannot have crossed its skin since. (The reach between full queries,
+#: 4 × 32 steps, would test every refreshed pair: half of the refresh's time on a jam of
+#: 300 elements. The heart's inside flags differ from that radius's in 5 vertex-steps of
+#: about 9 million, each caught by the next full query.)
 NEAR_STEPS = 8.0
 
 
