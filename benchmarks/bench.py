@@ -554,6 +554,15 @@ def bench_controls(seeds=(1, 2, 3)) -> None:
         print(f"| {name} | {it:.0f} | {sm:.2f} | {ms:.3f} | {tt:.2f} | {100 * (tt / ref - 1):+.0f}% |", flush=True)
 
 
+def poster_container(folder: Path) -> Path:
+    """Write the poster benchmarks' container, a 1000 x 1500 rectangle, into ``folder``;
+    returns its path."""
+    rect = Path(folder) / "poster.svg"
+    rect.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1500">'
+                    '<rect width="1000" height="1500"/></svg>')
+    return rect
+
+
 def bench_copies(count: int = 300, runs: int = 3) -> None:
     """The stages after the simulation with the per-copy work on one thread and on the
     threads :func:`repulsionpak.threads.thread_map` takes (``count`` shipped elements in a
@@ -570,9 +579,7 @@ def bench_copies(count: int = 300, runs: int = 3) -> None:
     default = th.MOST_WORKERS
     rows: dict[str, list] = {"one thread": [], f"{th.worker_threads()} threads": []}
     with tempfile.TemporaryDirectory() as tmp:
-        rect = Path(tmp) / "poster.svg"
-        rect.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1500">'
-                        '<rect width="1000" height="1500"/></svg>')
+        rect = poster_container(tmp)
         for _ in range(runs):
             for name, workers in zip(rows, (1, default)):
                 th.MOST_WORKERS = workers
@@ -609,9 +616,7 @@ def bench_svg(count: int = 300, runs: int = 3) -> None:
     from repulsionpak.params import Params
 
     with tempfile.TemporaryDirectory() as tmp:
-        rect = Path(tmp) / "poster.svg"
-        rect.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1500">'
-                        '<rect width="1000" height="1500"/></svg>')
+        rect = poster_container(tmp)
         p = rp.pack(str(rect), [str(f) for f in examples.element_files()], Params(seed=1).with_(placement__count=count))
 
     def best(writer):

@@ -34,7 +34,7 @@ ANIMALS = SHARED / "animals"
 PACK = [str(Path(sys.executable).parent / "repulsionpak"), "pack"]
 
 sys.path.insert(0, str(HERE))
-from bench import machine  # noqa: E402  (the same machine line as the other scripts)
+from bench import machine, poster_container  # noqa: E402  (the same machine line and poster as the other scripts)
 
 
 def timed(cmd, cwd=None, env=None, during=None) -> tuple[float, float, float, str]:
@@ -155,9 +155,7 @@ def bench_poster(count: int = 1000, png: bool = False) -> None:
     from repulsionpak import examples
 
     with tempfile.TemporaryDirectory() as tmp:
-        rect = Path(tmp) / "poster.svg"
-        rect.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 1000 1500">'
-                        '<rect width="1000" height="1500"/></svg>')
+        rect = poster_container(tmp)
         out = Path(tmp) / "poster-out.svg"
         cmd = PACK + [str(rect), *map(str, examples.element_files()), "--count", str(count), "--seed", "1",
                       "-o", str(out), "--report", str(out.with_suffix(".json")), "--quiet"]
