@@ -11,7 +11,8 @@ import shapely
 from repulsionpak.params import SecondaryParams
 from repulsionpak.preprocess import outline_of
 from repulsionpak.geometry.pockets import fit_scale, fit_scales, outline_samples
-from repulsionpak.secondary import SIZE_STEP, _fit_to_pockets, pocket_axes, pocket_seeds
+from repulsionpak.secondary import (MAX_POCKET_GRID, PIXELS_PER_GAP, SIZE_STEP, _fit_to_pockets, pocket_axes,
+                                    pocket_grid, pocket_seeds)
 from repulsionpak.types import ArtPath, Element
 
 
@@ -189,8 +190,37 @@ def test_seeds_in_a_wide_sliver_leave_room_for_copies_as_wide_as_it():
     np.fill_diagonal(d, np.inf)
     depth = float(pockets.distance.max())
     assert depth == pytest.approx(8.0, abs=1.0)
-    assert d.min() >= 2.0 * depth / 1.34 - 0.15 * gap - 2 * pockets.h  # was 8 (the disc of its depth)
+    # each seed keeps the deeper seeds' claims (taken deepest first): as far from each as
+    # that one's copy is wide, a gap added, not the fixed 2 gaps or d they kept before
+    claim = np.maximum(2.0 * gap, 2.0 * pockets.distance / 1.34 - 0.15 * gap)
+    deeper = np.arange(len(s))[:, None] < np.arange(len(s))[None, :]
+    assert (d >= claim[:, None] - 2 * pockets.h)[deeper].all()
+    inner = np.abs(s[:, 0]) < 80  # along the sliver, away from the container's edges
+    assert d[np.ix_(inner, inner)].min() >= 2.0 * depth / 1.34 - 0.15 * gap - 2 * pockets.h  # was 8
     assert len(s) >= 5  # still a row along the 200-unit sliver
+
+
+def test_pocket_depth_is_measured_finely_whatever_the_gap():
+    """A channel 3.2 gaps wide in a container 600 gaps long (a poster of 1,000 elements):
+    at the default 1,000 pixels a gap spans 1.7 of them and the channel's depth came out
+    0.2 gap too deep (a copy's fit ~20-40 % too large in such pockets); the raster now
+    follows the gap."""
+    gap = 2.5
+    region = shapely.box(0, -500, 1500, 500)
+    skins = [_box(-10, 4.0, 1510, 600), _box(-10, -600, 1510, -4.0)]
+    pockets = pocket_seeds(region, skins, gap=gap, params=SecondaryParams())
+    assert pockets.h <= gap / PIXELS_PER_GAP + 1e-9
+    assert abs(float(pockets.distance.max()) - 4.0) < 0.1 * gap
+    assert len(pockets.seeds) >= 100  # a row along the channel
+
+
+def test_pocket_grid_is_the_given_one_at_the_default_gap_and_bounded():
+    bounds = (0.0, 0.0, 1500.0, 1000.0)
+    assert pocket_grid(bounds, 15.0, 1000) == 1000  # 1 % of the longer side: 10 pixels a gap
+    assert pocket_grid(bounds, 15.0, 2000) == 2000  # a finer grid asked for is kept
+    assert pocket_grid(bounds, 2.5, 1000) == 3600
+    assert pocket_grid(bounds, 0.01, 1000) == MAX_POCKET_GRID
+    assert pocket_grid(bounds, 0.0, 1000) == 1000
 
 
 def test_a_narrow_band_with_one_primary_gets_its_pockets_filled(tmp_path):

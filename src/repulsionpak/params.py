@@ -359,7 +359,9 @@ class SecondaryParams:
     d_sep: float = _doc(2.0, "× gap", "d_sep: kept seeds are at least this far apart (paper: 10 px); "
                         "in a pocket of half-width d, at least 2d/1.34 - 0.15 gap apart (the room a copy "
                         "as wide as the pocket takes).")
-    grid: int = _doc(1000, "pixels", "Longer side of the distance-transform grid.")
+    grid: int = _doc(1000, "pixels", "Longer side of the distance-transform grid the pockets are "
+                     "measured on; more pixels where it would leave fewer than 6 across a gap (up to "
+                     "4000: a small gap beside the container, as on a poster of 1,000 elements).")
     max_count: int | None = _doc(None, "elements", "Upper bound on the number of secondary elements.")
     initial_fraction: float = _doc(
         0.5, "-", "Initial secondary size relative to its pocket (its skin's radius = fraction × distance).")
