@@ -171,6 +171,64 @@ print(before, len(mod.twice.parallel.overloads))
 '''
 
 
+#: ``twice`` loaded ahead with two threads allowed: how many specialisations its serial
+#: and parallel builds hold after the block, and every thread that asked for the threading
+#: layer with whether it had been started by then
+_AHEAD_PARALLEL = _IMPORT_PROBE + '''
+import threading, time
+from numba.core import types
+from numba.np.ufunc import parallel as P
+from repulsionpak._jit import signatures
+asked = []
+launch = P._launch_threads
+def recorded():
+    asked.append((threading.current_thread().name, bool(P._is_initialized)))
+    return launch()
+P._launch_threads = recorded
+signatures.load_signatures = lambda: [(mod.twice.serial, (types.Array(types.float64, 1, "C"),))]
+with loading.loading_ahead():
+    end = time.monotonic() + 30
+    while time.monotonic() < end and not mod.twice.parallel.overloads:
+        time.sleep(0.01)
+print(len(mod.twice.serial.overloads), len(mod.twice.parallel.overloads),
+      sorted(set(name for name, started in asked if not started)),
+      any(name == "repulsionpak-kernel-loading" for name, _ in asked))
+'''
+
+
+def test_loading_ahead_loads_the_parallel_builds_with_the_layer_started_here(tmp_path):
+    """With two threads allowed the parallel builds are loaded ahead too (the simulation
+    loaded them when it first went to two threads: ~45 ms of the heart's primary stage),
+    and the threading layer their cache entries start is started on the main thread
+    first: the loading thread only finds it running."""
+    (tmp_path / "probe.py").write_text(_PARALLEL)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT / "src"),
+               NUMBA_NUM_THREADS="2")
+    env.pop("REPULSIONPAK_THREADS", None)
+    warm = _IMPORT_PROBE + '''
+import numpy as np
+from repulsionpak._jit import kernels
+x = np.ones(4)
+mod.twice(x)  # the serial build
+kernels.set_threads(2)
+mod.twice(x)  # the parallel one
+assert x.tolist() == [4.0] * 4
+'''
+    subprocess.run([sys.executable, "-c", warm, str(tmp_path / "probe.py")], check=True, env=env, timeout=300)
+    proc = subprocess.run([sys.executable, "-c", _AHEAD_PARALLEL, str(tmp_path / "probe.py")],
+                          capture_output=True, text=True, env=env, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    # both builds loaded; the layer was started by the main thread, never by the loader
+    assert proc.stdout.split() == ["1", "1", "['MainThread']", "True"]
+    # one thread allowed: the parallel build is left alone
+    proc = subprocess.run([sys.executable, "-c", _AHEAD_PARALLEL.replace("time.monotonic() + 30",
+                                                                         "time.monotonic() + 1"),
+                           str(tmp_path / "probe.py")],
+                          capture_output=True, text=True, env=dict(env, REPULSIONPAK_THREADS="1"), timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split()[:2] == ["1", "0"]
+
+
 def test_the_first_switch_to_threads_loads_every_parallel_build(tmp_path):
     """All at once, between two iterations: a kernel loaded on its first call inside the
     thread governor's measurement made two threads look slower than one."""

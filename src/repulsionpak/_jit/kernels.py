@@ -266,8 +266,14 @@ def load_parallel_builds() -> int:
     if calls is None:  # (not while the warm-up's recording stands in for the kernels)
         return 0
     _parallel_loaded = True
+    return load_cached(parallel_calls(calls))
+
+
+def parallel_calls(calls) -> list:
+    """The parallel builds' ``(dispatcher, argument types)`` of the serial ones in ``calls``
+    (the package's kernels among them; the others are left out)."""
     builds = {id(k.serial): k for k in KERNELS}
-    return load_cached([(builds[id(d)].parallel, sig) for d, sig in calls if id(d) in builds])
+    return [(builds[id(d)].parallel, sig) for d, sig in calls if id(d) in builds]
 
 
 def uses_parallel_builds() -> bool:
