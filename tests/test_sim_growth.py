@@ -168,3 +168,28 @@ def test_without_pocket_fill_elements_with_room_grow_past_the_filled_cap():
     assert p.sim.growth_cap(filled=True) == MAX_SIZE_FILLED
     assert p.sim.for_run(filled=False).max_size == MAX_SIZE_UNFILLED
     assert replace(p.sim, max_size=1.5).for_run(filled=False).max_size == 1.5  # a given cap is kept
+
+
+def test_the_growth_rate_follows_whether_the_pockets_are_filled():
+    """``sim.k_growth`` None: 0.06 where pocket copies fill the voids (the jam walked in
+    fewer steps at the same density), 0.04 where the primaries must fill them alone; the
+    primary simulation grows its elements at the rate resolved, and a rate given is kept."""
+    from repulsionpak.params import K_GROWTH_FILLED, K_GROWTH_UNFILLED
+
+    p = scene_params(count=4, max_iterations=40)
+    assert p.sim.k_growth is None
+    seen = {}
+    for auto in (True, False):
+        def snap(s, auto=auto):
+            if s.phase == "primary" and s.done:
+                seen[auto] = (s.sim.k_growth, s.state.growth[s.state.moving].copy(),
+                              s.state.n_grow[s.state.moving].copy())
+
+        pack(CONTAINER, library(), replace(p, secondary=replace(p.secondary, auto=auto)), on_snapshot=snap)
+    assert seen[True][0] == K_GROWTH_FILLED
+    assert seen[False][0] == K_GROWTH_UNFILLED
+    for kg, growth, n in seen.values():
+        assert n.max() > 10  # (grown: the rate shows)
+        np.testing.assert_allclose(growth, 1.0 + n * kg * p.sim.dt)
+    assert p.sim.growth_rate() == K_GROWTH_FILLED
+    assert replace(p.sim, k_growth=0.01).for_run(filled=True).k_growth == 0.01

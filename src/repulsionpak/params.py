@@ -148,8 +148,13 @@ class SimParams:
     soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")
     dt: float = _doc(0.1, "-", "Δt, explicit Euler time step (paper: 0.1).")
     velocity_cap: float = _doc(5.0, "× Δt", "Velocities are capped at velocity_cap·Δt (paper: 5).")
-    k_growth: float = _doc(0.04, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6; "
-                           "the paper: 0.01).")
+    k_growth: float | None = _doc(
+        None, "-", "k_g, growth rate: rest lengths (1 + n·k_g·Δt)·L (sec. 6; the paper: 0.01). None: "
+        "0.06 when the pockets are filled, 0.04 when they are not (--no-pocket-fill). With the "
+        "pockets filled 0.06 walks the jam in fewer steps at the same density (main suite: 19 % fewer "
+        "iterations, mean area 0.5774 -> 0.5786, the same promises); the primaries alone, which must "
+        "fill the voids themselves, pack looser at it (the heart with 30 animals, seeds 1-3: area "
+        "0.583 -> 0.567, Q_s ratio 0.463 -> 0.491; docs/algorithm.md).")
     fast_growth: int = _doc(
         1, "× k_g", "An element with room grows this many times faster (beyond the paper): while "
         "no other skin and no container edge is within fast_growth_clearance of its skin, its growth "
@@ -282,6 +287,25 @@ class SimParams:
             return float(self.max_size)
         return MAX_SIZE_FILLED if filled else MAX_SIZE_UNFILLED
 
+    def growth_rate(self, filled: bool = True) -> float:
+        """k_g, the growth rate.
+
+        Parameters
+        ----------
+        filled : bool
+            Whether copies fill the pockets of this run (the pocket phase's own copies:
+            True).
+
+        Returns
+        -------
+        float
+            ``k_growth``; for None :data:`K_GROWTH_FILLED` when the pockets are filled and
+            :data:`K_GROWTH_UNFILLED` when they are not.
+        """
+        if self.k_growth is not None:
+            return float(self.k_growth)
+        return K_GROWTH_FILLED if filled else K_GROWTH_UNFILLED
+
     def repulsion(self, filled: bool = True, gap: float | None = None) -> float:
         """k_r, the repulsion's strength.
 
@@ -323,12 +347,20 @@ class SimParams:
         return max(K_REPULSION_FILLED, K_REPULSION_UNFILLED * (g / DEFAULT_GAP_SIM) ** 2)
 
     def for_run(self, filled: bool, gap: float | None = None) -> "SimParams":
-        """These parameters with ``max_size`` and ``k_repulsion`` resolved
-        (:meth:`growth_cap`, :meth:`repulsion`) for a run whose pockets are ``filled`` or
-        not, at ``gap`` (simulation units): what the primary phase's simulator is given."""
-        return dataclasses.replace(self, max_size=self.growth_cap(filled), k_repulsion=self.repulsion(filled, gap))
+        """These parameters with ``max_size``, ``k_repulsion`` and ``k_growth`` resolved
+        (:meth:`growth_cap`, :meth:`repulsion`, :meth:`growth_rate`) for a run whose pockets
+        are ``filled`` or not, at ``gap`` (simulation units): what the primary phase's
+        simulator is given."""
+        return dataclasses.replace(self, max_size=self.growth_cap(filled), k_repulsion=self.repulsion(filled, gap),
+                                   k_growth=self.growth_rate(filled))
 
 
+#: k_g when the pockets are filled: the jam is walked in fewer steps at the same density
+#: (main suite: 80,435 -> 64,979 iterations, mean area 0.5774 -> 0.5786)
+K_GROWTH_FILLED = 0.06
+#: k_g when nothing fills the pockets: the primaries alone pack denser at it than at 0.06
+#: (the heart with 30 animals, seeds 1-3: area 0.567 -> 0.583)
+K_GROWTH_UNFILLED = 0.04
 #: the growth cap (× nominal size) when the pockets are filled: an element that finds room
 #: early does not dwarf its twins that got stuck, and the voids go to the pocket copies
 MAX_SIZE_FILLED = 1.3
@@ -632,7 +664,7 @@ class Params:
             (s.k_repulsion is None or s.k_repulsion >= 0,
              f"sim.k_repulsion must be >= 0 (a force constant), got {s.k_repulsion!r}"),
             (s.align_reach >= 0, "sim.align_reach must be >= 0 (× gap)"),
-            (s.k_growth >= 0, "sim.k_growth must be >= 0"),
+            (s.k_growth is None or s.k_growth >= 0, "sim.k_growth must be >= 0"),
             (s.fast_growth >= 1, "sim.fast_growth must be >= 1"),
             (s.fast_growth_clearance >= 0, "sim.fast_growth_clearance must be >= 0"),
             (s.bend_limit >= 0 and s.bend_limit_convex >= 0, "sim.bend_limit and bend_limit_convex must be >= 0"),

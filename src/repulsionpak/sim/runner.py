@@ -120,11 +120,13 @@ class Simulator:
         self.edge_rest = (np.bincount(edge_elem, weights=m.rest0[m.spring_is_edge], minlength=m.n_elements)
                           / np.maximum(np.bincount(edge_elem, minlength=m.n_elements), 1))
         # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
+        #: k_g (``sim.k_growth``, None: the filled runs' rate, :meth:`SimParams.growth_rate`)
+        self.k_growth = kg = params.growth_rate()
         self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
-                                      params.dt, params.k_growth, params.growth_headroom)
+                                      params.dt, kg, params.growth_headroom)
         # the caps of an element growing fast (``fast_growth`` steps an iteration: it has room)
         self.vmax_fast = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
-                                           params.dt, params.k_growth * params.fast_growth,
+                                           params.dt, kg * params.fast_growth,
                                            params.growth_headroom)
         self.grow_steps = np.ones(m.n_elements, np.int64)  # growth steps per element this iteration
         self.n_fast = 0  # elements growing fast this iteration
@@ -223,7 +225,7 @@ class Simulator:
                               st.blocking)
             blocking = st.blocking
         grow(blocking, st.outside, m.elem_vstart, m.elem_nskin, st.moving, st.n_grow,
-             st.growth, p.k_growth * p.dt, st.allow_growth, self.max_growth, self.grow_steps)
+             st.growth, self.k_growth * p.dt, st.allow_growth, self.max_growth, self.grow_steps)
 
     def _growth_rates(self) -> np.ndarray:
         """Each element's growth steps this iteration (``self.grow_steps``: ``fast_growth``
@@ -330,7 +332,7 @@ class Simulator:
 
     def refresh_growth(self) -> None:
         """Recompute growth factors from the counters (after loading a state)."""
-        self.state.refresh_growth(self.params.k_growth * self.params.dt)
+        self.state.refresh_growth(self.k_growth * self.params.dt)
 
     # -- the loop --------------------------------------------------------------------
     def run(self, on_snapshot: Callable[[Snapshot], None] | None = None, every: int = 25,
@@ -460,7 +462,7 @@ class Simulator:
 
     def restore(self, saved: dict) -> None:
         """Continue from :meth:`snapshot_state` output (same model)."""
-        self.state.load(saved, self.params.k_growth * self.params.dt)
+        self.state.load(saved, self.k_growth * self.params.dt)
         self.dt = self.state.dt  # the velocity caps follow the saved time step
         if self.relocator is not None and "relocate" in saved:
             self.relocator.load(saved["relocate"])
