@@ -876,7 +876,7 @@ def test_a_resumed_simulation_keeps_the_entry_sides(template):
     """The entry sides are state: a simulator restored from a snapshot taken while
     vertices are inside another mesh continues exactly as the uninterrupted one."""
     def sim_of():
-        model, state = two_square_model(template, (44, 50), (52, 50))  # overlapping
+        model, state = two_square_model(template, (44, 50), (50, 50))  # overlapping
         sim = Simulator(model, state, SimParams())
         sim.refresh_growth()
         return sim

@@ -106,10 +106,10 @@ def test_loading_a_cached_kernel_skips_the_lock_callbacks_and_restores_them(tmp_
 _AHEAD = _IMPORT_PROBE + '''
 import threading, time
 from numba.core import types
-from repulsionpak._jit import signatures
+from repulsionpak._jit import kernels, signatures
 calls = [(mod.plain, (types.int64,)), (mod.plain2, (types.int64,)), (mod.plain3, (types.float64,))]
 signatures.load_signatures = lambda: list(calls)
-with loading.loading_ahead(enabled=sys.argv[2] == "on"):
+with loading.loading_ahead(kernels.calls_to_load_ahead(parallel=False) if sys.argv[2] == "on" else []):
     end = time.monotonic() + (30 if sys.argv[2] == "on" else 1)
     while time.monotonic() < end and not (mod.plain.overloads and mod.plain2.overloads):
         time.sleep(0.01)
@@ -171,14 +171,15 @@ print(before, len(mod.twice.parallel.overloads))
 '''
 
 
-#: ``twice`` loaded ahead with two threads allowed: how many specialisations its serial
-#: and parallel builds hold after the block, and every thread that asked for the threading
-#: layer with whether it had been started by then
+#: ``twice`` loaded ahead, its parallel build asked for (``sys.argv[2]`` "on") or not: how
+#: many specialisations its serial and parallel builds hold after the block, the threads
+#: that asked for the threading layer before it was started, and whether the loading
+#: thread asked for it at all
 _AHEAD_PARALLEL = _IMPORT_PROBE + '''
 import threading, time
 from numba.core import types
 from numba.np.ufunc import parallel as P
-from repulsionpak._jit import signatures
+from repulsionpak._jit import kernels, signatures
 asked = []
 launch = P._launch_threads
 def recorded():
@@ -186,8 +187,8 @@ def recorded():
     return launch()
 P._launch_threads = recorded
 signatures.load_signatures = lambda: [(mod.twice.serial, (types.Array(types.float64, 1, "C"),))]
-with loading.loading_ahead():
-    end = time.monotonic() + 30
+with loading.loading_ahead(kernels.calls_to_load_ahead(parallel=sys.argv[2] == "on")):
+    end = time.monotonic() + (30 if sys.argv[2] == "on" else 1)
     while time.monotonic() < end and not mod.twice.parallel.overloads:
         time.sleep(0.01)
 print(len(mod.twice.serial.overloads), len(mod.twice.parallel.overloads),
@@ -204,7 +205,6 @@ def test_loading_ahead_loads_the_parallel_builds_with_the_layer_started_here(tmp
     (tmp_path / "probe.py").write_text(_PARALLEL)
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT / "src"),
                NUMBA_NUM_THREADS="2")
-    env.pop("REPULSIONPAK_THREADS", None)
     warm = _IMPORT_PROBE + '''
 import numpy as np
 from repulsionpak._jit import kernels
@@ -215,18 +215,16 @@ mod.twice(x)  # the parallel one
 assert x.tolist() == [4.0] * 4
 '''
     subprocess.run([sys.executable, "-c", warm, str(tmp_path / "probe.py")], check=True, env=env, timeout=300)
-    proc = subprocess.run([sys.executable, "-c", _AHEAD_PARALLEL, str(tmp_path / "probe.py")],
-                          capture_output=True, text=True, env=env, timeout=300)
-    assert proc.returncode == 0, proc.stderr
+    def ahead(mode):
+        proc = subprocess.run([sys.executable, "-c", _AHEAD_PARALLEL, str(tmp_path / "probe.py"), mode],
+                              capture_output=True, text=True, env=env, timeout=300)
+        assert proc.returncode == 0, proc.stderr
+        return proc.stdout.split()
+
     # both builds loaded; the layer was started by the main thread, never by the loader
-    assert proc.stdout.split() == ["1", "1", "['MainThread']", "True"]
-    # one thread allowed: the parallel build is left alone
-    proc = subprocess.run([sys.executable, "-c", _AHEAD_PARALLEL.replace("time.monotonic() + 30",
-                                                                         "time.monotonic() + 1"),
-                           str(tmp_path / "probe.py")],
-                          capture_output=True, text=True, env=dict(env, REPULSIONPAK_THREADS="1"), timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.split()[:2] == ["1", "0"]
+    assert ahead("on") == ["1", "1", "['MainThread']", "True"]
+    # one thread allowed (pack asks for the parallel builds when auto_threads() > 1): left alone
+    assert ahead("off") == ["1", "0", "[]", "False"]
 
 
 def test_the_first_switch_to_threads_loads_every_parallel_build(tmp_path):

@@ -26,7 +26,7 @@ from .sim.art import placed_art, rest_art
 from .sim.model import Model, SimFrame, State, build_model
 from .sim.phase import bend_limits, neighbour_cell
 from .sim.relocate import Relocator
-from .sim.runner import Simulator, Snapshot
+from .sim.runner import Simulator, Snapshot, auto_threads
 from .sizing import UNEVEN_SHARE, is_even, narrow_share, plan_sizes
 from .types import Container, Element, PlacedArt
 from .verify import dent, straighten, verify_and_repair
@@ -207,14 +207,16 @@ def _check_arguments(container, elements, secondary, params) -> None:
 def _kernels_loaded_ahead(func: Callable) -> Callable:
     """Decorator: installs the kernels compiled with the package, then runs ``func`` while
     a second thread loads the simulation's kernels from numba's cache
-    (:func:`repulsionpak._jit.loading.loading_ahead`; not beside a warm-up process, which
-    shares the compiling with this one by claims)."""
+    (:func:`repulsionpak._jit.loading.loading_ahead`), their parallel builds too when more
+    than one thread is allowed (:func:`~repulsionpak.sim.runner.auto_threads`); not beside
+    a warm-up process, which shares the compiling with this one by claims."""
     @functools.wraps(func)
     def wrapped(*args, **kwargs):
-        from ._jit import loading, prebuilt, warmup
+        from ._jit import kernels, loading, prebuilt, warmup
 
         prebuilt.install()  # kernels compiled when the package was built, if any (once)
-        with loading.loading_ahead(enabled=warmup.running() is None):
+        ahead = kernels.calls_to_load_ahead(parallel=auto_threads() > 1) if warmup.running() is None else []
+        with loading.loading_ahead(ahead):
             return func(*args, **kwargs)
     return wrapped
 

@@ -177,37 +177,18 @@ def load_cached(calls, stop: threading.Event | None = None) -> int:
     return loaded
 
 
-def _threads_possible() -> bool:
-    """Whether an automatic run in this process may go to several threads: more than one
-    allowed (numba's count, ``$REPULSIONPAK_THREADS``), the parallel builds cached and the
-    threading layer suited to them (:func:`~repulsionpak._jit.kernels.parallel_ready`,
-    which starts the layer on the calling thread). A run below ``sim.parallel_threshold``
-    vertices, or with one thread chosen, has them loaded for nothing, on the second core."""
-    import numba
-
-    from ..threads import thread_cap
-    from .kernels import parallel_ready
-
-    cap = thread_cap()
-    if numba.config.NUMBA_NUM_THREADS < 2 or (cap is not None and cap < 2):
-        return False
-    try:
-        return parallel_ready()
-    except Exception:  # noqa: BLE001  (private numba API: the run loads what it needs)
-        return False
-
-
 @contextlib.contextmanager
-def loading_ahead(enabled: bool = True):
-    """Within the block, a second thread loads the simulation's kernels from numba's disk
-    cache, from the last one a run calls to the first, while this thread reads and meshes
-    the inputs (and loads the first kernels itself as it calls them).
+def loading_ahead(calls):
+    """Within the block, a second thread loads ``calls`` from numba's disk cache while this
+    thread reads and meshes the inputs (and loads the first kernels itself as it calls them).
 
     Parameters
     ----------
-    enabled
-        False: nothing is loaded ahead (a warm-up process is compiling the kernels: the
-        two processes share that work by claims, :mod:`repulsionpak._jit.warmup`).
+    calls : list of (dispatcher, argument types)
+        What to load, in order
+        (:func:`~repulsionpak._jit.kernels.calls_to_load_ahead`); empty: nothing (beside a
+        warm-up process, which compiles the kernels and shares that work with this one by
+        claims, :mod:`repulsionpak._jit.warmup`).
 
     Notes
     -----
@@ -215,28 +196,17 @@ def loading_ahead(enabled: bool = True):
     load, which sets up numba's runtime), most of it in LLVM, which releases the GIL, so
     on a second core it overlaps the reading of the inputs.
     numba's compiler lock orders the two threads: a kernel is loaded once, by whichever
-    comes first. The parallel builds follow the serial ones when a run may use several
-    threads (:func:`_threads_possible`): ~45 ms on the heart that the simulation otherwise
-    spent loading them when it first went to two threads. A parallel build's cache entry
-    starts numba's threading layer when it is loaded, so the layer is started on this
-    thread before (none is started off the main thread: with TBB that can hang the exit),
-    and the block waits for the thread at its end, however it ends.
+    comes first. A parallel build's cache entry starts numba's threading layer when it is
+    loaded: ``calls`` holds parallel builds only once the layer runs (started on the main
+    thread: with TBB a layer started elsewhere can hang the exit). The block waits for the
+    thread at its end, however it ends.
     """
     thread = stop = None
-    if enabled:
-        from .signatures import load_signatures
-
-        calls = load_signatures()
-        if calls:
-            todo = calls[::-1]
-            if _threads_possible():
-                from .kernels import parallel_calls
-
-                todo += parallel_calls(calls)[::-1]
-            stop = threading.Event()
-            thread = threading.Thread(target=load_cached, args=(todo, stop),
-                                      name="repulsionpak-kernel-loading", daemon=True)
-            thread.start()
+    if calls:
+        stop = threading.Event()
+        thread = threading.Thread(target=load_cached, args=(list(calls), stop),
+                                  name="repulsionpak-kernel-loading", daemon=True)
+        thread.start()
     try:
         yield
     finally:
