@@ -36,13 +36,13 @@ def pocket_seeds(region, skins: Sequence[np.ndarray], gap: float, params: Second
 
     Distance transform of the negative space on a grid of ``params.grid`` pixels along
     the container's longer side (more for a small gap, :func:`pocket_grid`); candidates
-    are pixels whose distance is above d_min = ``params.d_min``·gap, taken by decreasing distance and kept when no kept seed
-    claims them: a seed at distance d claims the disc of radius d_sep = ``params.d_sep``·gap
-    (sec. 9) or, when more, 2d/1.34 − 0.15·gap (:data:`_SPACING`): a round pocket gets one
-    seed that grows to fill it, and a band of half-width d a row of seeds about as far apart
-    as copies as wide as the band, a gap apart, stand (a claim of radius d alone gives twice
-    as many, smaller copies in wide bands, each with its own gap ring: the suite's mean area
-    0.559 against 0.563).
+    are pixels whose distance is above d_min = ``params.d_min``·gap, taken by decreasing
+    distance and kept when no kept seed claims them: a seed at distance d claims the disc
+    of radius d_sep = ``params.d_sep``·gap (sec. 9) or, when more, 2d/1.34 − 0.15·gap
+    (:data:`_SPACING`): a round pocket gets one seed that grows to fill it, and a band of
+    half-width d a row of seeds about as far apart as copies as wide as the band, a gap
+    apart, stand (a claim of radius d alone gives twice as many, smaller copies in wide
+    bands, each with its own gap ring: the suite's mean area 0.559 against 0.563).
     """
     polys = [shapely.make_valid(shapely.Polygon(s)) for s in skins]
     bounds = region.bounds
@@ -100,7 +100,8 @@ def pocket_grid(bounds, gap: float, grid: int) -> int:
     about a pixel. At the default gap (1 % of the longer side) 1,000 pixels give 10 across
     a gap; a poster of 1,000 elements has a gap of 0.17 % of it, 1.7 pixels: its pockets,
     a few pixels deep, measured a fifth of a gap too deep, their copies' fits came out far
-    too large, and most copies simulated ended below the size floor (2,052 for 401 kept).
+    too large, and most copies simulated ended below the size floor (2,052 simulated,
+    401 kept).
     """
     longer = max(bounds[2] - bounds[0], bounds[3] - bounds[1])
     if not (gap > 0 and longer > 0):

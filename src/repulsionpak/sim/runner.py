@@ -119,9 +119,9 @@ class Simulator:
         edge_elem = m.spring_elem[m.spring_is_edge]
         self.edge_rest = (np.bincount(edge_elem, weights=m.rest0[m.spring_is_edge], minlength=m.n_elements)
                           / np.maximum(np.bincount(edge_elem, minlength=m.n_elements), 1))
-        # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
         #: k_g (``sim.k_growth``, None: the filled runs' rate, :meth:`SimParams.growth_rate`)
         self.k_growth = kg = params.growth_rate()
+        # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
         self.vmax = growth_speed_caps(m.x_rest, m.elem_vstart, m.elem_nskin, params.velocity_cap,
                                       params.dt, kg, params.growth_headroom)
         # the caps of an element growing fast (``fast_growth`` steps an iteration: it has room)
