@@ -112,8 +112,17 @@ def test_terms_follow_the_parameters():
     assert terms_of(p.for_run(filled=False))[0] == Repulsion(320.0, p.soft)
     assert p.for_run(filled=False, gap=20.0).k_repulsion == 320.0  # (above the default gap: kept)
     assert p.for_run(filled=False, gap=7.0).k_repulsion == pytest.approx(156.8)
-    assert p.for_run(filled=False, gap=3.0).k_repulsion == 80.0
+    assert p.for_run(filled=False, gap=5.0).k_repulsion == 80.0
     assert terms_of(p.for_run(filled=True, gap=20.0))[0] == Repulsion(80.0, p.soft)
+    # below 0.5 % of the container (5 units) both follow the gap: the push across a gap,
+    # k_r / (gap² + ς), stays what it is at 5 units (the 1,000-element poster: 1.7 units)
+    at5 = 80.0 / (25.0 + p.soft)
+    for g in (3.0, 1.72, 0.5):
+        for filled in (True, False):
+            k = p.for_run(filled=filled, gap=g).k_repulsion
+            assert k / (g * g + p.soft) == pytest.approx(at5)
+    assert p.repulsion(True, 5.0) == 80.0 and p.repulsion(True, 4.999) == pytest.approx(80.0, rel=1e-3)
+    assert dataclasses.replace(p, k_repulsion=50.0).for_run(filled=True, gap=1.0).k_repulsion == 50.0
     assert terms_of(dataclasses.replace(p, k_repulsion=50.0).for_run(filled=False))[0] == Repulsion(50.0, p.soft)
 
 

@@ -321,7 +321,8 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     its = min(int(SECONDARY_WORK * work / v_sec), max(primary_its, MIN_WORK_ITERATIONS))
     cap = min(p.sim.max_iterations, max(its, p.sim.min_iterations))
     sim = Simulator(model, state, dataclasses.replace(p.sim, max_iterations=cap, stop_epsilon=sp.stop_epsilon,
-                                                      settle_iterations=sp.settle_iterations),
+                                                      settle_iterations=sp.settle_iterations,
+                                                      k_repulsion=p.sim.repulsion(True, m0.gap)),
                     phase="secondary")
     sim.templates = all_templates
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
