@@ -285,28 +285,13 @@ class SimParams:
             ``max_size``; for None :data:`MAX_SIZE_FILLED` when the pockets are filled and
             :data:`MAX_SIZE_UNFILLED` when they are not (the primaries then fill the voids).
         """
-        if self.max_size is not None:
-            return float(self.max_size)
-        return MAX_SIZE_FILLED if filled else MAX_SIZE_UNFILLED
+        return _given_or(self.max_size, MAX_SIZE_FILLED if filled else MAX_SIZE_UNFILLED)
 
     def growth_rate(self, filled: bool = True) -> float:
-        """k_g, the growth rate.
-
-        Parameters
-        ----------
-        filled : bool
-            Whether copies fill the pockets of this run (the pocket phase's own copies:
-            True).
-
-        Returns
-        -------
-        float
-            ``k_growth``; for None :data:`K_GROWTH_FILLED` when the pockets are filled and
-            :data:`K_GROWTH_UNFILLED` when they are not.
-        """
-        if self.k_growth is not None:
-            return float(self.k_growth)
-        return K_GROWTH_FILLED if filled else K_GROWTH_UNFILLED
+        """k_g, the growth rate: ``k_growth``; for None :data:`K_GROWTH_FILLED` when the
+        pockets are ``filled`` and :data:`K_GROWTH_UNFILLED` when they are not (as
+        :meth:`growth_cap`)."""
+        return _given_or(self.k_growth, K_GROWTH_FILLED if filled else K_GROWTH_UNFILLED)
 
     def repulsion(self, filled: bool = True, gap: float | None = None) -> float:
         """k_r, the repulsion's strength.
@@ -363,6 +348,11 @@ class SimParams:
         simulator is given."""
         return dataclasses.replace(self, max_size=self.growth_cap(filled), k_repulsion=self.repulsion(filled, gap),
                                    k_growth=self.growth_rate(filled))
+
+
+def _given_or(value: float | None, default: float) -> float:
+    """``value`` as a float, or ``default`` where it is None (a parameter resolved per run)."""
+    return float(default if value is None else value)
 
 
 #: k_g when the pockets are filled: the jam is walked in fewer steps at the same density

@@ -320,9 +320,10 @@ def add_secondary(packing, elements: Sequence[Element], rng: np.random.Generator
     work = max(v_prim * primary_its, MIN_WORK_VERTICES * MIN_WORK_ITERATIONS)
     its = min(int(SECONDARY_WORK * work / v_sec), max(primary_its, MIN_WORK_ITERATIONS))
     cap = min(p.sim.max_iterations, max(its, p.sim.min_iterations))
-    sim = Simulator(model, state, dataclasses.replace(p.sim, max_iterations=cap, stop_epsilon=sp.stop_epsilon,
-                                                      settle_iterations=sp.settle_iterations,
-                                                      k_repulsion=p.sim.repulsion(True, m0.gap)),
+    # the pocket phase's copies fill pockets: the filled runs' growth cap, k_r and k_g at this gap
+    sim = Simulator(model, state, dataclasses.replace(p.sim.for_run(True, gap=m0.gap), max_iterations=cap,
+                                                      stop_epsilon=sp.stop_epsilon,
+                                                      settle_iterations=sp.settle_iterations),
                     phase="secondary")
     sim.templates = all_templates
     res = sim.run_resumable(saved, on_checkpoint, checkpoint_every, on_snapshot=on_snapshot,
