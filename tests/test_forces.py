@@ -7,6 +7,7 @@ through ``preprocess.build_template`` + ``sim.model.build_model``.
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 
 import numpy as np
@@ -18,6 +19,7 @@ from repulsionpak.params import SimParams
 from repulsionpak.placement import Placement
 from repulsionpak.preprocess import build_template, outline_of
 from repulsionpak.sim.forces import (
+    adhesion_force,
     boundary_force,
     contact_query,
     _field_sample,
@@ -205,6 +207,68 @@ def test_repulsion_sums_neighbours_and_adds_to_F():
 
 def test_repulsion_is_zero_for_a_vertex_inside_another_mesh():
     np.testing.assert_array_equal(repulse((0.0, 0.0), [(1.0, 1.0)], inside=True), 0.0)
+
+
+def adhere(x, q, k_a=50.0, reach=4.0, inside=False):
+    """adhesion_force on one vertex at ``x`` with neighbouring closest points ``q``."""
+    x = np.array([x], float)
+    q = np.array(q, float).reshape(-1, 2)
+    d2 = ((q - x[0]) ** 2).sum(axis=1)
+    F = np.zeros((1, 2))
+    adhesion_force(x, np.array([0], np.int64), np.array([inside]), np.array([len(q)], np.int64),
+                   d2[None], q[None], k_a, reach, F)
+    return F[0]
+
+
+@pytest.mark.parametrize("q", [(1.0, 0.0), (0.0, -2.5), (3.0, 2.0)])
+def test_adhesion_pulls_toward_the_nearest_skin_falling_to_zero_at_reach(q):
+    f = adhere((0.0, 0.0), [q], k_a=50.0, reach=4.0)
+    d = np.hypot(*q)
+    np.testing.assert_allclose(np.linalg.norm(f), 50.0 * (1.0 - d / 4.0), rtol=1e-12)
+    np.testing.assert_allclose(f / np.linalg.norm(f), np.asarray(q) / d, rtol=1e-12)
+
+
+def test_adhesion_only_the_nearest_neighbour_pulls():
+    # a vertex between two skins goes to the closer one: the channel closes from its narrow side
+    f = adhere((0.0, 0.0), [(-3.0, 0.0), (1.0, 0.0), (0.0, 2.0)], k_a=10.0, reach=4.0)
+    np.testing.assert_allclose(f, [10.0 * 0.75, 0.0], rtol=1e-12)
+
+
+def test_adhesion_is_zero_beyond_reach_and_inside_another_mesh():
+    np.testing.assert_array_equal(adhere((0.0, 0.0), [(4.0, 0.0), (0.0, 5.0)], reach=4.0), 0.0)
+    np.testing.assert_array_equal(adhere((0.0, 0.0), [(1.0, 0.0)], inside=True), 0.0)
+
+
+def _skins_apart(template, k_adhesion, settle=True, steps=100):
+    """Two squares whose skins start a gap apart, run ``steps`` iterations settling (or
+    growing); returns (the distance between their skins, the positions)."""
+    model, state = two_square_model(template, (42, 50), (57, 50))
+    sim = Simulator(model, state, dataclasses.replace(SimParams(), k_adhesion=k_adhesion))
+    skins = lambda: [Polygon(state.x[model.elem_vstart[e]:model.elem_vstart[e] + model.elem_nskin[e]])
+                     for e in range(2)]
+    a, b = skins()
+    assert a.distance(b) == pytest.approx(model.gap, rel=0.05)  # within the adhesion's reach
+    if settle:
+        sim.begin_settle()
+    for _ in range(steps):
+        sim.step()
+    a, b = skins()
+    return a.distance(b), state.x.copy()
+
+
+def test_settling_skins_a_gap_apart_are_drawn_together_by_the_adhesion(template):
+    drawn, _ = _skins_apart(template, 50.0)
+    pushed, _ = _skins_apart(template, 0.0)
+    # the repulsion alone drives the two apart; the adhesion closes the channel to a fraction
+    # of the gap, where the repulsion holds them
+    assert pushed > 3.0 * 3.0
+    assert 0.0 < drawn < 0.4 * 3.0
+
+
+def test_the_adhesion_does_nothing_while_the_elements_grow(template):
+    _, x_on = _skins_apart(template, 50.0, settle=False, steps=20)
+    _, x_off = _skins_apart(template, 0.0, settle=False, steps=20)
+    np.testing.assert_array_equal(x_on, x_off)
 
 
 # --------------------------------------------------------------------------------------

@@ -335,6 +335,36 @@ def repulsion_force(x, active, inside, nb_count, nb_q, k_r, soft, F):
 
 
 @parallel_kernel
+def adhesion_force(x, active, inside, nb_count, nb_d2, nb_q, k_a, reach, F):
+    """Beyond the paper: each skin vertex outside every other mesh whose nearest
+    neighbouring skin is closer than ``reach`` is drawn toward that skin's closest point
+    with the force k_a·(1 − d/reach), d its distance; nothing for a vertex inside another
+    mesh or with no neighbour within ``reach``.
+
+    Notes
+    -----
+    Only the nearest neighbour pulls, so a vertex between two skins is drawn to the closer
+    one and the channel between them closes from the narrow side first. The force falls
+    to zero at ``reach`` so that it does not jump as a neighbour comes into range.
+    """
+    for k in prange(active.shape[0]):
+        i = active[k]
+        if inside[i] or nb_count[i] == 0:
+            continue
+        j = 0
+        for jj in range(1, nb_count[i]):
+            if nb_d2[i, jj] < nb_d2[i, j]:
+                j = jj
+        d2 = nb_d2[i, j]
+        if d2 >= reach * reach or d2 <= 1e-24:
+            continue
+        d = np.sqrt(d2)
+        w = k_a * (1.0 - d / reach) / d
+        F[i, 0] += (nb_q[i, j, 0] - x[i, 0]) * w
+        F[i, 1] += (nb_q[i, j, 1] - x[i, 1]) * w
+
+
+@parallel_kernel
 def overlap_force(x, active, inside, tris, vtri_ptr, vtri, nb_count, nb_d2, nb_q, k_o, F):
     """Eq. 4: F_o = k_o Σ (p_i − x) over the centroids p_i of the triangles incident to x,
     for vertices inside another mesh — plus, beyond the paper, k_o (q − x) towards the
