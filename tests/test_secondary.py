@@ -145,7 +145,7 @@ def test_pack_sizes_secondaries_to_their_pockets():
 
     region = shapely.box(0, 0, 300, 200)
     el = _bar_element(60.0, 12.0)
-    p = Params(gap=4.0, seed=2, placement=PlacementParams(count=8))
+    p = Params(gap=4.0, seed=1, placement=PlacementParams(count=8))  # 15 copies, 5 classes
     packing = pack(Container("box.svg", region), [el], p)
     sec = [i for i, k in enumerate(packing.model.kind) if k == "secondary"]
     assert len(sec) >= 5

@@ -15,7 +15,7 @@ from repulsionpak.placement import Placement
 from repulsionpak.preprocess import build_template, outline_of
 from repulsionpak.sim.model import SimFrame, State, build_model
 from repulsionpak.sim.runner import Simulator
-from repulsionpak.sim.terms import (Alignment, Boundary, Corners, Edges, Inversion, Overlap, Repulsion,
+from repulsionpak.sim.terms import (Adhesion, Alignment, Boundary, Corners, Edges, Inversion, Overlap, Repulsion,
                                    ShapeMatching, terms_of)
 from repulsionpak.types import ArtPath, Element, Style
 
@@ -78,15 +78,19 @@ def test_every_term_adds_into_the_forces(template):
     sim.update_contacts(full=True)
     m, st = sim.model, sim.state
     assert [type(t) for t in sim.terms] == [Repulsion, Edges, ShapeMatching, Boundary, Overlap, Inversion,
-                                            Corners, Alignment]
+                                            Corners, Alignment, Adhesion]
     rng = np.random.default_rng(1)
-    for term in sim.terms:
-        alone = np.zeros_like(st.x)
-        term(m, st, alone)
-        base = rng.normal(size=st.x.shape)
-        summed = base.copy()
-        term(m, st, summed)
-        np.testing.assert_allclose(summed - base, alone, atol=1e-9)
+    for growing in (True, False):  # the adhesion acts only while the packing settles
+        st.allow_growth = growing
+        for term in sim.terms:
+            alone = np.zeros_like(st.x)
+            term(m, st, alone)
+            base = rng.normal(size=st.x.shape)
+            summed = base.copy()
+            term(m, st, summed)
+            np.testing.assert_allclose(summed - base, alone, atol=1e-9)
+        adhesion = np.abs(_alone(sim.terms[-1], m, st)).max()
+        assert (adhesion > 0) != growing
     # the repulsion, springs, boundary and overlap act on this overlapping scene
     assert all(np.abs(_alone(t, m, st)).max() > 0 for t in sim.terms[:2] + sim.terms[4:5])
 
@@ -103,6 +107,8 @@ def test_terms_follow_the_parameters():
     assert ShapeMatching not in map(type, default)  # k_shape = 0: the paper's four forces
     no_fold = terms_of(dataclasses.replace(SimParams(), min_triangle_area=0.0))
     assert Inversion not in map(type, no_fold)
+    assert default[-1] == Adhesion(SimParams().k_adhesion, SimParams().adhesion_reach)
+    assert Adhesion not in map(type, terms_of(dataclasses.replace(SimParams(), k_adhesion=0.0)))
     p = SimParams()
     assert default[0] == Repulsion(80.0, p.soft)  # k_repulsion None: the pockets' own strength
     assert Boundary(p.k_boundary, p.outside_block, p.boundary_inset) in default
