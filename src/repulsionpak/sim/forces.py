@@ -345,7 +345,9 @@ def adhesion_force(x, active, inside, nb_count, nb_d2, nb_q, k_a, reach, F):
     -----
     Only the nearest neighbour pulls, so a vertex between two skins is drawn to the closer
     one and the channel between them closes from the narrow side first. The force falls
-    to zero at ``reach`` so that it does not jump as a neighbour comes into range.
+    to zero at ``reach`` so that it does not jump as a neighbour comes into range, and so
+    that a closest point the cheap update leaves as the last full query found it (beyond
+    ``sim.far_update``, by default the same 2 gaps) pulls with next to nothing.
     """
     for k in prange(active.shape[0]):
         i = active[k]

@@ -167,9 +167,9 @@ class Adhesion:
     -----
     Growth stops an element at its first contact (sec. 6), so the jam ends with channels a
     gap or two wide along the parts of each element that met no neighbour. Drawn together
-    while growing, the elements met earlier and the packing came out looser (the heart
-    with 30 animals, no pockets: art area 0.584 -> 0.563); drawn together once growth has
-    stopped, they bend into those channels within their shape limits.
+    while growing (k 30), the elements met earlier and the packing came out looser (the
+    heart with 30 animals, no pockets, seeds 1-6: art area 0.584 -> 0.563); drawn together
+    once growth has stopped, they bend into those channels within their shape limits.
     """
 
     k: float
