@@ -39,6 +39,17 @@ def _in_mesh_triangle(x, tris, t, px, py):
 
 
 @njit(cache=True, inline="always")
+def _nearest_slot(nb_count, nb_d2, i):
+    """The contact slot of vertex ``i``'s nearest neighbouring skin (the first of equals),
+    −1 when it has none."""
+    best = -1
+    for j in range(nb_count[i]):
+        if best < 0 or nb_d2[i, j] < nb_d2[i, best]:
+            best = j
+    return best
+
+
+@njit(cache=True, inline="always")
 def _closest_on_coords(ax, ay, bx, by, px, py):
     """Closest point of segment (a, b) to p: (d², qx, qy, t) with t in [0, 1]."""
     abx = bx - ax
@@ -299,11 +310,7 @@ def contact_update(x, active, ring, seg_tri_ptr, seg_tri, tris, tri_ptr,
                     hit = True
                     break
         if was_inside and not hit and nb_count[i] > 0:
-            j = 0
-            for jj in range(1, nb_count[i]):
-                if nb_d2[i, jj] < nb_d2[i, j]:
-                    j = jj
-            f = nb_elem[i, j]
+            f = nb_elem[i, _nearest_slot(nb_count, nb_d2, i)]
             for t in range(tri_ptr[f], tri_ptr[f + 1]):
                 if _in_mesh_triangle(x, tris, t, px, py):
                     hit = True
@@ -353,10 +360,7 @@ def adhesion_force(x, active, inside, nb_count, nb_d2, nb_q, k_a, reach, F):
         i = active[k]
         if inside[i] or nb_count[i] == 0:
             continue
-        j = 0
-        for jj in range(1, nb_count[i]):
-            if nb_d2[i, jj] < nb_d2[i, j]:
-                j = jj
+        j = _nearest_slot(nb_count, nb_d2, i)
         d2 = nb_d2[i, j]
         if d2 >= reach * reach or d2 <= 1e-24:
             continue
@@ -386,10 +390,7 @@ def overlap_force(x, active, inside, tris, vtri_ptr, vtri, nb_count, nb_d2, nb_q
             c = tris[t, 2]
             fx += (x[a, 0] + x[b, 0] + x[c, 0]) / 3.0 - x[i, 0]
             fy += (x[a, 1] + x[b, 1] + x[c, 1]) / 3.0 - x[i, 1]
-        best = -1
-        for j in range(nb_count[i]):
-            if best < 0 or nb_d2[i, j] < nb_d2[i, best]:
-                best = j
+        best = _nearest_slot(nb_count, nb_d2, i)
         if best >= 0:
             fx += nb_q[i, best, 0] - x[i, 0]
             fy += nb_q[i, best, 1] - x[i, 1]
