@@ -254,3 +254,37 @@ def test_the_bump_map_and_its_jacobian_are_the_gaussian_sum_and_its_derivative()
         fd = (_bumped(pts + e, bumps, two_rho2) - _bumped(pts - e, bumps, two_rho2)) / (2 * h)
         assert np.allclose(jac[:, :, k], fd, atol=1e-8)
     assert np.allclose(jac[4], np.eye(2), rtol=0, atol=1e-200)
+
+
+def test_copies_bent_together_are_bent_as_each_alone_to_the_bit(tmp_path):
+    """The dents bend every copy in one batch of arrays; each copy's art must be what
+    bending it alone gives, and its points the flattening of its written (rounded) curves."""
+    from repulsionpak.io import load_element
+    from repulsionpak.render.placed import refined
+
+    f = tmp_path / "disc.svg"
+    f.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+                 '<circle cx="50" cy="50" r="50"/></svg>')
+    el = load_element(f)
+    box = shapely.box(0, 0, 400, 100)
+
+    def disc(x0, scale, tol):
+        return PlacedArt(str(f), "primary", tuple(refined(a.transformed(lambda p: np.asarray(p) * scale + [x0, 10.0]),
+                                                          tol) for a in el.paths), tolerance=tol)
+
+    pairs = [(disc(10.0, 0.4, 1e-3), poly([[50.6, 0.0], [80, 0], [80, 60], [50.6, 60]])),
+             (disc(150.0, 0.6, 4e-3), poly([[210.8, 0.0], [240, 0], [240, 80], [210.8, 80]]))]
+    frozen = np.array([False, True])
+    alone = [dent(list(p), box, GAP, 0.5, 0.9 * GAP, frozen=frozen)[0] for p in pairs]
+    together, res = dent([pairs[0][0], pairs[0][1], pairs[1][0], pairs[1][1]], box, GAP, 0.5, 0.9 * GAP,
+                         frozen=np.array([False, True, False, True]))
+    assert res.dented == (0, 2)
+    for a, b, tol in ((alone[0][0], together[0], 1e-3), (alone[1][0], together[2], 4e-3)):
+        assert a is not None and len(a.paths) == len(b.paths)
+        for pa, pb in zip(a.paths, b.paths):
+            for sa, sb in zip(pa.subpaths, pb.subpaths):
+                assert np.array_equal(sa, sb)
+            for ca, cb in zip(pa.source.curves, pb.source.curves):
+                assert np.array_equal(ca.ctrl, cb.ctrl) and np.array_equal(ca.order, cb.order)
+            again = refined(pb, tol)  # written curves, flattened as the writer's are: the same points
+            assert all(np.array_equal(s, t) for s, t in zip(again.subpaths, pb.subpaths))

@@ -101,13 +101,26 @@ def refined(art: ArtPath, tol: float | None) -> ArtPath:
     src = art.source
     if tol is None or not tol > 0 or src is None or not src.curves:
         return art
-    curves = round_curves(src.curves, decimals_for(tol))
+    return written(art, round_curves(src.curves, decimals_for(tol)), tol)
+
+
+def written(art: ArtPath, curves: tuple, tol: float) -> ArtPath:
+    """``art`` with ``curves`` (its curves already rounded as the writer rounds them at
+    ``tol``: :func:`~repulsionpak.geometry.curves.round_curves`) as its source and their
+    flattening at ``FLATTEN_SHARE`` × ``tol`` as its subpaths (:func:`refined`'s last
+    step); ``art`` itself when no curve flattens to two points or more.
+
+    Notes
+    -----
+    Apart from :func:`refined` so that a caller rounding the curves of many copies in one
+    array (the dents: :mod:`repulsionpak.verify.dents`) makes the same path to the bit.
+    """
     flat = tuple(flatten_subpath(c, FLATTEN_SHARE * tol) for c in curves)
     keep = [i for i, f in enumerate(flat) if len(f) >= 2]
     if not keep:
         return art
     return ArtPath(tuple(flat[i] for i in keep), tuple(curves[i].closed for i in keep), art.style,
-                   source=dataclasses.replace(src, curves=tuple(curves[i] for i in keep)))
+                   source=dataclasses.replace(art.source, curves=tuple(curves[i] for i in keep)))
 
 
 def render_copy(t, verts: np.ndarray, gap: float | None = None,

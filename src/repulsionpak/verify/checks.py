@@ -143,6 +143,19 @@ def _pair_distances(ga: np.ndarray, gb: np.ndarray, memo: dict | None) -> np.nda
     return d
 
 
+def _kept(shapes: dict | None, key: tuple, objs: tuple, make):
+    """``make()``, kept in ``shapes`` under ``key`` (the ids of the objects ``objs`` it is
+    made of) when ``shapes`` is given. The entry holds ``objs``, so their ids are not
+    reused while ``shapes`` lives: a repair round replaces the geometry of the few copies
+    it moves; what is made of the others' geometry is made once."""
+    if shapes is None:
+        return make()
+    hit = shapes.get(key)
+    if hit is None:
+        hit = shapes[key] = (objs, make())
+    return hit[1]
+
+
 @dataclass(frozen=True)
 class Rough:
     """Outlines ``geoms`` that each lie within ``err[i]`` of the outline they stand for
@@ -168,7 +181,7 @@ class Rough:
 
 
 def _check(geoms, alive, region, edges, min_gap, margin, tol, inner=None, exact_edges=False,
-           fixed=None, rank=None, contacts=None, weak=None, memo=None, rough=None):
+           fixed=None, rank=None, contacts=None, weak=None, memo=None, rough=None, shapes=None):
     """What each element needs to meet the promises: ``need[i]`` how far (container
     units) its art must get away from what it is too close to, ``push[i]`` the summed
     directions (weighted by deficit) of a move that would do it, and ``rel[i]`` the
@@ -190,7 +203,10 @@ def _check(geoms, alive, region, edges, min_gap, margin, tol, inner=None, exact_
     points. ``memo`` (a dict): pair distances kept between calls (:func:`_pair_distances`).
     ``rough`` (:class:`Rough`): cheaper outlines within a known distance of ``geoms``;
     pairs whose rough distance shows them farther apart than ``min_gap`` are not measured
-    on ``geoms`` (the result is the same: only pairs closer than ``min_gap`` count)."""
+    on ``geoms`` (the result is the same: only pairs closer than ``min_gap`` count).
+    ``shapes`` (a dict): what is measured of each geometry object and pair of them
+    (centroid, convex hull, shrink candidates, shortest line), kept between calls
+    (:func:`_kept`)."""
     n = len(geoms)
     need = np.zeros(n)
     rel = np.zeros(n)
@@ -203,15 +219,21 @@ def _check(geoms, alive, region, edges, min_gap, margin, tol, inner=None, exact_
 
     def centre(i):
         if i not in centres:
-            centres[i] = _centre(geoms[i])
+            g = geoms[i]
+            centres[i] = _kept(shapes, ("centre", id(g)), (g,), lambda: _centre(g))
         return centres[i]
 
     shrink_points: dict = {}  # an element too close to several others: its candidates once
 
     def cost(i, p, u, total):
         if i not in shrink_points:
-            shrink_points[i] = _shrink_candidates(geoms[i], centre(i), SHRINK_POINTS)
-        return _shrink_cost(shrink_points[i], float(geoms[i].area), p, u, total)
+            g = geoms[i]
+            shrink_points[i] = _kept(shapes, ("shrink", id(g)), (g,),
+                                     lambda: (_shrink_candidates(g, centre(i), SHRINK_POINTS), float(g.area)))
+        return _shrink_cost(*shrink_points[i], p, u, total)
+
+    def hull(g):
+        return _kept(shapes, ("hull", id(g)), (g,), lambda: g.convex_hull)
 
     if len(idx) >= 2:
         a, b = _near_pairs(arr, np.arange(len(arr)), min_gap)
@@ -239,7 +261,8 @@ def _check(geoms, alive, region, edges, min_gap, margin, tol, inner=None, exact_
                 pi = pj = _centre(inter) if not inter.is_empty else 0.5 * (centre(i) + centre(j))
                 u = centre(i) - centre(j)
             else:
-                line = np.asarray(shapely.shortest_line(gi, gj).coords)
+                line = _kept(shapes, ("line", id(gi), id(gj)), (gi, gj),
+                             lambda: np.asarray(shapely.shortest_line(gi, gj).coords))
                 pi, pj = line[0], line[1]
                 total = min_gap - dd + 2 * tol
                 u = pi - pj
@@ -266,26 +289,30 @@ def _check(geoms, alive, region, edges, min_gap, margin, tol, inner=None, exact_
                 push[j] -= 0.5 * total * u / nu
             need[i] = max(need[i], 0.5 * total)
             need[j] = max(need[j], 0.5 * total)
-            # one of the two shrinks: the one poking into the other's hollow (its contact
-            # lies in the other's convex hull: shrinking the hollow's owner would close the
-            # hollow further), else the smaller one
-            in_i = gj.convex_hull.contains(shapely.points(pi))
-            in_j = gi.convex_hull.contains(shapely.points(pj))
-            if in_i != in_j:
-                k, pk = (i, pi) if in_i else (j, pj)
-            elif nu > 0:
-                # the one that loses less art shrinking about its best point: a thin
-                # part poking into a neighbour's body comes out of it when its owner
-                # shrinks a little about a far point, while the body would have to shrink
-                # by the whole depth about any of its points (a penguin's tail through
-                # the heart's snake: the snake shrank to 0.67 of its size)
-                ci = cost(i, pi, u / nu, total)
-                cj = cost(j, pj, -u / nu, total)
-                if ci == cj:  # both hopeless (no point moves the contact away): the smaller shrinks
-                    ci, cj = gi.area, gj.area
-                k, pk = (i, pi) if ci <= cj else (j, pj)
-            else:
-                k, pk = (i, pi) if gi.area <= gj.area else (j, pj)
+            def i_shrinks():
+                # one of the two shrinks: the one poking into the other's hollow (its contact
+                # lies in the other's convex hull: shrinking the hollow's owner would close the
+                # hollow further), else the smaller one
+                in_i = hull(gj).contains(shapely.points(pi))
+                in_j = hull(gi).contains(shapely.points(pj))
+                if in_i != in_j:
+                    return in_i
+                if nu > 0:
+                    # the one that loses less art shrinking about its best point: a thin
+                    # part poking into a neighbour's body comes out of it when its owner
+                    # shrinks a little about a far point, while the body would have to shrink
+                    # by the whole depth about any of its points (a penguin's tail through
+                    # the heart's snake: the snake shrank to 0.67 of its size)
+                    ci = cost(i, pi, u / nu, total)
+                    cj = cost(j, pj, -u / nu, total)
+                    if ci == cj:  # both hopeless (no point moves the contact away): the smaller shrinks
+                        ci, cj = gi.area, gj.area
+                    return ci <= cj
+                return gi.area <= gj.area
+
+            # (a function of the two outlines and the floor: made once for a pair that stays)
+            first = _kept(shapes, ("shrinks", id(gi), id(gj), min_gap, tol), (gi, gj), i_shrinks)
+            k, pk = (i, pi) if first else (j, pj)
             if weak is not None and weak[k] and not weak[i + j - k]:
                 k, pk = (j, pj) if k == i else (i, pi)
             rho = float(np.hypot(*(pk - centre(k))))

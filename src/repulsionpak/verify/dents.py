@@ -34,12 +34,13 @@ import numpy as np
 import shapely
 from numba import njit
 
-from ..geometry.curves import as_cubics, cubic_points
+from ..geometry.curves import as_cubics, cubic_points, decimals_for
 from ..geometry.edges import Edges
 from ..geometry.pairwise import distances
-from ..render.placed import FIT_SHARE, refined
+from ..render.placed import FIT_SHARE, written
 from ..types import ArtPath, CurveSubpath, PlacedArt
 from ..threads import thread_map
+from .checks import _near_pairs
 from .repairs import rest_distortion
 
 __all__ = ["DentResult", "dent"]
@@ -158,18 +159,57 @@ def _bumped_with_jacobians(points: np.ndarray, bumps: list, two_rho2: float) -> 
     return _bump_map(pts, _packed(bumps), float(two_rho2))
 
 
-def _bend(order: np.ndarray, ctrl: np.ndarray, bumps: list, two_rho2: float) -> np.ndarray:
-    """Control points (n, 4, 2) of segments ``order``, ``ctrl`` under the bump map, smooth
-    joins kept smooth: the end points move with the map, each handle with the map's
-    tangent (affine) approximation at its own end point, so a handle pair in line across
-    a join stays in line (a cubic then matches the bumped curve's position and derivative
-    at both ends). A quadratic's one handle takes the mean of its two ends' estimates."""
+class _Steps:
+    """The bump lists of several elements (groups), each applied in turn, as the kernels
+    take them: ``steps[g]`` is group g's list of bump lists.
+
+    Notes
+    -----
+    The dents bend thousands of elements, each a few times over, in small numpy steps:
+    one element at a time, their fixed cost, not the arithmetic, is most of the time. The
+    bends of every element are therefore taken together, one array over all their
+    segments. Only the
+    bump map differs between elements: it is evaluated one element at a time
+    (:func:`_bump_map` on that element's points with its own bumps), so every point
+    moves by the same sum, to the bit, as when each element was bent alone; the numpy
+    steps around it are elementwise, the same on any batch."""
+
+    def __init__(self, steps: list[list[list]], two_rho2: float):
+        self.packed = [[_packed(bumps) for bumps in st] for st in steps]
+        self.count = np.array([len(st) for st in steps], dtype=np.int64)
+        self.two_rho2 = float(two_rho2)
+
+    def depth(self, group: np.ndarray) -> int:
+        """The most bump lists any of the ``group`` (one entry per row) applies."""
+        return int(self.count[group].max()) if len(group) else 0
+
+    def map(self, points: np.ndarray, group: np.ndarray, step: int) -> tuple[np.ndarray, np.ndarray]:
+        """``points`` (n, 2), each moved by bump list ``step`` of its ``group`` (sorted;
+        every group has that many lists), and the (n, 2, 2) Jacobian of that map there
+        (:func:`_bumped_with_jacobians`)."""
+        points = np.ascontiguousarray(points, dtype=float)
+        moved = np.empty((len(points), 2))
+        jac = np.empty((len(points), 2, 2))
+        cut = np.concatenate([[0], np.flatnonzero(np.diff(group)) + 1, [len(group)]]).tolist()
+        for a, b in zip(cut[:-1], cut[1:]):
+            moved[a:b], jac[a:b] = _bump_map(points[a:b], self.packed[group[a]][step], self.two_rho2)
+        return moved, jac
+
+
+def _bend(order: np.ndarray, ctrl: np.ndarray, group: np.ndarray, steps: _Steps, step: int) -> np.ndarray:
+    """Control points (n, 4, 2) of segments ``order``, ``ctrl`` under bump list ``step`` of
+    each one's ``group``, smooth joins kept smooth: the end points move with the map, each
+    handle with the map's tangent (affine) approximation at its own end point, so a handle
+    pair in line across a join stays in line (a cubic then matches the bumped curve's
+    position and derivative at both ends). A quadratic's one handle takes the mean of its
+    two ends' estimates."""
     n = len(order)
     start = ctrl[:, 0]
     end = ctrl[np.arange(n), order]
-    ends = np.concatenate([start, end])
-    moved, jac = _bumped_with_jacobians(ends, bumps, two_rho2)
-    f0, f1, j0, j1 = moved[:n], moved[n:], jac[:n], jac[n:]
+    # each segment's two ends side by side, so that each group's points are one slice
+    moved, jac = steps.map(np.stack([start, end], axis=1).reshape(-1, 2), np.repeat(group, 2), step)
+    f0, f1 = np.ascontiguousarray(moved[0::2]), np.ascontiguousarray(moved[1::2])
+    j0, j1 = np.ascontiguousarray(jac[0::2]), np.ascontiguousarray(jac[1::2])
     h0 = f0 + np.einsum("nij,nj->ni", j0, ctrl[:, 1] - start)  # first handle, from the start
     out = np.empty_like(ctrl)
     out[:, 0] = f0
@@ -179,6 +219,20 @@ def _bend(order: np.ndarray, ctrl: np.ndarray, bumps: list, two_rho2: float) -> 
     out[quad, 1] = 0.5 * (h0[quad] + f1[quad] + np.einsum("nij,nj->ni", j1[quad], ctrl[quad, 1] - end[quad]))
     tail = np.arange(4)[None, :] >= order[:, None]  # the end point and its copies
     out[tail] = np.broadcast_to(f1[:, None, :], ctrl.shape)[tail]
+    return out
+
+
+def _bend_all(order: np.ndarray, ctrl: np.ndarray, group: np.ndarray, steps: _Steps) -> np.ndarray:
+    """Segments ``order``, ``ctrl`` under every bump list of their ``group``, in turn
+    (:func:`_bend`)."""
+    out = ctrl
+    for step in range(steps.depth(group)):
+        rows = np.flatnonzero(steps.count[group] > step)
+        if len(rows) == len(order):
+            out = _bend(order, out, group, steps, step)
+        else:
+            out = out.copy()
+            out[rows] = _bend(order[rows], out[rows], group[rows], steps, step)
     return out
 
 
@@ -195,20 +249,24 @@ SPLIT_ANGLE = 0.5
 SPLIT_DEPTH = 5
 
 
-def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, steps: list[list],
-               two_rho2: float, distance: float, angle: float) -> np.ndarray:
-    """(n,) bool: whether each bent segment is farther than ``distance`` from the bumped
-    curve, or turned from its direction by more than ``angle`` (radians), at any of
-    :data:`CHECK_AT`."""
-    t = np.repeat(CHECK_AT, len(order))  # every segment at each parameter in turn
-    p, d = cubic_points(np.tile(as_cubics(order, ctrl), (len(CHECK_AT), 1, 1)), t)
-    for bumps in steps:  # the exact map: one bump list after the other
-        p, jac = _bumped_with_jacobians(p, bumps, two_rho2)
-        d = np.einsum("nij,nj->ni", jac, d)
-    q, e = cubic_points(np.tile(as_cubics(order, bent), (len(CHECK_AT), 1, 1)), t)
+def _off_curve(order: np.ndarray, ctrl: np.ndarray, bent: np.ndarray, group: np.ndarray, steps: _Steps,
+               distance: np.ndarray, angle: float) -> np.ndarray:
+    """(n,) bool: whether each bent segment is farther than ``distance`` (one per
+    segment) from the curve bumped by its ``group``'s bump lists, or turned from its
+    direction by more than ``angle`` (radians), at any of :data:`CHECK_AT`."""
+    k = len(CHECK_AT)
+    t = np.tile(CHECK_AT, len(order))  # each segment at every parameter: a group's rows are one slice
+    p, d = cubic_points(np.repeat(as_cubics(order, ctrl), k, axis=0), t)
+    rows_group = np.repeat(group, k)
+    for step in range(steps.depth(group)):  # the exact map: one bump list after the other
+        rows = np.flatnonzero(steps.count[rows_group] > step)
+        moved, jac = steps.map(p[rows], rows_group[rows], step)
+        p[rows] = moved
+        d[rows] = np.einsum("nij,nj->ni", jac, d[rows])
+    q, e = cubic_points(np.repeat(as_cubics(order, bent), k, axis=0), t)
     turn = np.abs(np.arctan2(d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0], (d * e).sum(axis=1)))
-    bad = (np.hypot(*(p - q).T) > distance) | (turn > angle)
-    return bad.reshape(len(CHECK_AT), -1).any(axis=0)
+    bad = (np.hypot(*(p - q).T) > np.repeat(distance, k)) | (turn > angle)
+    return bad.reshape(-1, k).any(axis=1)
 
 
 def _halves(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
@@ -230,12 +288,16 @@ def _halves(order: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
     return out
 
 
-def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float, tol: float,
-                 centres: np.ndarray, reach: float) -> list[CurveSubpath]:
-    """``curves`` (all of one element's) under the bump lists ``steps``, applied in turn
-    (:func:`_bend`). A curved segment within ``reach`` of one of the bumps' ``centres`` is
-    split in halves, exactly, until each bent half is within :data:`SPLIT_DISTANCE` ×
-    ``tol`` and :data:`SPLIT_ANGLE` of the bumped curve.
+def _bent_curves(groups: list[tuple[list[CurveSubpath], list[list], float, np.ndarray]], two_rho2: float,
+                 reach: float) -> list[list[tuple]]:
+    """Each group's ``(curves, steps, tol, centres)``: ``curves`` (all of one element's)
+    under the bump lists ``steps``, applied in turn (:func:`_bend`). A curved segment
+    within ``reach`` of one of the bumps' ``centres`` is split in halves, exactly, until
+    each bent half is within :data:`SPLIT_DISTANCE` × ``tol`` and :data:`SPLIT_ANGLE` of
+    the bumped curve. Returns each group's bent curves, each as ``(order, ctrl, rounded,
+    closed)``: ``rounded`` its control points rounded as the writer rounds them at
+    ``tol`` (:func:`~repulsionpak.geometry.curves.round_curves`; None when ``tol`` is not
+    positive), for :func:`_as_written`.
 
     Notes
     -----
@@ -244,35 +306,66 @@ def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float,
     segment of length L for a bump of size |v| and width ρ. A large copy's fitted
     segments are several ρ long: a disc bent with them turned 2.9° at one written joint
     and 0.9° at the next (400 samples) where the bumped outline turns a steady 2°. Lines
-    stay lines: the outline the checks measure keeps them straight too."""
+    stay lines: the outline the checks measure keeps them straight too.
+
+    The groups are bent together (:class:`_Steps`): each segment exactly as if its
+    element were bent alone; a group whose segments all fit stops changing, as it
+    stopped splitting alone."""
+    curves = [c for cv, _, _, _ in groups for c in cv]
+    if not curves:
+        return [[] for _ in groups]
     order = np.concatenate([c.order for c in curves]).astype(np.int64)
     ctrl = np.concatenate([c.ctrl for c in curves])
     owner = np.repeat(np.arange(len(curves)), [len(c.order) for c in curves])
-    check = _near_each(ctrl, centres, reach) & (order > 1)
-
-    def bent_by_all(o, c):
-        for bumps in steps:
-            c = _bend(o, c, bumps, two_rho2)
-        return c
-
-    bent = bent_by_all(order, ctrl)
+    group = np.repeat(np.arange(len(groups)), [sum(len(c.order) for c in cv) for cv, _, _, _ in groups])
+    steps = _Steps([st for _, st, _, _ in groups], two_rho2)
+    distance = np.array([SPLIT_DISTANCE * tol for _, _, tol, _ in groups])
+    check = _near_each(ctrl.min(axis=1), ctrl.max(axis=1), group, [c for _, _, _, c in groups], reach) & (order > 1)
+    bent = _bend_all(order, ctrl, group, steps)
     for _ in range(SPLIT_DEPTH):
         if not check.any():
             break
         bad = np.zeros(len(order), bool)
-        bad[check] = _off_curve(order[check], ctrl[check], bent[check], steps, two_rho2,
-                                SPLIT_DISTANCE * tol, np.radians(SPLIT_ANGLE))
+        bad[check] = _off_curve(order[check], ctrl[check], bent[check], group[check], steps,
+                                distance[group[check]], np.radians(SPLIT_ANGLE))
         if not bad.any():
             break
         idx = np.repeat(np.arange(len(order)), np.where(bad, 2, 1))
-        order, ctrl, owner, bent, check = order[idx], ctrl[idx], owner[idx], bent[idx], bad[idx]
+        order, ctrl, owner, group, bent, check = order[idx], ctrl[idx], owner[idx], group[idx], bent[idx], bad[idx]
         twice = np.flatnonzero(check)  # two rows per split segment, in order
         halves = _halves(order[twice[0::2]], ctrl[twice[0::2]])
         ctrl[twice[0::2]] = halves[:, 0]
         ctrl[twice[1::2]] = halves[:, 1]
-        bent[check] = bent_by_all(order[check], ctrl[check])  # only the halves are new
-    cut = np.searchsorted(owner, np.arange(len(curves) + 1))  # owner is sorted
-    return [CurveSubpath(order[a:b], bent[a:b], c.closed) for c, a, b in zip(curves, cut[:-1], cut[1:])]
+        bent[check] = _bend_all(order[check], ctrl[check], group[check], steps)  # only the halves are new
+    # rounded as written, all of a tolerance's decimals at once (np.round is elementwise)
+    decimals = np.array([decimals_for(tol) if tol > 0 else -1 for _, _, tol, _ in groups])[group]
+    rounded = np.full_like(bent, np.nan)
+    for d in np.unique(decimals[decimals >= 0]).tolist():
+        rows = decimals == d
+        rounded[rows] = np.round(bent[rows], d)
+    cut = np.searchsorted(owner, np.arange(len(curves) + 1)).tolist()  # owner is sorted
+    flat = iter([(order[a:b], bent[a:b], rounded[a:b] if decimals[a] >= 0 else None, c.closed)
+                 for c, a, b in zip(curves, cut[:-1], cut[1:])])
+    return [[next(flat) for _ in cv] for cv, _, _, _ in groups]
+
+
+def _as_written(a: ArtPath, curves: list[tuple], tol: float) -> ArtPath:
+    """Path ``a`` with the bent ``curves`` (:func:`_bent_curves`) as the copy at curve
+    tolerance ``tol`` writes it: ``refined(a with those curves, tol)``
+    (:func:`~repulsionpak.render.placed.refined`), the same path to the bit.
+
+    Notes
+    -----
+    The curves come rounded in one array over every bent element (:func:`_bent_curves`;
+    ``np.round`` is elementwise, so the same numbers): rounded one subpath at a time, as
+    :func:`refined` rounds them, with each curve made twice (bent, then rounded), that
+    costs about half as much again as the bends themselves on a 1,000-element poster.
+    :func:`~repulsionpak.render.placed.written` does the rest, as for :func:`refined`."""
+    bent = ArtPath(a.subpaths, a.closed, a.style, source=dataclasses.replace(
+        a.source, curves=tuple(CurveSubpath(order, ctrl, closed) for order, ctrl, _, closed in curves)))
+    if not tol > 0:
+        return bent
+    return written(bent, tuple(CurveSubpath(order, rounded, closed) for order, _, rounded, closed in curves), tol)
 
 
 #: a path farther than this many ρ from every bump is left as it is: the bumps move it by
@@ -280,56 +373,101 @@ def _bent_curves(curves: list[CurveSubpath], steps: list[list], two_rho2: float,
 REACH = 4.5
 
 
-def _near_each(groups: np.ndarray, centres: np.ndarray, reach: float) -> np.ndarray:
-    """(n,) bool: whether the bounding box of each group of points (n, k, 2), e.g. a
-    segment's control points, comes within ``reach`` of a centre."""
-    lo, hi = groups.min(axis=1), groups.max(axis=1)
-    off = np.maximum(np.maximum(lo[:, None] - centres, centres - hi[:, None]), 0.0)
-    return (np.hypot(off[..., 0], off[..., 1]) < reach).any(axis=1)
+def _near_each(lo: np.ndarray, hi: np.ndarray, group: np.ndarray, centres: list[np.ndarray],
+               reach: float) -> np.ndarray:
+    """(n,) bool: whether each bounding box ``lo``, ``hi`` (n, 2), e.g. of a segment's
+    control points, comes within ``reach`` of one of the ``centres`` (m, 2) of its
+    ``group``.
+
+    Notes
+    -----
+    The centres are tried in turn, each on the boxes of the groups that have it and that
+    no centre before it reached: most boxes near a bump are found by the first."""
+    count = np.array([len(c) for c in centres], dtype=np.int64)
+    first = np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.int64)
+    every = np.concatenate(centres).reshape(-1, 2) if len(centres) else np.zeros((0, 2))
+    near = np.zeros(len(group), bool)
+    todo = np.arange(len(group))
+    for k in range(int(count.max()) if len(count) else 0):
+        todo = todo[count[group[todo]] > k]
+        if not len(todo):
+            break
+        c = every[first[group[todo]] + k]
+        off = np.maximum(np.maximum(lo[todo] - c, c - hi[todo]), 0.0)
+        hit = np.hypot(off[:, 0], off[:, 1]) < reach
+        near[todo[hit]] = True
+        todo = todo[~hit]
+    return near
 
 
-def _near(points: np.ndarray, centres: np.ndarray, reach: float) -> bool:
-    """Whether the bounding box of ``points`` (n, 2) comes within ``reach`` of a centre."""
-    return bool(_near_each(points[None], centres, reach)[0])
+def _path_points(a: ArtPath) -> list[np.ndarray]:
+    """The points whose bounding box stands for path ``a``: its curves' control points, or
+    its subpaths' points when it has no curves."""
+    if a.source is not None and a.source.curves:
+        return [c.ctrl.reshape(-1, 2) for c in a.source.curves]
+    return list(a.subpaths)
 
 
-def _bent(placed: PlacedArt, steps: list[list], two_rho2: float) -> PlacedArt:
-    """``placed`` with its art moved by each bump list of ``steps`` in turn: curves
-    through their control points, then flattened at the copy's tolerance
-    (:func:`~repulsionpak.render.placed.refined`); art without curves through its
-    points. Paths out of the bumps' reach (:data:`REACH`) are kept as they are."""
-    centres = np.array([c for bumps in steps for c, _ in bumps])
+def _bent_many(jobs: list[tuple[PlacedArt, list[list]]], two_rho2: float) -> list[PlacedArt]:
+    """Each job's ``placed`` with its art moved by each bump list of its ``steps`` in
+    turn: curves through their control points, then flattened at the copy's tolerance
+    (:func:`_as_written`, as :func:`~repulsionpak.render.placed.refined` does);
+    art without curves through its points. Paths out of the bumps' reach (:data:`REACH`)
+    are kept as they are, and a copy with none in reach is returned itself.
+
+    Notes
+    -----
+    The curves of every job are bent together (:func:`_bent_curves`), each one as if its
+    copy were bent alone: the same art, to the bit."""
+    if not jobs:
+        return []
     reach = REACH * np.sqrt(0.5 * two_rho2)
-
-    def near(a: ArtPath) -> bool:
-        if a.source is not None and a.source.curves:
-            return _near(np.concatenate([c.ctrl.reshape(-1, 2) for c in a.source.curves]), centres, reach)
-        return _near(np.concatenate(a.subpaths), centres, reach)
-
-    hit = [near(a) for a in placed.paths]
-    if not any(hit):
-        return placed
-    curved = [h and a.source is not None and bool(a.source.curves) and placed.tolerance is not None
-              for a, h in zip(placed.paths, hit)]
-    every = [c for a, cv in zip(placed.paths, curved) if cv for c in a.source.curves]
-    if every:
-        every = _bent_curves(every, steps, two_rho2, placed.tolerance, centres, reach)
-    bent = iter(every)
-    paths = []
-    for a, h, cv in zip(placed.paths, hit, curved):
-        src = a.source
-        if not h:
-            paths.append(a)
-        elif cv:
-            curves = tuple(next(bent) for _ in src.curves)
-            paths.append(refined(ArtPath(a.subpaths, a.closed, a.style,
-                                         source=dataclasses.replace(src, curves=curves)), placed.tolerance))
-        else:
-            subs = a.subpaths
-            for bumps in steps:
-                subs = tuple(_bumped(p, bumps, two_rho2) for p in subs)
-            paths.append(ArtPath(subs, a.closed, a.style, source=None if src is None or src.curves else src))
-    return dataclasses.replace(placed, paths=tuple(paths))
+    centres = [np.array([c for bumps in steps for c, _ in bumps]).reshape(-1, 2) for _, steps in jobs]
+    # every path's bounding box, all at once
+    points, path_job, sizes = [], [], []
+    for j, (placed, _) in enumerate(jobs):
+        for a in placed.paths:
+            pts = _path_points(a)
+            points += pts
+            sizes.append(len(pts))
+            path_job.append(j)
+    if points:
+        first = np.concatenate([[0], np.cumsum([len(p) for p in points])[:-1]]).astype(np.int64)
+        starts = first[np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)]
+        every = np.concatenate(points)
+        hits = iter(_near_each(np.minimum.reduceat(every, starts), np.maximum.reduceat(every, starts),
+                               np.array(path_job, dtype=np.int64), centres, reach).tolist())
+    plans, groups = [], []
+    for (placed, steps), cs in zip(jobs, centres):
+        hit = [next(hits) for _ in placed.paths]
+        curved = [h and a.source is not None and bool(a.source.curves) and placed.tolerance is not None
+                  for a, h in zip(placed.paths, hit)]
+        plans.append((hit, curved))
+        if any(hit):
+            groups.append(([c for a, cv in zip(placed.paths, curved) if cv for c in a.source.curves],
+                           steps, placed.tolerance, cs))
+    bent_groups = iter(_bent_curves([g for g in groups if g[0]], two_rho2, reach))
+    out = []
+    groups = iter(groups)
+    for (placed, steps), (hit, curved) in zip(jobs, plans):
+        if not any(hit):
+            out.append(placed)
+            continue
+        bent = iter(next(bent_groups) if next(groups)[0] else ())
+        paths = []
+        for a, h, cv in zip(placed.paths, hit, curved):
+            src = a.source
+            if not h:
+                paths.append(a)
+            elif cv:
+                paths.append(_as_written(a, [next(bent) for _ in src.curves], placed.tolerance))
+            else:
+                subs = a.subpaths
+                for bumps in steps:
+                    subs = tuple(_bumped(p, bumps, two_rho2) for p in subs)
+                paths.append(ArtPath(subs, a.closed, a.style, source=None if src is None or src.curves else src))
+        out.append(dataclasses.replace(placed, paths=tuple(paths)))
+    return out
 
 
 def _xy(points: np.ndarray) -> np.ndarray:
@@ -360,9 +498,15 @@ def _pair_bumps(geoms: np.ndarray, exact: np.ndarray, target: float, frozen: np.
     Apart, a pair parts along the line between its closest points. Overlapping (a limb
     pressed into a neighbour), it parts at the centroid of the overlap, along the line
     between the centroids of the two arts within ``reach`` of it, by the overlap's depth
-    along that line plus ``target``."""
-    tree = shapely.STRtree(geoms)
-    q, b = tree.query(geoms[which], predicate="dwithin", distance=target)
+    along that line plus ``target``.
+
+    Notes
+    -----
+    The candidates are the pairs whose bounding boxes come within ``target`` (a little
+    more, for rounding), each measured once: a ``dwithin`` query would measure every
+    candidate, and the pairs it keeps would be measured again. Only the pairs measured
+    closer than ``target`` count, in the order of their indices."""
+    q, b = _near_pairs(geoms, which, target * (1.0 + 1e-9) + 1e-12)
     a = which[q]
     keep = a != b
     if not keep.any():
@@ -501,17 +645,20 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
     args = (target, inner, inner_edges, rounds, rho, push * gap, budget * gap, eps, room)
     two_rho2 = 2.0 * rho ** 2  # as _rounds bends: _within_limit bends again with the same bumps
     out, counts, steps = _rounds(list(placed), np.arange(n), frozen, *args)
-    over = _over_limit(placed, out, rest, limits)
+    beyond: dict = {}  # what _over_limit found of each art it measured
+    over = _over_limit(placed, out, rest, limits, beyond)
     if over:  # bent back to their limit and frozen, the rounds go on: their neighbours give way alone
         frozen = frozen.copy()
         frozen[over] = True
-        for i in over:
-            out[i] = _within_limit(placed[i], steps[i], rest[i], limits[i], two_rho2)
+        for i, q in zip(over, _within_limit([(placed[i], steps[i], rest[i], limits[i]) for i in over], two_rho2)):
+            out[i] = q
+            beyond[i] = (q, False)  # (measured within its limit, or unbent: not measured again)
         out, more, later = _rounds(out, np.array(over), frozen, *args)
         counts += more
-        over2 = _over_limit(placed, out, rest, limits)
-        for i in over2:
-            out[i] = _within_limit(placed[i], steps.get(i, []) + later.get(i, []), rest[i], limits[i], two_rho2)
+        over2 = _over_limit(placed, out, rest, limits, beyond)
+        for i, q in zip(over2, _within_limit([(placed[i], steps.get(i, []) + later.get(i, []), rest[i], limits[i])
+                                              for i in over2], two_rho2)):
+            out[i] = q
         over = sorted(set(over) | set(over2))
     dented = tuple(i for i in range(n) if out[i] is not placed[i])
     return out, DentResult(tuple(counts), dented, tuple(over))
@@ -522,39 +669,51 @@ def dent(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: fl
 AIM = 0.98
 
 
-def _within_limit(placed: PlacedArt, steps: list[list], rest: PlacedArt, limit: float,
-                  two_rho2: float) -> PlacedArt:
-    """``placed`` bent by ``steps`` with every bump scaled by the largest share (to 1/64)
-    that keeps it within its shape ``limit``; ``placed`` itself when none does.
+def _within_limit(jobs: list[tuple[PlacedArt, list[list], PlacedArt, float]], two_rho2: float) -> list[PlacedArt]:
+    """For each job ``(placed, steps, rest, limit)``: ``placed`` bent by ``steps`` with
+    every bump scaled by the largest share (to 1/64) that keeps it within its shape
+    ``limit``; ``placed`` itself when none does.
 
     Notes
     -----
     An element whose dents take it past its limit keeps what part of them fits: unbent
     whole, its contacts were left to the repair, which shrank it about its centroid (on
     the heart with 30 animals a dog to 0.89 of its size for four contacts).
-    """
-    def scaled(a):
+
+    Each job is its own: the bisections (GEOS overlays) run on
+    :func:`~repulsionpak.threads.thread_map`'s threads and the bends of every job are
+    taken together (:func:`_bent_many`); each job's steps are those it took alone."""
+    def scaled(steps, a):
         return [[(c, a * v) for c, v in bumps] for bumps in steps]
 
-    def outline(a):
-        art = placed.art
-        for bumps in scaled(a):
-            art = _bumped_outline(art, bumps, two_rho2)
-        return art
+    def bisect(job) -> float:
+        placed, steps, rest, limit = job
+        lo, hi = 0.0, 1.0
+        for _ in range(6):
+            mid = 0.5 * (lo + hi)
+            art = placed.art
+            for bumps in scaled(steps, mid):
+                art = _bumped_outline(art, bumps, two_rho2)
+            if rest_distortion(rest, placed, art) <= AIM * limit:
+                lo = mid
+            else:
+                hi = mid
+        return lo
 
-    lo, hi = 0.0, 1.0
-    for _ in range(6):
-        mid = 0.5 * (lo + hi)
-        if rest_distortion(rest, placed, outline(mid)) <= AIM * limit:
-            lo = mid
-        else:
-            hi = mid
-    while lo > 0.0:
-        bent = _bent(placed, scaled(lo), two_rho2)
-        if rest_distortion(rest, placed, bent.art) <= limit:
-            return bent
-        lo = 0.5 * lo if lo > 1 / 16 else 0.0
-    return placed
+    out = [placed for placed, _, _, _ in jobs]
+    share = thread_map(bisect, jobs)
+    todo = [k for k, lo in enumerate(share) if lo > 0.0]
+    while todo:
+        bent = _bent_many([(jobs[k][0], scaled(jobs[k][1], share[k])) for k in todo], two_rho2)
+        fits = thread_map(lambda kb: rest_distortion(jobs[kb[0]][2], jobs[kb[0]][0], kb[1].art) <= jobs[kb[0]][3],
+                          list(zip(todo, bent)))
+        for k, b, ok in zip(todo, bent, fits):
+            if ok:
+                out[k] = b
+            else:
+                share[k] = 0.5 * share[k] if share[k] > 1 / 16 else 0.0
+        todo = [k for k, ok in zip(todo, fits) if not ok and share[k] > 0.0]
+    return out
 
 
 #: the area a bump of vector v is taken to add to its element's distortion, in units of
@@ -597,24 +756,32 @@ def _rounds(out, which, frozen, target, inner, inner_edges, rounds, rho, push, b
             used[i] += moved
             swept[i] += add
             steps.setdefault(i, []).append(bl)
-            # the outline measured next round: the art's outline under the same map (to
-            # the flattening tolerance what the bent paths' union gives)
-            exact[i] = _bumped_outline(exact[i], bl, two_rho2)
-            geoms[i] = shapely.simplify(exact[i], eps, preserve_topology=False)
             bent.append(i)
         if not bent:  # what is still too close is between elements that may not bend further
             break
+        # the outlines measured next round: the art's outline under the same map (to the
+        # flattening tolerance what the bent paths' union gives)
+        for i in bent:
+            exact[i] = _bumped_outline(exact[i], bumps[i], two_rho2)
+        geoms[bent] = shapely.simplify(exact[bent], eps, preserve_topology=False)
         which = np.array(sorted(bent))
-    for i, st in steps.items():  # (mostly small numpy steps: threads only wait for each other)
-        out[i] = _bent(out[i], st, two_rho2)
+    for i, q in zip(steps, _bent_many([(out[i], st) for i, st in steps.items()], two_rho2)):
+        out[i] = q
     return out, counts, steps
 
 
-def _over_limit(placed, out, rest, limits) -> list[int]:
+def _over_limit(placed, out, rest, limits, known: dict | None = None) -> list[int]:
     """The elements that ``out`` bends beyond their shape ``limits`` (measured as
-    :func:`~repulsionpak.verify.straighten` does, against ``rest`` moved onto ``placed``)."""
+    :func:`~repulsionpak.verify.straighten` does, against ``rest`` moved onto ``placed``).
+
+    ``known`` maps an element to ``(art, beyond)``, what an earlier call found of the
+    copy ``art``: an element whose copy in ``out`` is that same object is not measured
+    again (a measure is one GEOS overlay). Filled with what this call measures."""
     if rest is None or limits is None:
         return []
+    known = {} if known is None else known
     which = [i for i, (p, q) in enumerate(zip(placed, out)) if q is not p and np.isfinite(limits[i])]
-    beyond = thread_map(lambda i: rest_distortion(rest[i], placed[i], out[i].art) > limits[i], which)
-    return [i for i, b in zip(which, beyond) if b]
+    todo = [i for i in which if i not in known or known[i][0] is not out[i]]
+    beyond = thread_map(lambda i: rest_distortion(rest[i], placed[i], out[i].art) > limits[i], todo)
+    known.update((i, (out[i], b)) for i, b in zip(todo, beyond))
+    return [i for i in which if known[i][1]]

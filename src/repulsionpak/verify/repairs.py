@@ -430,7 +430,7 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     # the rounds work on outlines simplified by eps and ask eps more of every distance
     # (exact checks are the slow part with detailed art); the final check is exact
     eps = 0.01 * max(min_gap, gap * 0.5)
-    base = [shapely.simplify(g, eps, preserve_topology=True) for g in exact]
+    base = thread_map(lambda g: shapely.simplify(g, eps, preserve_topology=True), exact)  # (GEOS: on threads)
     w_gap, w_margin = min_gap + 2 * eps, margin + eps
     inner = shapely.buffer(region, -(w_margin + eps))
     shapely.prepare(inner)
@@ -458,10 +458,11 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     halfway = 0.5 * (1.0 + lowest)  # shrunk half-way to being dropped
 
     memo: dict = {}  # pair distances of the rounds' outlines: a round changes a few copies
+    shapes: dict = {}  # and what else the checks measure of them
 
     def check(exact_edges=False, contacts=None):
         return _check(geoms, alive, region, edges, w_gap, w_margin, tol, inner, exact_edges, fixed, rank,
-                      contacts, scale < halfway, memo)
+                      contacts, scale < halfway, memo, shapes=shapes)
 
     def move(i, ln):
         """The step that takes element i its need (plus the slack) along its push (length ln)."""
