@@ -6,6 +6,7 @@ and curves stay what is written."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import shapely
 
 from repulsionpak.types import ArtPath, PlacedArt, Style
@@ -256,11 +257,16 @@ def test_the_bump_map_and_its_jacobian_are_the_gaussian_sum_and_its_derivative()
     assert np.allclose(jac[4], np.eye(2), rtol=0, atol=1e-200)
 
 
-def test_copies_bent_together_are_bent_as_each_alone_to_the_bit(tmp_path):
-    """The dents bend every copy in one batch of arrays; each copy's art must be what
-    bending it alone gives, and its points the flattening of its written (rounded) curves."""
+@pytest.mark.parametrize("batch", [1, 64])
+def test_copies_bent_together_are_bent_as_each_alone_to_the_bit(tmp_path, monkeypatch, batch):
+    """The dents bend the copies in batches of arrays (``BATCH`` at a time); each copy's
+    art must be what bending it alone gives, and its points the flattening of its written
+    (rounded) curves."""
     from repulsionpak.io import load_element
     from repulsionpak.render.placed import refined
+    from repulsionpak.verify import dents
+
+    monkeypatch.setattr(dents, "BATCH", batch)
 
     f = tmp_path / "disc.svg"
     f.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
