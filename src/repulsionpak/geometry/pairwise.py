@@ -20,7 +20,7 @@ import shapely
 
 from ..threads import warnings_kept, worker_threads
 
-__all__ = ["DENSE", "MIN_PAIRS", "PIECE", "dense_distance", "distances", "threads"]
+__all__ = ["DENSE", "MIN_PAIRS", "PIECE", "dense_distance", "distances", "near_pairs", "threads"]
 
 #: pairs per thread below which one thread measures them all (starting a thread costs
 #: ~0.1 ms; a pair of packed copies' outlines 20–50 µs)
@@ -144,3 +144,31 @@ def distances(a: np.ndarray, b: np.ndarray, workers: int | None = None) -> np.nd
         for done in [pool.submit(share, j) for j in range(k)]:
             done.result()  # (re-raises a thread's error here)
     return out
+
+
+def near_pairs(arr: np.ndarray, which: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate pairs of geometries within ``reach`` of each other.
+
+    Parameters
+    ----------
+    arr : (n,) object array of shapely geometries
+    which : (m,) int array
+        The indices into ``arr`` to find neighbours of.
+    reach : float
+        The distance of interest.
+
+    Returns
+    -------
+    k, j : (p,) int arrays
+        The pairs whose bounding boxes meet once ``arr[which[k]]``'s is widened by
+        ``reach``: every pair closer than ``reach``, and some farther ones (``j`` may be
+        ``which[k]`` itself).
+
+    Notes
+    -----
+    Callers measure the distance of each pair anyway; an STRtree ``dwithin`` query would
+    measure it twice (its exact test costs as much as the distance itself).
+    """
+    lo = shapely.bounds(arr[which])
+    boxes = shapely.box(lo[:, 0] - reach, lo[:, 1] - reach, lo[:, 2] + reach, lo[:, 3] + reach)
+    return shapely.STRtree(arr).query(boxes)

@@ -25,7 +25,7 @@ import shapely
 from shapely.ops import polylabel
 
 from ..geometry.edges import Edges
-from ..geometry.pairwise import distances
+from ..geometry.pairwise import distances, near_pairs
 from ..geometry.robust import overlay
 
 __all__ = ["Verification", "distortion"]
@@ -108,16 +108,6 @@ def _thickness(g) -> float:
 
 def _centre(g) -> np.ndarray:
     return np.asarray(shapely.get_coordinates(shapely.centroid(g)))[0]
-
-
-def _near_pairs(arr: np.ndarray, which: np.ndarray, reach: float) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs (k, j): ``arr[which[k]]``'s bounding box, widened by ``reach``, meets
-    ``arr[j]``'s — every pair closer than ``reach``, and some farther ones. Callers measure
-    the distance of each pair anyway; an STRtree ``dwithin`` query would measure it
-    twice (its exact test costs as much as the distance itself)."""
-    lo = shapely.bounds(arr[which])
-    boxes = shapely.box(lo[:, 0] - reach, lo[:, 1] - reach, lo[:, 2] + reach, lo[:, 3] + reach)
-    return shapely.STRtree(arr).query(boxes)
 
 
 def _pair_distances(ga: np.ndarray, gb: np.ndarray, memo: dict | None) -> np.ndarray:
@@ -236,7 +226,7 @@ def _check(geoms, alive, region, edges, min_gap, margin, tol, inner=None, exact_
         return _kept(shapes, ("hull", id(g)), (g,), lambda: g.convex_hull)
 
     if len(idx) >= 2:
-        a, b = _near_pairs(arr, np.arange(len(arr)), min_gap)
+        a, b = near_pairs(arr, np.arange(len(arr)), min_gap)
         keep = a < b
         a, b = a[keep], b[keep]
         if rough is not None:

@@ -36,11 +36,10 @@ from numba import njit
 
 from ..geometry.curves import as_cubics, cubic_points, decimals_for
 from ..geometry.edges import Edges
-from ..geometry.pairwise import distances
+from ..geometry.pairwise import distances, near_pairs
 from ..render.placed import FIT_SHARE, written
 from ..types import ArtPath, CurveSubpath, PlacedArt
 from ..threads import thread_map
-from .checks import _near_pairs
 from .repairs import rest_distortion
 
 __all__ = ["DentResult", "dent"]
@@ -515,7 +514,7 @@ def _pair_bumps(geoms: np.ndarray, exact: np.ndarray, target: float, frozen: np.
     more, for rounding), each measured once: a ``dwithin`` query would measure every
     candidate, and the pairs it keeps would be measured again. Only the pairs measured
     closer than ``target`` count, in the order of their indices."""
-    q, b = _near_pairs(geoms, which, target * (1.0 + 1e-9) + 1e-12)
+    q, b = near_pairs(geoms, which, target * (1.0 + 1e-9) + 1e-12)
     a = which[q]
     keep = a != b
     if not keep.any():

@@ -33,10 +33,11 @@ import shapely
 from ..art_area import _polygonal
 from ..geometry.dilate import covering, room_left
 from ..geometry.edges import Edges
+from ..geometry.pairwise import near_pairs
 from ..render.placed import refined, similarity_matrix
 from ..threads import thread_map
 from ..types import PlacedArt
-from .checks import Rough, Verification, _check, _near_pairs, _nearest, _pair_distances, _shrink_centre, distortion
+from .checks import Rough, Verification, _check, _nearest, _pair_distances, _shrink_centre, distortion
 
 __all__ = ["scaled_art", "similar_copy", "straighten", "verify_and_repair"]
 
@@ -251,7 +252,7 @@ def _inflate(geoms, base, alive, scale, shift, centre, region, edges, target, ma
         # targets cannot limit it
         slack = np.full(len(idx), np.inf)
         slack[q] = np.minimum(edge - margin, 1.5 * target)
-        a, b = _near_pairs(arr, q, 4.0 * target)
+        a, b = near_pairs(arr, q, 4.0 * target)
         a = q[a]
         keep = a != b
         pairs = np.unique(np.sort(np.stack([a[keep], b[keep]], axis=1), axis=1), axis=0)
