@@ -78,8 +78,14 @@ def test_checkpoint_file_round_trip_and_fingerprint(tmp_path):
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_sigint_writes_partial_packing_and_resume_matches(tmp_path):
     exe = [sys.executable, "-m", "repulsionpak.cli"]
+    # the primary phase runs at least 2,500 iterations (about a second), so the signal sent
+    # once the first checkpoint (iteration 100) is on disk lands in it however busy the
+    # machine: by default this scene's primaries converge ~0.1 s after that checkpoint, and
+    # a signal that came later landed in the pocket phase (more copies) or the verification
+    config = tmp_path / "long.toml"
+    config.write_text("[sim]\nmin_iterations = 2500\n")
     base = ["pack", str(CONTAINER), *map(str, ELEMENTS), "--gap", "12", "--count", "5", "--seed", "5",
-            "--max-iterations", "3000", "-q"]
+            "--max-iterations", "3000", "--config", str(config), "-q"]
     ck, part, resumed, full = (tmp_path / n for n in ("ck.npz", "part.svg", "resumed.svg", "full.svg"))
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
     proc = subprocess.Popen([*exe, *base, "-o", str(part), "--checkpoint", str(ck), "--checkpoint-every", "100"],
@@ -94,6 +100,7 @@ def test_sigint_writes_partial_packing_and_resume_matches(tmp_path):
     assert "Traceback" not in err
     _, placed, info = read_packing_svg(part)
     assert info["partial"] is True and len(placed) == 5
+    assert all(p.kind == "primary" for p in placed)  # interrupted in the primary phase
     r = subprocess.run([*exe, *base, "-o", str(resumed), "--resume", str(ck)], capture_output=True, text=True,
                        env=env, timeout=300)
     assert r.returncode == 0, r.stderr

@@ -400,6 +400,31 @@ def test_copies_spread_along_a_band_they_fill_across_gather_to_the_gap():
         assert region.exterior.distance(g1) >= 5.0 - 1e-6
 
 
+def test_gathering_never_moves_past_a_neighbour_it_did_not_measure():
+    """The gathering measures only the neighbours within a few gaps (by bounding box) and
+    moves an element by its nearest one's distance less the gap. A square alone in the
+    middle of a square frame is 73 from the frame, nearer to nothing measured; another
+    square 48 above it lies beyond the measured reach: moved the full 63 up, the first
+    went through the second and both were dropped (found on a partial packing, stopped
+    at iteration 239, where two of five primaries were lost so)."""
+    gap = 10.0
+    region = shapely.box(-200, -200, 200, 200)
+    outer = np.array([[-90, -90], [90, -90], [90, 90], [-90, 90]], dtype=float)
+    inner = np.array([[-80, -80], [-80, 80], [80, 80], [80, -80]], dtype=float)  # the other way round: a hole
+    frame = PlacedArt("frame.svg", "primary", (ArtPath((outer, inner), (True, True), Style()),))
+    placed = [square(-5, -3, side=10), square(-5, 55, side=10), frame]
+    d0 = geoms(placed)
+    assert d0[0].distance(d0[2]) == pytest.approx(73) and d0[0].distance(d0[1]) == pytest.approx(48)
+    out, v = verify_and_repair(placed, region, gap=gap, margin=5.0, min_gap=0.9 * gap, grow_to=gap,
+                               max_scale=1.0, gather=1.1 * gap)
+    assert v.ok and not v.dropped and len(out) == 3
+    g = geoms(out)
+    for i in range(3):
+        for j in range(i + 1, 3):
+            assert g[i].distance(g[j]) >= 0.9 * gap - 1e-6, (i, j)
+    assert g[0].distance(g[1]) <= 1.1 * gap  # and the gathering still closed the gap between them
+
+
 def test_gathering_in_a_curved_band_turns_the_copies_to_slide_along_it():
     """Squares in an annulus, each just inside the edge margin at its inner side's middle
     and its outer corners: a straight move along the band would push an outer corner into

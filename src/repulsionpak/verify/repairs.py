@@ -288,8 +288,10 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, edges, targ
     Moving an element changes its distance to anything by at most the longest way one of
     its points travels, and every other element is at least as far as its nearest, so a
     move whose points travel at most (distance − target) keeps it at least ``target``
-    from every element. A straight move that would come closer than ``margin`` to the
-    edge is tried again turned (about the element's centre, by up to the angle that moves
+    from every element. Only the elements whose bounding boxes come within ``reach`` of
+    its own are measured; the others are at least ``reach`` away, so a move is bounded by
+    (min(distance, reach) − target). A straight move that would come closer than
+    ``margin`` to the edge is tried again turned (about the element's centre, by up to the angle that moves
     its farthest point as far as the step: an element that fills the width of a curved
     band slides along it only so), at half the step so the travel bound holds, and
     halved until the margin is kept. None crosses what is not the container (the segment
@@ -331,7 +333,9 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, edges, targ
                 continue
             p, q = shapely.get_coordinates(line)
             u = (q - p) / max(float(np.hypot(*(q - p))), 1e-300)
-            budget = d - target - tol
+            # what lies beyond ``reach`` was not measured: it is at least that far, and a
+            # nearest neighbour farther than that does not bound the move by itself
+            budget = min(d, reach) - target - tol
             g = moved_copy(i, budget, u, 0.0)
             ok = edges.distance(g) - margin > tol
             step, v, turn = budget, u, 0.0
