@@ -110,6 +110,19 @@ def test_a_stop_ends_the_repair_and_what_still_violates_is_dropped():
     assert w.ok and not w.dropped and len(full) == 4  # without the stop every one is kept
 
 
+def test_of_a_pair_still_too_close_when_the_repair_stops_only_the_smaller_goes():
+    """Stopped before its first round, the repair drops what violates: of two squares 2
+    apart (floor 4.5) only the smaller goes, and the larger, now clear, stays; a square
+    over the edge goes whatever its size; a third square near nothing stays as it is.
+    (Dropping every element with a need lost both of the pair.)"""
+    placed = [square(20, 20, side=20), square(42, 20, side=18), square(20, 70, side=10), square(-5, 40)]
+    with pytest.warns(UserWarning, match="the repair was stopped"):
+        out, v = verify_and_repair(placed, CONTAINER, gap=5, margin=2.5, min_gap=4.5, should_stop=lambda: True)
+    assert v.ok and sorted(i for i, _ in v.dropped) == [1, 3]
+    assert len(out) == 2 and out[0] is placed[0] and out[1] is placed[2]
+    check(out, 5, 2.5, 4.5)
+
+
 def test_a_secondary_too_close_to_a_primary_gives_way_alone():
     """Of a primary and a secondary too close, only the secondary moves or shrinks (a
     pocket filler never costs the element it fills around); two primaries share."""

@@ -37,7 +37,8 @@ from ..geometry.pairwise import near_pairs
 from ..render.placed import refined, similarity_matrix
 from ..threads import thread_map
 from ..types import PlacedArt
-from .checks import Rough, Verification, _check, _nearest, _pair_distances, _shrink_centre, distortion
+from .checks import (Rough, Verification, _check, _edge_distance, _nearest, _pair_distances, _shrink_centre,
+                     distortion)
 
 __all__ = ["scaled_art", "similar_copy", "straighten", "verify_and_repair"]
 
@@ -367,6 +368,42 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, edges, targ
             break
 
 
+def _drop_violators(geoms, alive, need, region, edges, min_gap: float, margin: float, tol: float,
+                    fixed, rank, memo) -> None:
+    """Drop the elements that still violate a promise after the repair (``need > 0``),
+    as few as keep the rest: one outside or nearer the edge than ``margin`` goes; of
+    elements nearer each other than ``min_gap``, the lower ranked (a pocket copy), else
+    the smaller, goes first, and one whose every such neighbour went stays. A pinned
+    element (``fixed``) is never dropped. Updates ``alive`` in place.
+
+    Notes
+    -----
+    Both elements of a pair a little too close carry a need, so dropping every element
+    with one lost both where one was enough (a repair stopped by the user early, or a
+    pair the rounds could not part).
+    """
+    bad = [int(i) for i in np.flatnonzero((need > 0) & alive) if fixed is None or not fixed[i]]
+    if not bad:
+        return
+    idx = np.flatnonzero(alive)
+    arr = np.array([geoms[i] for i in idx], dtype=object)
+    rows = np.searchsorted(idx, bad)
+    a, b = near_pairs(arr, rows, min_gap)
+    a = rows[a]
+    keep = a != b
+    a, b = a[keep], b[keep]
+    d = _pair_distances(arr[a], arr[b], memo)
+    close = d < min_gap - tol
+    partners: dict[int, list[int]] = {}
+    for p, q in zip(idx[a[close]], idx[b[close]]):
+        partners.setdefault(int(p), []).append(int(q))
+    rank = np.ones(len(geoms), int) if rank is None else rank
+    for i in sorted(bad, key=lambda k: (rank[k], geoms[k].area, k)):
+        if (_edge_distance(edges, region, geoms[i]) < margin - tol
+                or any(alive[j] for j in partners.get(i, ()))):
+            alive[i] = False
+
+
 def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float, min_gap: float,
                       min_scale: float = 0.5, rounds: int = 24, repair: bool = True,
                       straightened: list | None = None, grow_to: float = 0.0,
@@ -422,8 +459,9 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     The room the skins' extra width leaves between two arts is the same in container
     units whatever the elements' size, so an element not much wider than the gap needs
     more than ``max_scale`` to close it: hence ``grow_reach``. Whatever is still violated
-    after the rounds is dropped (never a pinned copy), so the promises hold on the
-    returned art even when the rounds are stopped.
+    after the rounds is dropped (never a pinned copy; of a pair too close, the lower
+    ranked or smaller one: :func:`_drop_violators`), so the promises hold on the returned
+    art even when the rounds are stopped.
     """
     region = _polygonal(region)
     edges = Edges(region)  # the container's edge, indexed: distances cost what is near
@@ -578,11 +616,15 @@ def verify_and_repair(placed: list[PlacedArt], region, gap: float, margin: float
     need, rel, push, counts, dmin, emin = _check(geoms, alive, region, edges, min_gap, margin, tol,
                                                  exact_edges=True, fixed=fixed, rank=rank, memo=final,
                                                  rough=rough)
-    if repair:  # anything still violating after the rounds is dropped (never a pinned copy)
-        for i in np.flatnonzero(need > 0):
-            if fixed is None or not fixed[i]:
-                alive[i] = False
-        if (need > 0).any():
+    if repair and (need > 0).any():  # what still violates after the rounds is dropped
+        _drop_violators(geoms, alive, need, region, edges, min_gap, margin, tol, fixed, rank, final)
+        need, rel, push, counts, dmin, emin = _check(geoms, alive, region, edges, min_gap, margin,
+                                                     tol, exact_edges=True, fixed=fixed, rank=rank,
+                                                     memo=final, rough=rough)
+        if (need > 0).any():  # (not expected: every violator dropped, as a last resort)
+            for i in np.flatnonzero(need > 0):
+                if fixed is None or not fixed[i]:
+                    alive[i] = False
             need, rel, push, counts, dmin, emin = _check(geoms, alive, region, edges, min_gap, margin,
                                                          tol, exact_edges=True, fixed=fixed, rank=rank,
                                                          memo=final, rough=rough)
