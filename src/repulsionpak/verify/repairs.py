@@ -292,9 +292,10 @@ def _gather(geoms, base, alive, scale, shift, angle, centre, region, edges, targ
     from every element. Only the elements whose bounding boxes come within ``reach`` of
     its own are measured; the others are at least ``reach`` away, so a move is bounded by
     (min(distance, reach) − target). A straight move that would come closer than
-    ``margin`` to the edge is tried again turned (about the element's centre, by up to the angle that moves
-    its farthest point as far as the step: an element that fills the width of a curved
-    band slides along it only so), at half the step so the travel bound holds, and
+    ``margin`` to the edge is tried again turned (about the element's centre, by up to
+    the angle that moves its farthest point as far as the step: an element that fills the
+    width of a curved band slides along it only so), at half the step so the travel bound
+    holds, and
     halved until the margin is kept. None crosses what is not the container (the segment
     between the two nearest points must lie in ``region``). Elements move one at a time,
     the loneliest first; the rounds repeat while moves help. ``max_turn[i]`` (radians)
@@ -392,12 +393,11 @@ def _drop_violators(geoms, alive, need, region, edges, min_gap: float, margin: f
     a = rows[a]
     keep = a != b
     a, b = a[keep], b[keep]
-    d = _pair_distances(arr[a], arr[b], memo)
+    d = _pair_distances(arr[a], arr[b], memo)  # (the final check's memo: measured there)
     close = d < min_gap - tol
     partners: dict[int, list[int]] = {}
     for p, q in zip(idx[a[close]], idx[b[close]]):
         partners.setdefault(int(p), []).append(int(q))
-    rank = np.ones(len(geoms), int) if rank is None else rank
     for i in sorted(bad, key=lambda k: (rank[k], geoms[k].area, k)):
         if (_edge_distance(edges, region, geoms[i]) < margin - tol
                 or any(alive[j] for j in partners.get(i, ()))):
