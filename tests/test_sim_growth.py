@@ -1,5 +1,5 @@
 """Fast growth while an element has room (``sim.fast_growth``): the rate per element, the
-velocity caps that follow it, and determinism.
+velocity caps that follow it, and determinism; and what growth does to a skin's width.
 
 The kernel cases are built by hand; the run cases use the small square scene of
 ``test_sim.py`` (a 200×200 square, 8 elements, gap 4).
@@ -193,3 +193,32 @@ def test_the_growth_rate_follows_whether_the_pockets_are_filled():
         np.testing.assert_allclose(growth, 1.0 + n * kg * p.sim.dt)
     assert p.sim.growth_rate() == K_GROWTH_FILLED
     assert replace(p.sim, k_growth=0.01).for_run(filled=True).k_growth == 0.01
+
+
+class _SceneFault(Exception):
+    """The scene no longer shows what the test below is about (not the expected failure)."""
+
+
+@pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
+    "limitation (docs/algorithm.md, 'Not done'): a copy's mesh grows as a whole, so its "
+    "skin ends half a gap times its final size over its planned size wide"))
+def test_every_skin_ends_half_a_gap_from_its_art_whatever_size_its_copy_grew_to():
+    """A skin stands for half the gap beside its art, so a copy that grew past its planned
+    size should not keep its neighbours farther off, nor one that stopped short let them
+    closer. Twelve copies of the square scene end between 0.8 and 1.2 of their planned
+    sizes; the median distance from each copy's skin vertices to its mapped art (the
+    simulation's own output: no repair) should be half the gap, ±10 %. Today it follows the
+    size: 0.37 gap on the copy at 0.78 of its size, 0.59 on the one at 1.22."""
+    import shapely
+
+    p = scene_params(count=12)
+    p = replace(p, verify=replace(p.verify, repair=False, dent=0))
+    run = pack(CONTAINER, library(), p)
+    m, st = run.model, run.state
+    size = st.growth / m.max_growth
+    if len(run.placed) != m.n_elements or not (size.min() < 0.85 and size.max() > 1.15):
+        raise _SceneFault(f"copies end at {size.min():.2f}-{size.max():.2f} of their planned sizes")
+    skins = run.skins()
+    width = np.array([np.median(shapely.distance(shapely.points(skins[e]), q.art.boundary))
+                      for e, q in enumerate(run.placed)]) / run.gap
+    assert np.all(np.abs(width - 0.5) <= 0.05), np.round(width, 3)
