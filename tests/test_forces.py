@@ -1264,6 +1264,51 @@ def test_keep_skin_width_pushes_a_squashed_skin_vertex_out_and_keeps_the_centre(
     assert np.array_equal(y, state.x)
 
 
+def test_a_skin_grown_past_its_planned_size_is_narrowed_to_its_built_width(template):
+    """Square 0 placed at half its planned size and grown to twice it: its skin, grown with
+    it, is twice as wide as built; narrowed, each skin vertex stands its built width (at the
+    current growth) from its anchor, which stays where it was, and the springs, triangles
+    and kept widths follow the new rest shape. Square 1, short of its planned size, is left
+    as built; a second call changes nothing; and the mesh widened back (the art's map)
+    is the rest shape as built."""
+    from repulsionpak.sim.skinwidth import as_built, narrow_grown_skins
+
+    model, state = two_square_model(template, (30, 30), (60, 60), shrink=0.5)
+    state.begin(model, 0.1)
+    assert np.allclose(model.max_growth, 2.0)
+    state.growth = np.array([4.0, 1.5])
+    built = (model.x_rest.copy(), model.rest0.copy(), model.tri_rest.copy(), model.anchor_w.copy())
+    assert narrow_grown_skins(model, state) == 1
+    s, n, t = int(model.elem_vstart[0]), int(model.elem_nskin[0]), int(model.elem_vstart[1])
+    skin = np.arange(s, s + n)
+    corners = model.tris[model.anchor_tri[skin]]
+    before = np.einsum("ij,ijk->ik", model.skins_built[3][skin], built[0][corners])
+    after = np.einsum("ij,ijk->ik", model.anchor_bary[skin], model.x_rest[corners])
+    np.testing.assert_allclose(after, before, atol=1e-9)  # the art points stay
+    width = np.hypot(*(model.x_rest[skin] - after).T)
+    width0 = np.hypot(*(built[0][skin] - before).T)
+    k = model.band_scale[skin]
+    assert (k <= 0.5 + 1e-12).all() and np.median(k) == pytest.approx(0.5)  # G / g, less where a corner folds
+    np.testing.assert_allclose(width, k * width0, rtol=1e-9)
+    np.testing.assert_allclose(model.anchor_w[skin], k * built[3][skin])
+    sp = model.springs
+    np.testing.assert_allclose(model.rest0, np.hypot(*(model.x_rest[sp[:, 0]] - model.x_rest[sp[:, 1]]).T))
+    assert (model.tri_rest > 0.2 * built[2]).all()
+    rest1 = slice(t, model.n_vertices)
+    assert np.array_equal(model.x_rest[rest1], built[0][rest1]) and (model.band_scale[rest1] == 1.0).all()
+    # idempotent
+    again = (model.x_rest.copy(), model.rest0.copy(), model.tri_rest.copy(), model.anchor_w.copy())
+    narrow_grown_skins(model, state)
+    for a, b in zip(again, (model.x_rest, model.rest0, model.tri_rest, model.anchor_w)):
+        np.testing.assert_allclose(a, b, atol=1e-12)
+    # a copy at its narrowed rest shape (turned, moved, grown) widens back to its shape as built
+    c, sn = np.cos(0.3), np.sin(0.3)
+    rot = np.array([[c, -sn], [sn, c]]) * 4.0
+    x = model.x_rest[s:t] @ rot.T + np.array([5.0, -2.0])
+    np.testing.assert_allclose(as_built(model, x, 0), built[0][s:t] @ rot.T + np.array([5.0, -2.0]), atol=1e-9)
+    assert as_built(model, x, 1) is x  # not narrowed: as it is
+
+
 def _walk_both_sides(x, seg_a, seg_b, seg_next, seg_prev, s, px, py, max_hops):
     """The walk as first written: every hop tries the next segment, then the previous."""
     def d2(k):

@@ -48,6 +48,24 @@ def test_resume_from_any_checkpoint_equals_uninterrupted_run():
         np.testing.assert_array_equal(again.state.x, full.state.x)
 
 
+def test_resume_while_settling_narrows_the_skins_as_the_uninterrupted_run():
+    """A checkpoint taken after growth stopped holds positions pulled towards skins that
+    :func:`~repulsionpak.sim.skinwidth.narrow_grown_skins` narrowed; the resumed run (its
+    model built again as placed) narrows them again from the saved growth and ends where
+    the uninterrupted run ends."""
+    cont, els = load_container(CONTAINER), load_elements(ELEMENTS)
+    p = params_from_dict({"gap": 12.0, "seed": 5, "placement": {"count": 8}, "secondary": {"auto": False},
+                          "sim": {"settle_iterations": 50}})
+    saved = []
+    full = pack(cont, els, p, on_checkpoint=lambda s: saved.append(s), checkpoint_every=20)
+    assert full.model.band_scale is not None and (full.model.band_scale < 1.0).any()
+    settling = next(s for s in saved if s["primary"]["settle_left"])
+    again = pack(cont, els, p, resume=settling)
+    assert again.iterations == full.iterations
+    np.testing.assert_array_equal(again.state.x, full.state.x)
+    np.testing.assert_array_equal(again.model.band_scale, full.model.band_scale)
+
+
 def test_checkpoint_file_round_trip_and_fingerprint(tmp_path):
     out, ck = tmp_path / "a.svg", tmp_path / "ck.npz"
     args = ["pack", str(CONTAINER), *map(str, ELEMENTS), "--gap", "12", "--count", "5", "--seed", "5",

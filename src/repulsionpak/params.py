@@ -145,6 +145,10 @@ class SimParams:
         0.8, "× rest width", "Each skin vertex is kept at least this share of its rest distance "
         "outside the nearest point of its art (beyond the paper: a squashed skin let arts whose skins "
         "touched stand well under the gap apart; 0 = off).")
+    narrow_skins: bool = _doc(
+        True, "-", "When growth stops, the skin of a copy grown past its planned size is narrowed back "
+        "to the width it was built with, half the gap (beyond the paper: a skin grows with its copy, "
+        "so the copies that grew most kept their neighbours up to 1.5 gaps off).")
     k_overlap: float = _doc(80.0, "paper units", "k_o, strength of the overlap force (Eq. 4).")
     k_boundary: float = _doc(80.0, "paper units", "k_b, strength of the boundary force (Eq. 5).")
     soft: float = _doc(1.0, "paper units²", "ς, soft parameter bounding the repulsion (Eq. 2).")

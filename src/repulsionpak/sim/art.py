@@ -20,6 +20,7 @@ from ..render.placed import placed_copy, rest_copy
 from ..threads import thread_map
 from ..types import PlacedArt
 from .model import Model, SimFrame, State
+from .skinwidth import as_built
 
 
 def element_vertices(model: Model, state: State, e: int) -> np.ndarray:
@@ -65,8 +66,8 @@ def placed_art(templates: Sequence[Template], model: Model, state: State, frame:
     for ti in sorted({int(model.template_index[e]) for e in drawn}):
         map_plan(templates[ti], params.smooth_map, params.samples, params.smoothing)
 
-    def one(e: int) -> PlacedArt:
-        verts = element_vertices(model, state, e) * frame.unit
+    def one(e: int) -> PlacedArt:  # (the art is bound to the mesh as built: a narrowed skin widened back)
+        verts = as_built(model, element_vertices(model, state, e), e) * frame.unit
         return placed_copy(templates[model.template_index[e]], verts, model.kind[e], gap, params)
     return thread_map(one, drawn)
 

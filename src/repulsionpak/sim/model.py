@@ -138,6 +138,13 @@ class Model:
     align_weight: np.ndarray | None = None  # (M,) how strongly each element turns (sim/alignment.py)
     spring_ptr: np.ndarray | None = None  # (M+1,) int64
     tri_ptr: np.ndarray | None = None  # (M+1,) int64
+    # skins narrowed when growth stops (sim/skinwidth.narrow_grown_skins; None: none yet):
+    # per skin vertex its band width over the width built, per inner vertex in a band the
+    # skin vertex of that band (-1: none) and its share of its width; the rest arrays as built
+    band_scale: np.ndarray | None = None  # (N,)
+    band_near: np.ndarray | None = None  # (N,) int64
+    band_share: np.ndarray | None = None  # (N,)
+    skins_built: tuple | None = None  # (x_rest, tri_rest, anchor_w, anchor_bary) before narrowing
 
     @property
     def n_vertices(self) -> int:
@@ -575,6 +582,18 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
         model.align_weight[:m0] = base[0].align_weight
     model.spring_ptr = element_ranges(model.spring_elem, M)
     model.tri_ptr = element_ranges(model.tri_elem, M)
+    if base is not None and base[0].band_scale is not None:  # the placed copies' narrowed skins
+        model.band_scale = np.ones(N)
+        model.band_near = np.full(N, -1, np.int64)
+        model.band_share = np.zeros(N)
+        model.band_scale[:n0] = base[0].band_scale
+        model.band_near[:n0] = base[0].band_near
+        model.band_share[:n0] = base[0].band_share
+    if base is not None and base[0].skins_built is not None:  # ... and their rest arrays as built
+        bx, bt, bw, bb = base[0].skins_built
+        t0 = len(base[0].tris)
+        model.skins_built = (np.concatenate([bx, model.x_rest[n0:]]), np.concatenate([bt, model.tri_rest[t0:]]),
+                             np.concatenate([bw, model.anchor_w[n0:]]), np.concatenate([bb, model.anchor_bary[n0:]]))
     n_grow = np.zeros(M, np.int64)
     if base is not None:
         n_grow[:m0] = base[1].n_grow

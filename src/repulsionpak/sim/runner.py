@@ -31,7 +31,7 @@ from .model import Model, State
 from .relocate import Relocator
 from .selfintersect import relax_self_intersections
 from .shape import limit_deformation
-from .skinwidth import SKIN_RELAX, keep_skin_width
+from .skinwidth import SKIN_RELAX, keep_skin_width, narrow_grown_skins
 from .terms import terms_of
 from .threadgov import WINDOW as GOV_WINDOW
 from .threadgov import ThreadGovernor
@@ -115,10 +115,7 @@ class Simulator:
         self._corner_stamp = 0
         self.moving_area = 0.0
         self.relax_order = np.arange(N, dtype=np.int64)
-        # each element's mean edge rest length (before growth): the relaxation's length scale
-        edge_elem = m.spring_elem[m.spring_is_edge]
-        self.edge_rest = (np.bincount(edge_elem, weights=m.rest0[m.spring_is_edge], minlength=m.n_elements)
-                          / np.maximum(np.bincount(edge_elem, minlength=m.n_elements), 1))
+        self.edge_rest = self._edge_rest()
         #: k_g (``sim.k_growth``, None: the filled runs' rate, :meth:`SimParams.growth_rate`)
         self.k_growth = kg = params.growth_rate()
         # each element's velocity cap at the parameters' Δt (scaled with Δt: see ``dt``)
@@ -299,8 +296,24 @@ class Simulator:
         self.relaxed = self._relaxed()
 
     def begin_settle(self) -> None:
-        """Stop growing; the last iterations only resolve overlaps and even out gaps."""
+        """Stop growing; the last iterations only resolve overlaps and even out gaps (and,
+        with ``sim.narrow_skins``, pull in the skins of the copies grown past their planned
+        size: :func:`~repulsionpak.sim.skinwidth.narrow_grown_skins`)."""
         self.state.allow_growth = False
+        self._narrow_skins()
+
+    def _narrow_skins(self) -> None:
+        """Narrow the grown copies' skins (``sim.narrow_skins``) and take the relaxation's
+        length scale from the new rest lengths."""
+        if self.params.narrow_skins and narrow_grown_skins(self.model, self.state):
+            self.edge_rest = self._edge_rest()
+
+    def _edge_rest(self) -> np.ndarray:
+        """Each element's mean edge rest length (before growth): the relaxation's length scale."""
+        m = self.model
+        edge_elem = m.spring_elem[m.spring_is_edge]
+        return (np.bincount(edge_elem, weights=m.rest0[m.spring_is_edge], minlength=m.n_elements)
+                / np.maximum(np.bincount(edge_elem, minlength=m.n_elements), 1))
 
     def threads(self) -> int:
         """numba threads this run starts on (see :meth:`thread_range`)."""
@@ -464,6 +477,8 @@ class Simulator:
         """Continue from :meth:`snapshot_state` output (same model)."""
         self.state.load(saved, self.k_growth * self.params.dt)
         self.dt = self.state.dt  # the velocity caps follow the saved time step
+        if not self.state.allow_growth:  # saved while settling: the skins as they were narrowed
+            self._narrow_skins()
         if self.relocator is not None and "relocate" in saved:
             self.relocator.load(saved["relocate"])
 
