@@ -175,7 +175,7 @@ def narrow_grown_skins(model, state) -> int:
     """Narrow the skin of every moving copy grown past its planned size back to the width
     it was built with at that size (half the gap), in its rest shape: the call that ends
     growth (:meth:`~repulsionpak.sim.runner.Simulator.begin_settle`). Returns the number of
-    copies narrowed.
+    copies whose rest shape it set (narrowed, or back as built).
 
     Parameters
     ----------
@@ -272,7 +272,7 @@ def narrow_grown_skins(model, state) -> int:
         if len(inner):
             m.band_near[s + ns:t] = np.where(share > 0.0, s + near, -1)
             m.band_share[s + ns:t] = share
-        narrowed += int((k < 1.0).any())
+        narrowed += 1
     return narrowed
 
 
