@@ -7,7 +7,7 @@ import shapely
 
 from .triangulate import triangulate_polygon
 
-__all__ = ["triangulate_polygon", "mesh_springs", "barycentric", "bind_points", "apply_binding"]
+__all__ = ["triangulate_polygon", "mesh_springs", "barycentric", "bind_points", "apply_binding", "triangle_areas"]
 
 
 def mesh_springs(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -125,6 +125,14 @@ def _bind_all(points, a, b, c, chunk):
         out_t[s:s + chunk] = t
         out_b[s:s + chunk] = bc[np.arange(len(t)), t]
     return out_t, out_b
+
+
+def triangle_areas(verts: np.ndarray, tris: np.ndarray) -> np.ndarray:
+    """Signed areas of triangles ``tris`` (T, 3) of ``verts`` (N, 2) → (T,): positive for a
+    counter-clockwise triangle."""
+    p = verts[tris]
+    return 0.5 * ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+                  - (p[:, 1, 1] - p[:, 0, 1]) * (p[:, 2, 0] - p[:, 0, 0]))
 
 
 def apply_binding(verts: np.ndarray, tris: np.ndarray, tri_index: np.ndarray, bary: np.ndarray) -> np.ndarray:

@@ -16,6 +16,7 @@ import shapely
 
 from ..geometry.edges import Edges
 from ..geometry.edt import distance_transform
+from ..geometry.mesh import triangle_areas
 from ..placement import Placement, placed_vertices
 from ..preprocess import Template
 from .alignment import align_weights
@@ -539,9 +540,7 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     longest = max(float(np.max(np.linalg.norm(t.verts[t.springs[:t.n_edges, 0]] - t.verts[t.springs[:t.n_edges, 1]], axis=1)))
                   for t in templates) / frame.unit
     tri_cell = min(1.3 * longest, cell_size)
-    tri_pts = x[tris_a]
-    tri_rest = 0.5 * ((tri_pts[:, 1, 0] - tri_pts[:, 0, 0]) * (tri_pts[:, 2, 1] - tri_pts[:, 0, 1])
-                      - (tri_pts[:, 1, 1] - tri_pts[:, 0, 1]) * (tri_pts[:, 2, 0] - tri_pts[:, 0, 0]))
+    tri_rest = triangle_areas(x, tris_a)
     if base is not None:  # frozen elements: their current areas (they never move)
         tri_rest[:len(base[0].tris)] = base[0].tri_rest
     model = Model(

@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit, prange
 
 from .._jit.kernels import parallel_kernel
+from ..geometry.mesh import apply_binding, triangle_areas
 
 #: the share of a violation corrected per step: half, so that a vertex pressed between
 #: its skin constraint and a neighbour's overlap force does not jump back and forth
@@ -157,13 +158,12 @@ NARROW_MIN_AREA = 0.25
 NARROW_ROUNDS = 8
 
 
-def _tri_areas(x: np.ndarray, tris: np.ndarray) -> np.ndarray:
-    p = x[tris]
-    return 0.5 * ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
-                  - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
-
-
 def _barycentric(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Barycentric coordinates of ``p`` (n, 2) in the triangles (a, b, c), by the cross
+    products of :func:`~repulsionpak.geometry.mesh.triangle_areas` rather than
+    :func:`~repulsionpak.geometry.mesh.barycentric`'s dot products: the same coordinates to
+    rounding, but the narrowed anchors are what the packings and their recorded numbers
+    were measured with, to the last bit."""
     v0, v1, v2 = b - a, c - a, p - a
     d = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
     l1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / d
@@ -229,9 +229,9 @@ def narrow_grown_skins(model, state) -> int:
         at = m.anchor_tri[skin]
         if (at < 0).any():
             continue
-        corners = m.tris[at] - s
+        corners = m.tris[at] - s  # (the element's own triangles: local indices)
         rest = x0[s:t]
-        anchor = np.einsum("ij,ijk->ik", anchor_bary[skin], rest[corners])
+        anchor = apply_binding(rest, corners, np.arange(ns), anchor_bary[skin])
         offset = rest[:ns] - anchor
         width = np.hypot(offset[:, 0], offset[:, 1])
         inner = rest[ns:]
@@ -249,7 +249,7 @@ def narrow_grown_skins(model, state) -> int:
             new[:ns] = anchor + k[:, None] * offset
             if len(inner):
                 new[ns:] = inner + ((k[near] - 1.0) * share)[:, None] * offset[near]
-            areas = _tri_areas(new, tris)
+            areas = triangle_areas(new, tris)
             folded = areas <= NARROW_MIN_AREA * tri_rest[t0:t1]
             if not folded.any():
                 break
@@ -290,8 +290,7 @@ def as_built(model, x: np.ndarray, e: int) -> np.ndarray:
     if (k == 1.0).all():
         return x
     skin = np.arange(s, s + ns)
-    corners = m.tris[m.anchor_tri[skin]] - s
-    anchor = np.einsum("ij,ijk->ik", m.anchor_bary[skin], x[corners])
+    anchor = apply_binding(x, m.tris[m.anchor_tri[skin]] - s, np.arange(ns), m.anchor_bary[skin])
     band = x[:ns] - anchor  # each skin vertex's band, as narrowed
     out = x.copy()
     out[:ns] = anchor + band / k[:, None]
