@@ -15,6 +15,8 @@
                                                     #   in a circle: the pocket fill's time and peak memory
     python benchmarks/bench.py copies               # the stages after the simulation, per-copy work on
                                                     #   one thread and on several (300 shipped elements)
+    python benchmarks/bench.py poster-primary [--config T.toml]   # the 1,000-element poster's primary
+                                                    #   simulation alone: iterations, seconds, mesh area
     python benchmarks/bench.py all
 
 Fixed seeds; results are printed as Markdown table rows for docs/benchmarks.md.
@@ -643,12 +645,55 @@ def bench_svg(count: int = 300, runs: int = 3) -> None:
     print(f"| one kernel call per path | {kernel:.3f} |")
 
 
+def bench_poster_primary(config: str | None = None, count: int = 1000) -> None:
+    """The primary simulation of the 1,000-element poster (``runtime.py poster``) alone, in this
+    process: placed and meshed as ``repulsionpak pack`` does, then run to its stop with the
+    pockets' parameters (``SimParams.for_run``). ``config``: a TOML file of parameters, as
+    ``--config`` takes it. Prints a table row: iterations, seconds, the meshes' area
+    fraction at the end, and ms per iteration over the first and the last 500."""
+    import tempfile
+
+    from repulsionpak import examples
+    from repulsionpak._jit import warmup
+    from repulsionpak.inputs import load_inputs
+    from repulsionpak.pack import prepare, primary_model
+    from repulsionpak.params import load_config, params_from_dict
+    from repulsionpak.sim.runner import Simulator
+
+    base = params_from_dict({"seed": 1, "placement": {"count": count}})
+    params = base if config is None else load_config(config, base=base)
+    with tempfile.TemporaryDirectory() as tmp:
+        inp = load_inputs(str(poster_container(Path(tmp))), [str(p) for p in examples.element_files()],
+                          params, None)
+    params = inp.params
+    rng = np.random.default_rng(params.seed)
+    templates, placement, gap = prepare(inp.container, inp.elements, params, rng)
+    model, state, _ = primary_model(inp.container.region, templates, placement, gap, params)
+    sim = Simulator(model, state, params.sim.for_run(True, gap=model.gap), phase="primary")
+    warmup.compile_forward(serial=sim.threads() == 1)
+    stamps: list[tuple[int, float]] = []
+    t0 = time.perf_counter()
+    res = sim.run(on_snapshot=lambda s: stamps.append((s.iteration, time.perf_counter())), every=50)
+    seconds = time.perf_counter() - t0
+
+    def per_iteration(lo: int, hi: int) -> float:
+        got = [(i, t) for i, t in stamps if lo <= i <= hi]
+        return 1000.0 * (got[-1][1] - got[0][1]) / max(got[-1][0] - got[0][0], 1) if len(got) > 1 else float("nan")
+
+    n = res.iterations
+    print("| config | vertices | iterations | seconds | mesh area | ms/iteration, first 500 | last 500 |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+    print(f"| {config or 'defaults'} | {len(state.x):,} | {n:,} | {seconds:.1f} | {res.area_fraction:.4f} | "
+          f"{per_iteration(0, 500):.1f} | {per_iteration(n - 500, n):.1f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "threads", "kernels", "preprocess", "heart", "pockets", "secondary",
                                      "mesh", "firstrun", "freshinstall", "controls", "pockets-many", "copies",
-                                     "svg", "all"])
+                                     "svg", "poster-primary", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
+    ap.add_argument("--config", help="poster-primary: a TOML file of parameters")
     a = ap.parse_args()
     print(f"machine: {machine()}")
     print(f"date: {time.strftime('%Y-%m-%d')}")
@@ -681,6 +726,8 @@ def main() -> None:
         bench_copies()
     if a.what in ("svg", "all"):
         bench_svg()
+    if a.what == "poster-primary":  # (not in "all": runtime.py poster times the whole run)
+        bench_poster_primary(a.config)
 
 
 if __name__ == "__main__":
