@@ -147,6 +147,15 @@ class Model:
     band_share: np.ndarray | None = None  # (N,)
     skins_built: tuple | None = None  # (x_rest, tri_rest, anchor_w, anchor_bary) before narrowing
 
+    def ensure_bands(self) -> None:
+        """Give the narrowed-skin arrays (``band_scale``, ``band_near``, ``band_share``)
+        their as-built values for every vertex (scale 1, no band), where there are none yet."""
+        if self.band_scale is None:
+            n = self.n_vertices
+            self.band_scale = np.ones(n)
+            self.band_near = np.full(n, -1, np.int64)
+            self.band_share = np.zeros(n)
+
     @property
     def n_vertices(self) -> int:
         return len(self.vert_elem)
@@ -582,12 +591,9 @@ def build_model(templates: Sequence[Template], placement: Placement, frame: SimF
     model.spring_ptr = element_ranges(model.spring_elem, M)
     model.tri_ptr = element_ranges(model.tri_elem, M)
     if base is not None and base[0].band_scale is not None:  # the placed copies' narrowed skins
-        model.band_scale = np.ones(N)
-        model.band_near = np.full(N, -1, np.int64)
-        model.band_share = np.zeros(N)
-        model.band_scale[:n0] = base[0].band_scale
-        model.band_near[:n0] = base[0].band_near
-        model.band_share[:n0] = base[0].band_share
+        model.ensure_bands()
+        for name in ("band_scale", "band_near", "band_share"):
+            getattr(model, name)[:n0] = getattr(base[0], name)
     if base is not None and base[0].skins_built is not None:  # ... and their rest arrays as built
         bx, bt, bw, bb = base[0].skins_built
         t0 = len(base[0].tris)

@@ -215,10 +215,7 @@ def narrow_grown_skins(model, state) -> int:
     if m.skins_built is None:
         m.skins_built = (m.x_rest.copy(), m.tri_rest.copy(), m.anchor_w.copy(), m.anchor_bary.copy())
     x0, tri_rest, anchor_w, anchor_bary = m.skins_built
-    if m.band_scale is None:
-        m.band_scale = np.ones(m.n_vertices)
-        m.band_near = np.full(m.n_vertices, -1, np.int64)
-        m.band_share = np.zeros(m.n_vertices)
+    m.ensure_bands()
     narrowed = 0
     for e in np.flatnonzero(state.moving):
         k_e = min(float(m.max_growth[e]) / float(state.growth[e]), 1.0)
