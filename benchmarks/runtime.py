@@ -7,7 +7,7 @@
     python benchmarks/runtime.py neighbour [--runs 2]
         the heart without pockets, a CPU-bound process started one second into the run:
         ms per primary iteration with automatic threads, with one thread and with two
-    python benchmarks/runtime.py poster [--png]
+    python benchmarks/runtime.py poster [--png] [--draft] [--config T.toml]
         the shipped example elements, `--count 1000`, in a 2:3 rectangle: wall seconds, peak memory
         (the packing SVG and its report; ``--png`` also renders the PNG preview, ~3 s more)
 
@@ -149,9 +149,10 @@ def bench_neighbour(runs: int = 2) -> None:
         print(f"| {name} | {ms:.2f} | {ms / one:.2f} | {_median([x[1] for x in v]):.1f} |")
 
 
-def bench_poster(count: int = 1000, png: bool = False) -> None:
+def bench_poster(count: int = 1000, png: bool = False, config: Path | None = None, draft: bool = False) -> None:
     """The shipped examples, ``count`` copies, in a 2:3 rectangle: the packing SVG and the
-    report, and with ``png`` the PNG preview too."""
+    report, and with ``png`` the PNG preview too; ``config``: a TOML file of parameters
+    (``--config``); ``draft``: packed with ``--draft``."""
     from repulsionpak import examples
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -161,6 +162,10 @@ def bench_poster(count: int = 1000, png: bool = False) -> None:
                       "-o", str(out), "--report", str(out.with_suffix(".json")), "--quiet"]
         if png:
             cmd += ["--png", str(out.with_suffix(".png"))]
+        if config is not None:
+            cmd += ["--config", str(config)]
+        if draft:
+            cmd += ["--draft"]
         w, c, m, _ = timed(cmd)
         rep = json.loads(out.with_suffix(".json").read_text())
     print(f"machine: {machine()}")
@@ -221,6 +226,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--count", type=int, default=1000)
     ap.add_argument("--png", action="store_true", help="poster: also render the PNG preview")
+    ap.add_argument("--config", type=Path, help="poster: a TOML file of parameters")
+    ap.add_argument("--draft", action="store_true", help="poster: pack it with --draft")
     a = ap.parse_args()
     if a.what == "cpp":
         if a.cpp_dir is None:
@@ -231,7 +238,7 @@ def main() -> None:
     elif a.what == "loading":
         bench_loading(a.runs)
     else:
-        bench_poster(a.count, a.png)
+        bench_poster(a.count, a.png, a.config, a.draft)
 
 
 if __name__ == "__main__":

@@ -374,3 +374,26 @@ def test_a_ctrl_c_swallowed_by_a_callback_still_interrupts(monkeypatch, request)
         while time.monotonic() < deadline:  # ... but in the main thread soon after
             time.sleep(0.001)
     assert ref() is None
+
+
+def test_a_draft_stops_sooner_and_keeps_every_promise(tmp_path):
+    """``--draft`` ends both growth phases sooner by its looser thresholds (the report lists
+    them) and the verification still keeps every promise; the area is close to the full
+    run's."""
+    args = ["pack", str(examples.container_file("circle")), *map(str, examples.element_files()[:5]),
+            "--gap", "8", "--count", "10", "--seed", "3", "-q"]
+    reps = {}
+    for name, extra in (("full", []), ("draft", ["--draft"])):
+        r = CliRunner().invoke(app, [*args, *extra, "-o", str(tmp_path / f"{name}.svg"),
+                                     "--report", str(tmp_path / f"{name}.json")])
+        assert r.exit_code == 0, r.output
+        reps[name] = json.loads((tmp_path / f"{name}.json").read_text())
+    full, draft = reps["full"], reps["draft"]
+    assert draft["params"]["sim"]["stop_epsilon"] == pytest.approx(4 * full["params"]["sim"]["stop_epsilon"])
+    assert draft["params"]["secondary"]["stop_epsilon"] == pytest.approx(
+        4 * full["params"]["secondary"]["stop_epsilon"])
+    assert full["stopped_by"]["primary"] == draft["stopped_by"]["primary"] == "converged"
+    assert draft["iterations"]["primary"] < 0.85 * full["iterations"]["primary"], (draft["iterations"],
+                                                                                     full["iterations"])
+    assert draft["invariants"]["ok"] and full["invariants"]["ok"]
+    assert abs(draft["area_fraction"] - full["area_fraction"]) < 0.03

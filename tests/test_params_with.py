@@ -29,3 +29,24 @@ def test_nested_names_take_a_double_underscore():
 def test_unknown_names_and_bad_values_are_parameter_errors(kw, message):
     with pytest.raises(ParameterError, match=message):
         Params().with_(**kw)
+
+
+def test_a_draft_loosens_only_the_stopping_thresholds(tmp_path):
+    """``drafted`` multiplies both phases' thresholds, on whatever the config set, and
+    changes nothing else; ``--draft`` applies it after ``--config``."""
+    from repulsionpak.cli.run import resolve_params
+    from repulsionpak.params import DRAFT_FACTOR
+
+    base = Params(gap=5, seed=1).with_(sim__stop_epsilon=1e-5, sim__k_edge=30)
+    d = base.drafted()
+    assert (d.sim.stop_epsilon, d.secondary.stop_epsilon) == pytest.approx(
+        (DRAFT_FACTOR * 1e-5, DRAFT_FACTOR * base.secondary.stop_epsilon))
+    assert d.with_(sim__stop_epsilon=1e-5, secondary__stop_epsilon=base.secondary.stop_epsilon) == base
+    assert base.drafted(1.0) == base
+    for bad in (0, -2.0, float("nan"), "4"):
+        with pytest.raises(ParameterError, match="draft factor must be a positive number"):
+            base.drafted(bad)
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[sim]\nstop_epsilon = 3e-5\n")
+    assert resolve_params(cfg, draft=True).sim.stop_epsilon == pytest.approx(DRAFT_FACTOR * 3e-5)
+    assert resolve_params(cfg).sim.stop_epsilon == pytest.approx(3e-5)

@@ -594,6 +594,10 @@ def _same(a, b) -> bool:
     return type(a) is type(b) and (a == b or a != a)  # NaN stays NaN (refused later)
 
 
+#: how much looser a draft's stopping rule is (:meth:`Params.drafted`, ``--draft``)
+DRAFT_FACTOR = 4.0
+
+
 @dataclass(frozen=True)
 class Params:
     """All parameters of a packing run."""
@@ -794,6 +798,38 @@ class Params:
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+    def drafted(self, factor: float = DRAFT_FACTOR) -> "Params":
+        """These parameters for a draft (``repulsionpak pack --draft``): both growth phases
+        stop at ``factor`` times their stopping threshold (``sim.stop_epsilon``,
+        ``secondary.stop_epsilon``); nothing else changes.
+
+        Parameters
+        ----------
+        factor : float
+            How much looser the stopping rule is (> 0; 1 gives the same parameters).
+
+        Returns
+        -------
+        Params
+            The new parameters, validated. The report and the SVG's metadata list them, so a
+            draft is recognisable by its thresholds.
+
+        Notes
+        -----
+        Most of a large packing's time is its primaries' last creep, where the jam gains a
+        few thousandths of the area over thousands of iterations, and the pocket copies
+        take part of what it leaves. At 4x, the 1,000-element poster of
+        ``benchmarks/runtime.py poster`` stops its primaries after 1,160 iterations instead
+        of 2,534 at 0.010 less art area, and the main suite's scenes lose 0.0045 on average
+        (their primaries alone 0.0075; docs/benchmarks.md, "A draft").
+        """
+        if not (isinstance(factor, (int, float)) and math.isfinite(factor) and factor > 0):
+            raise ParameterError(f"the draft factor must be a positive number, got {factor!r}")
+        return dataclasses.replace(
+            self, sim=dataclasses.replace(self.sim, stop_epsilon=self.sim.stop_epsilon * factor),
+            secondary=dataclasses.replace(self.secondary,
+                                          stop_epsilon=self.secondary.stop_epsilon * factor)).validate()
 
 
 #: Largest number of primary elements accepted (memory and time grow with it).

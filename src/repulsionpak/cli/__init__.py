@@ -73,6 +73,10 @@ CountOpt = Annotated[Optional[int], typer.Option(help="Number of primary element
 MaxIterationsOpt = Annotated[Optional[int], typer.Option(help="Upper bound on the growing iterations of each phase; the settling ones (sim.settle_iterations, default 100) follow.")]
 QuietOpt = Annotated[bool, typer.Option("-q", "--quiet", help="No progress display or summary.")]
 MarginOpt = Annotated[Optional[float], typer.Option(help="Smallest distance from any art to the container's edge (default: gap/2).")]
+DraftOpt = Annotated[bool, typer.Option(
+    "--draft", help="A quicker, slightly looser packing to try a composition: both growth phases stop "
+    "at 4x their convergence threshold (a 1,000-element poster in about half the time, ~1 % less "
+    "art area; every promise still checked).")]
 RotationOpt = Annotated[Optional[str], typer.Option(help="Default rotation of the elements: free, fixed[:ANGLE], limited:DEG or upright[:DEG] (see docs/controls.md).")]
 RigidOpt = Annotated[bool, typer.Option("--rigid", help="Elements never deform (rigid bodies).")]
 StiffnessOpt = Annotated[Optional[float], typer.Option(help="Multiplier of the spring constants of the elements.")]
@@ -110,6 +114,7 @@ def pack(
     seed: Annotated[Optional[int], typer.Option(help="Random seed; the same seed gives a byte-identical result.")] = None,
     margin: MarginOpt = None,
     no_pocket_fill: NoPocketFillOpt = False,
+    draft: DraftOpt = False,
     fill_holes: Annotated[bool, typer.Option(
         "--fill-holes", help="Also put pocket copies in the holes of elements (a ring's middle, a letter's "
         "counter, the inside of a logo); off by default.")] = False,
@@ -155,7 +160,7 @@ def pack(
                        movie=movie, movie_every=movie_every, movie_size=movie_size,
                        controls=cli_controls(rotation, rigid, stiffness),
                        live={"port": port, "open_browser": not no_browser, "paused": paused} if live else None,
-                       container_paint=container_paint, flow=flow)
+                       container_paint=container_paint, flow=flow, draft=draft)
         if not quiet:
             typer.echo(_summary(rep, output), err=True)
             if "movie" in rep:
@@ -249,6 +254,7 @@ def batch(
     max_iterations: MaxIterationsOpt = None,
     margin: MarginOpt = None,
     no_pocket_fill: NoPocketFillOpt = False,
+    draft: DraftOpt = False,
     config: ConfigOpt = None,
     rotation: RotationOpt = None,
     rigid: RigidOpt = False,
@@ -266,7 +272,7 @@ def batch(
 
     with _errors():
         base = resolve_params(config, gap, None, count, max_iterations, margin, not no_pocket_fill,
-                              container_paint)
+                              container_paint, draft)
         with _BatchProgress(not quiet) as prog, _sigterm_as_interrupt():
             summary = run_batch(container, elements, output, seeds, set_ or [], base, secondary or [],
                                 workers=workers, scheduler=scheduler, on_start=prog.start, on_result=prog,

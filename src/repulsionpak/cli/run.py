@@ -63,11 +63,12 @@ def _check_outputs(outputs: list[Path | None], inputs: list[Path]) -> None:
 
 def resolve_params(config: Path | None = None, gap: float | None = None, seed: int | None = None,
                    count: int | None = None, max_iterations: int | None = None, margin: float | None = None,
-                   pocket_fill: bool = True, container_paint: str | None = None):
+                   pocket_fill: bool = True, container_paint: str | None = None, draft: bool = False):
     """:class:`Params` from ``--config`` with the options ``--gap``, ``--seed``, ``--count``,
-    ``--max-iterations``, ``--margin``, ``--no-pocket-fill`` and ``--container-paint`` on
-    top, validated; errors name the option. The seed and the gap stay None when neither the
-    config nor the options give them."""
+    ``--max-iterations``, ``--margin``, ``--no-pocket-fill``, ``--container-paint`` and
+    ``--draft`` (:meth:`Params.drafted`, on the config's thresholds) on top, validated;
+    errors name the option. The seed and the gap stay None when neither the config nor the
+    options give them."""
     from ..params import Params, load_config
     from ..render.container_paint import CONTAINER_PAINTS
 
@@ -100,6 +101,8 @@ def resolve_params(config: Path | None = None, gap: float | None = None, seed: i
         params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
     if max_iterations is not None:
         params = dataclasses.replace(params, sim=dataclasses.replace(params.sim, max_iterations=max_iterations))
+    if draft:
+        params = params.drafted()
     return params.validate()
 
 
@@ -131,7 +134,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
              pdf: Path | None = None,
              movie: Path | None = None, movie_every: int | None = None, movie_size: int = 600,
              controls=None, live: dict | None = None, container_paint: str | None = None,
-             flow: Path | None = None) -> dict:
+             flow: Path | None = None, draft: bool = False) -> dict:
     """Everything ``repulsionpak pack`` does; returns the report dict (without a ``report``
     file, its distortion entries and ``scp_ratio_primary`` are None: the fit is measured
     only to be written, :meth:`~repulsionpak.Packing.report`). An ``output`` ending
@@ -142,7 +145,8 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
     serves the run in the browser and writes the outputs only at Ctrl-C (see
     :mod:`repulsionpak.live`). ``container_paint`` (``outline``, ``as-drawn``, ``none``;
     None: the config's, else ``outline``) is how every output draws the container. ``flow``:
-    a guide SVG the elements follow (docs/flow.md)."""
+    a guide SVG the elements follow (docs/flow.md). ``draft``: stop the growth sooner
+    (:meth:`~repulsionpak.params.Params.drafted`)."""
     from ..pack import pack
 
     t_start = time.perf_counter()
@@ -171,7 +175,7 @@ def run_pack(container: Path, elements: list[Path], output: Path, secondary: lis
         resumed = load_checkpoint(resume)
         if seed is None:  # the seed of the interrupted run
             seed = int(next(iter(resumed.values()))["seed"])
-    params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill, container_paint)
+    params = resolve_params(config, gap, seed, count, max_iterations, margin, pocket_fill, container_paint, draft)
     if params.seed is None:
         params = dataclasses.replace(params, seed=secrets.randbelow(2**31))
     if fill_holes and pocket_fill:  # --fill-holes: copies go into the holes of the art too
