@@ -196,16 +196,18 @@ def test_text_and_a_secondary_layer(tmp_path, capsys):
     assert layer.get("data-rp-secondary-layer") == "Layer 2"
 
 
-def test_same_packing_as_the_command_line(tmp_path, capsys):
+@pytest.mark.parametrize("draft", [False, True])
+def test_same_packing_as_the_command_line(tmp_path, capsys, draft):
     """The objects cut out as standalone files and packed by ``repulsionpak pack`` with the
-    same gap, count and seed give the copies the effect puts in the layer."""
+    same gap, count and seed (and ``--draft`` for the dialog's Draft) give the copies the
+    effect puts in the layer."""
     from typer.testing import CliRunner
 
     from repulsionpak.cli import app
     from repulsionpak.inkscape.standalone import standalone_svg
 
     status, doc, _ = run_effect(["--id=oval", "--id=square", "--id=star", "--gap=2", "--count=4", "--seed=5",
-                                 "--pocket_fill=false"], SCALED, capsys)
+                                 "--pocket_fill=false", f"--draft={str(draft).lower()}"], SCALED, capsys)
     assert status == 0
     svg = inkex.load_svg(str(SCALED)).getroot()
     files = {}
@@ -214,11 +216,19 @@ def test_same_packing_as_the_command_line(tmp_path, capsys):
         files[name].write_bytes(standalone_svg(svg, svg.getElementById(name)))
     out = tmp_path / "cli.svg"
     res = CliRunner().invoke(app, ["pack", str(files["oval"]), str(files["square"]), str(files["star"]), "-o",
-                                   str(out), "--gap", "8", "--count", "4", "--seed", "5", "--no-pocket-fill", "-q"])
+                                   str(out), "--gap", "8", "--count", "4", "--seed", "5", "--no-pocket-fill", "-q",
+                                   "--report", str(tmp_path / "cli.json"), *(["--draft"] if draft else [])])
     assert res.exit_code == 0, res.output
     cli = [g for g in etree.parse(str(out)).getroot().iter() if "element" in (g.get("class") or "").split()]
     (layer,) = packing_layers(etree.fromstring(doc))
+    assert layer.get("data-rp-draft") == str(draft).lower()
     assert layer_geometry(layer) == [el.get("d") for g in cli for el in g.iter() if el.get("d")]
+    import json
+
+    from repulsionpak.params import DRAFT_FACTOR, SimParams
+
+    eps = json.loads((tmp_path / "cli.json").read_text())["params"]["sim"]["stop_epsilon"]
+    assert eps == pytest.approx(SimParams().stop_epsilon * (DRAFT_FACTOR if draft else 1.0))
 
 
 def test_controls_reach_the_library(capsys):

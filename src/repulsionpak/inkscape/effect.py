@@ -53,6 +53,8 @@ class PackIntoShape(inkex.EffectExtension):
         pars.add_argument("--stiffness", type=float, default=1.0, help="spring stiffness multiplier")
         pars.add_argument("--pocket_fill", type=_bool, default=True,
                           help="fill the pockets with small copies (or the secondary layer's objects)")
+        pars.add_argument("--draft", type=_bool, default=False,
+                          help="a quicker, slightly looser packing (repulsionpak pack --draft)")
         pars.add_argument("--secondary_layer", default="", help="label of a layer of pocket elements")
         pars.add_argument("--container_paint", default="none", help="none, outline or as-drawn")
 
@@ -144,7 +146,7 @@ class PackIntoShape(inkex.EffectExtension):
                 "count": str(o.count) if o.count and o.count > 0 else "auto",
                 "seed": str(seed), "rotation": str(o.rotation), "max-rotation": f"{o.max_rotation:.10g}",
                 "rigid": "true" if o.rigid else "false", "stiffness": f"{o.stiffness:.10g}",
-                "pocket-fill": "true" if o.pocket_fill else "false",
+                "pocket-fill": "true" if o.pocket_fill else "false", "draft": "true" if o.draft else "false",
                 "secondary-layer": (o.secondary_layer or "").strip(), "container-paint": str(o.container_paint)}
 
     def _request(self, s: dict) -> library.Request:
@@ -174,7 +176,8 @@ class PackIntoShape(inkex.EffectExtension):
             raise AbortExtension(f"repulsionpak: the stiffness must be > 0, got {stiffness:g}")
         return library.Request(seed=seed, gap=gap, count=count, rotation=rotation, max_rotation=max_rotation,
                                rigid=s.get("rigid") == "true", stiffness=stiffness,
-                               pocket_fill=s.get("pocket-fill", "true") == "true", container_paint=paint)
+                               pocket_fill=s.get("pocket-fill", "true") == "true", container_paint=paint,
+                               draft=s.get("draft", "false") == "true")
 
     def _uu_per_unit(self, unit: str | None = None) -> float:
         """User units of the root per document unit (``unit``; default the document's)."""

@@ -26,7 +26,8 @@ class Request:
     rotation: "free" | "fixed" | "limited" | "upright"; max_rotation: degrees either
     side, when limited or upright. rigid, stiffness: the element
     controls. pocket_fill: False leaves the pockets empty (``--no-pocket-fill``).
-    container_paint: "outline" | "as-drawn" | "none".
+    container_paint: "outline" | "as-drawn" | "none". draft: a quicker, slightly looser
+    packing (``--draft``).
     """
 
     seed: int
@@ -38,6 +39,7 @@ class Request:
     stiffness: float = 1.0
     pocket_fill: bool = True
     container_paint: str = "none"
+    draft: bool = False
 
 
 class PackError(Exception):
@@ -65,7 +67,8 @@ def _controls(req: Request):
 
 def _params(req: Request):
     """:class:`repulsionpak.Params` of ``req``, as ``repulsionpak pack`` builds them from
-    its options (``--gap``, ``--seed``, ``--count``, ``--no-pocket-fill``, ``--container-paint``)."""
+    its options (``--gap``, ``--seed``, ``--count``, ``--no-pocket-fill``, ``--container-paint``,
+    ``--draft``)."""
     from repulsionpak import Params  # noqa: PLC0415
 
     p = Params()
@@ -78,7 +81,7 @@ def _params(req: Request):
     if not req.pocket_fill:
         p = rep(p, secondary=rep(p.secondary, auto=False, fill_holes=False, fill_leftover=False))
     p = rep(p, output=rep(p.output, container_paint=req.container_paint))
-    return p.validate()
+    return p.drafted() if req.draft else p.validate()
 
 
 def _file_name(key: str) -> str:
