@@ -124,9 +124,12 @@ def test_segment_triangles_are_those_at_either_end_once(jammed):
 def _reference_update(x, active, seg_a, seg_b, seg_next, seg_prev, tris, vtri_ptr, vtri, tri_ptr, near2, far2,
                       inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
     """The cheap contact update as first written: the triangles at each end of the
-    closest segment through the vertex → triangle lists (the walk itself is checked
-    against one trying both sides every hop in test_forces)."""
+    closest segment through the vertex → triangle lists, and a vertex that was inside
+    and is not there tested against every triangle of its nearest neighbour (the walk
+    itself is checked against one trying both sides every hop in test_forces). Returns
+    how many vertices took that last test and how many it found inside."""
     ring = ring_table(seg_a, seg_b, seg_next, seg_prev)
+    deep = deep_hits = 0
     for i in active:
         px, py = x[i]
         was_inside = inside[i]
@@ -146,28 +149,37 @@ def _reference_update(x, active, seg_a, seg_b, seg_next, seg_prev, tris, vtri_pt
         if was_inside and not hit and nb_count[i] > 0:
             f = nb_elem[i, int(np.argmin(nb_d2[i, :nb_count[i]]))]
             hit = bool(_inside_all((px, py), x[tris[tri_ptr[f]:tri_ptr[f + 1]]]).any())
+            deep += 1
+            deep_hits += hit
         inside[i] = hit
+    return deep, deep_hits
 
 
-def test_contact_update_gives_the_arrays_of_the_first_version(jammed):
+@pytest.mark.parametrize("noise", [0.05, 0.4])
+def test_contact_update_gives_the_arrays_of_the_first_version(jammed, noise):
     """From a full query on a jammed state, a few steps' motion later: the same contact
-    arrays, bit for bit, as the update through the separate ring and triangle lists."""
+    arrays, bit for bit, as the update through the separate ring and triangle lists, whose
+    test of a vertex that left the triangles at its entry against every triangle of the
+    neighbour the update makes on the neighbour's skin ring (unfolded meshes: the same).
+    ``noise``: the motion, × gap (at 0.4 some vertices are found deeper in a neighbour)."""
     sim, model, state = jammed
     sim.update_contacts(True)
     rng = np.random.default_rng(2)
-    x = state.x + rng.normal(0.0, 0.05 * model.gap, state.x.shape)
+    x = state.x + rng.normal(0.0, noise * model.gap, state.x.shape)
     names = ["inside", "nb_count", "nb_elem", "nb_d2", "nb_q", "nb_seg"]
     ref = [getattr(state, n).copy() for n in names]
     s = model.skin
-    _reference_update(x, state.active_skin, s.seg_a, s.seg_b, s.seg_next, s.seg_prev, model.tris, model.vtri_ptr,
-                      model.vtri, model.tri_ptr, sim.near2, np.inf, *ref)
+    deep, deep_hits = _reference_update(x, state.active_skin, s.seg_a, s.seg_b, s.seg_next, s.seg_prev,
+                                        model.tris, model.vtri_ptr, model.vtri, model.tri_ptr, sim.near2, np.inf,
+                                        *ref)
     topo = model.contact
     out = [getattr(state, n).copy() for n in names]
-    contact_update(x, state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri, model.tris, model.tri_ptr,
-                   sim.near2, np.inf, *out)
+    contact_update(x, state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri, model.elem_vstart,
+                   model.elem_nskin, sim.near2, np.inf, *out)
     for name, a, b in zip(names, ref, out):
         np.testing.assert_array_equal(a, b, err_msg=name)
     assert ref[0][state.active_skin].any()
+    assert deep > 0 and (deep_hits > 0 or noise < 0.1)  # the neighbour-wide test was taken, and found some
 
 
 def _reference_relax(x, elem_vstart, elem_nskin, moving, edge_rest, growth, vnbr_ptr, vnbr, passes, fraction,

@@ -863,7 +863,7 @@ def test_contact_update_tracks_the_full_query(template):
     x2 = x + rng.normal(scale=0.05, size=x.shape)
     topo = model.contact
     contact_update(x2, sim.state.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri,
-                   model.tris, model.tri_ptr, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
+                   model.elem_vstart, model.elem_nskin, 4.0, np.inf, inside, cnt, elem, d2, q, seg)
     inside_f, cnt_f, elem_f, d2_f, q_f, _ = full(x2)
     skin = sim.state.active_skin
     np.testing.assert_array_equal(inside[skin], inside_f[skin])

@@ -58,5 +58,5 @@ def follow_contacts(model: Model, state: State, near2: float, far2: float) -> No
         Squared distance beyond which a neighbour keeps its point of the last full query.
     """
     st, topo = state, model.contact
-    contact_update(st.x, st.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri, model.tris, model.tri_ptr,
-                   near2, far2, st.inside, st.nb_count, st.nb_elem, st.nb_d2, st.nb_q, st.nb_seg)
+    contact_update(st.x, st.active_skin, topo.ring, topo.seg_tri_ptr, topo.seg_tri, model.elem_vstart,
+                   model.elem_nskin, near2, far2, st.inside, st.nb_count, st.nb_elem, st.nb_d2, st.nb_q, st.nb_seg)

@@ -30,12 +30,20 @@ def _inside_triangle(px, py, ax, ay, bx, by, cx, cy):
 
 
 @njit(cache=True, inline="always")
-def _in_mesh_triangle(x, tris, t, px, py):
-    """Whether (px, py) lies in triangle ``t`` of the meshes (vertex positions ``x``)."""
-    a = tris[t, 0]
-    b = tris[t, 1]
-    c = tris[t, 2]
-    return _inside_triangle(px, py, x[a, 0], x[a, 1], x[b, 0], x[b, 1], x[c, 0], x[c, 1])
+def _inside_skin(x, s0, n, px, py):
+    """Whether (px, py) lies inside the closed skin ring of vertices ``s0`` .. ``s0 + n - 1``
+    (crossing number: a ray towards +x crosses the ring an odd number of times)."""
+    c = False
+    ax = x[s0 + n - 1, 0]
+    ay = x[s0 + n - 1, 1]
+    for k in range(n):
+        bx = x[s0 + k, 0]
+        by = x[s0 + k, 1]
+        if (ay > py) != (by > py) and px < ax + (py - ay) * (bx - ax) / (by - ay):
+            c = not c
+        ax = bx
+        ay = by
+    return c
 
 
 @njit(cache=True, inline="always")
@@ -260,7 +268,7 @@ def contact_query(x, active, vert_elem,
 
 
 @parallel_kernel
-def contact_update(x, active, ring, seg_tri_ptr, seg_tri, tris, tri_ptr,
+def contact_update(x, active, ring, seg_tri_ptr, seg_tri, elem_vstart, elem_nskin,
                    near2, far2, inside, nb_count, nb_elem, nb_d2, nb_q, nb_seg):
     """Cheap refresh of :func:`contact_query`'s results between full queries.
 
@@ -275,9 +283,9 @@ def contact_update(x, active, ring, seg_tri_ptr, seg_tri, tris, tri_ptr,
     vertices: :func:`segment_triangles`): between full queries a vertex moves far less
     than a triangle, so it can only enter a mesh there. A vertex that was inside and is
     not in those triangles may lie deeper (a thin part's triangles span its width): it is
-    tested against every triangle of its nearest neighbour (``tri_ptr``: each element's
-    range of ``tris``), so that it does not count as out, and its way out,
-    :func:`contact_query`'s entry side, is not lost.
+    tested against its nearest neighbour's whole skin ring (``elem_vstart``,
+    ``elem_nskin``: :func:`_inside_skin`), so that it does not count as out, and its way
+    out, :func:`contact_query`'s entry side, is not lost.
 
     Notes
     -----
@@ -285,6 +293,14 @@ def contact_update(x, active, ring, seg_tri_ptr, seg_tri, tris, tri_ptr,
     the positions directly: through the vertex → triangles → corners chain of loads (and
     with the triangle on the segment, at both ends, tested twice) the call took about a
     third longer on a jammed 1,000-element scene.
+
+    A mesh's triangles tile the inside of its skin ring, so the deep test reads the ring
+    (its skin vertices, consecutive in ``x``) instead of every triangle: late in the
+    1,000-element poster 3,895 vertices a step take it, 678 of them still inside, and the
+    ring gave the same answer for every one at ~40 % fewer loads (the update 10.4 → 9.2 ms
+    on two threads, 24.5 → 20.6 ms on one). Where a mesh folds over itself the two differ
+    (a point under the fold is inside two triangles and, by the crossing number, outside
+    the ring); the full query every ``requery_every`` steps tests the triangles.
     """
     for k in prange(active.shape[0]):
         i = active[k]
@@ -311,10 +327,7 @@ def contact_update(x, active, ring, seg_tri_ptr, seg_tri, tris, tri_ptr,
                     break
         if was_inside and not hit and nb_count[i] > 0:
             f = nb_elem[i, _nearest_slot(nb_count, nb_d2, i)]
-            for t in range(tri_ptr[f], tri_ptr[f + 1]):
-                if _in_mesh_triangle(x, tris, t, px, py):
-                    hit = True
-                    break
+            hit = _inside_skin(x, elem_vstart[f], elem_nskin[f], px, py)
         inside[i] = hit
 
 
