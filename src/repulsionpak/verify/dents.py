@@ -360,11 +360,15 @@ def _as_written(a: ArtPath, curves: list[tuple], tol: float) -> ArtPath:
     :func:`refined` rounds them, with each curve made twice (bent, then rounded), that
     costs about half as much again as the bends themselves on a 1,000-element poster.
     :func:`~repulsionpak.render.placed.written` does the rest, as for :func:`refined`."""
-    bent = ArtPath(a.subpaths, a.closed, a.style, source=dataclasses.replace(
+    if tol > 0:
+        # ``written`` reads only the style and the source of the path it is given, whose
+        # curves it replaces: ``a`` serves as well as the path with the bent curves, which
+        # is made only when it is returned (no curve flattens to two points)
+        out = written(a, tuple(CurveSubpath(order, rounded, closed) for order, _, rounded, closed in curves), tol)
+        if out is not a:
+            return out
+    return ArtPath(a.subpaths, a.closed, a.style, source=dataclasses.replace(
         a.source, curves=tuple(CurveSubpath(order, ctrl, closed) for order, ctrl, _, closed in curves)))
-    if not tol > 0:
-        return bent
-    return written(bent, tuple(CurveSubpath(order, rounded, closed) for order, _, rounded, closed in curves), tol)
 
 
 #: a path farther than this many ρ from every bump is left as it is: the bumps move it by
