@@ -32,6 +32,7 @@ from .geometry.robust import overlay
 from .geometry.robust import union_all as robust_union_all
 from .params import RenderParams
 from .render.placed import curve_tolerance, refined
+from .threads import thread_map
 from .types import ArtPath, Element, PlacedArt
 
 __all__ = ["fill_holes", "fill_pockets", "HoleLibrary"]
@@ -355,7 +356,8 @@ def fill_pockets(placed: list[PlacedArt], library: HoleLibrary, region, gap: flo
     keep = 1.005 * gap
     eps = 0.01 * gap
     reach = covering(keep + eps)  # 4-segment buffers that cover the true dilation
-    geoms = [shapely.simplify(p.art if into_holes else _shells(p.art), eps) for p in placed]
+    # (one GEOS simplification per copy: on threads, the same outlines)
+    geoms = thread_map(lambda p: shapely.simplify(p.art if into_holes else _shells(p.art), eps), placed)
     free = room_left(shapely.buffer(region, -(1.005 * margin)), geoms, reach)
     if free.is_empty:
         return []
