@@ -297,8 +297,8 @@ def contact_update(x, active, ring, seg_tri_ptr, seg_tri, elem_vstart, elem_nski
     A mesh's triangles tile the inside of its skin ring, so the deep test reads the ring
     (its skin vertices, consecutive in ``x``) instead of every triangle: late in the
     1,000-element poster 3,895 vertices a step take it, 678 of them still inside, and the
-    ring gave the same answer for every one at ~40 % fewer loads (the update 10.4 → 9.2 ms
-    on two threads, 24.5 → 20.6 ms on one). Where a mesh folds over itself the two differ
+    ring gave the same answer for every one at ~40 % fewer loads (the update 8.9–9.7 →
+    6.2–7.0 ms an iteration on two threads). Where a mesh folds over itself the two differ
     (a point under the fold is inside two triangles and, by the crossing number, outside
     the ring); the full query every ``requery_every`` steps tests the triangles.
     """
