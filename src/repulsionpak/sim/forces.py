@@ -32,7 +32,13 @@ def _inside_triangle(px, py, ax, ay, bx, by, cx, cy):
 @njit(cache=True, inline="always")
 def _inside_skin(x, s0, n, px, py):
     """Whether (px, py) lies inside the closed skin ring of vertices ``s0`` .. ``s0 + n - 1``
-    (crossing number: a ray towards +x crosses the ring an odd number of times)."""
+    (crossing number: a ray towards +x crosses the ring an odd number of times).
+
+    Notes
+    -----
+    The count of :func:`repulsionpak.geometry.overlap._inside`, read from the ring's
+    consecutive rows of ``x`` (a mesh's skin) instead of a polygon array and its
+    next-vertex table, which the simulation does not keep."""
     c = False
     ax = x[s0 + n - 1, 0]
     ay = x[s0 + n - 1, 1]
