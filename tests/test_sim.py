@@ -18,6 +18,7 @@ from shapely.geometry import box
 from repulsionpak.errors import ConfigError, InputError, ParameterError
 from repulsionpak.pack import pack
 from repulsionpak.sim.integrate import skin_areas
+from repulsionpak.sim.runner import stop_threshold
 from repulsionpak.params import (
     Params,
     PlacementParams,
@@ -220,6 +221,7 @@ def test_pack_validates_params_first():
     ({"sim": SimParams(k_edge=-1.0)}, "sim.k_edge must be >= 0"),
     ({"sim": SimParams(velocity_cap=0.0)}, "velocity_cap"),
     ({"sim": SimParams(stop_window=1)}, "stop_window"),
+    ({"sim": SimParams(stop_vertices=-1)}, "stop_vertices"),
     ({"sim": SimParams(max_iterations=0)}, "max_iterations"),
     ({"placement": PlacementParams(initial_fraction=0.9, target_fraction=0.8)}, "initial_fraction"),
     ({"placement": PlacementParams(count=0)}, "count"),
@@ -342,6 +344,32 @@ def test_large_meshes_keep_up_with_their_growth():
     now = _mesh_lag(Params().sim.growth_headroom)
     assert len(now) == 2 and min(now) > 0.95
     assert max(paper) < 0.9
+
+
+def test_a_scene_with_more_vertices_than_stop_vertices_stops_sooner():
+    """The stopping threshold is ``stop_epsilon`` up to ``stop_vertices`` moving vertices and
+    grows in proportion beyond them: the same scene with the reference at a quarter of its
+    vertices stops at a 4x threshold, sooner, and converged; at or above its vertices (and
+    with 0, off) it runs to the same iteration as the per-iteration rule."""
+    runs = {}
+    for name, sv in (("off", 0), ("above", 10 ** 6), ("quarter", None)):
+        p = scene_params()
+        if sv is None:  # a quarter of the scene's vertices, from the run before
+            sv = runs["off"][0].model.n_vertices // 4
+        p = replace(p, sim=replace(p.sim, stop_vertices=sv))
+        runs[name] = (pack(CONTAINER, library(), p), sv)
+    off, above, quarter = (runs[k][0] for k in ("off", "above", "quarter"))
+    n = off.model.n_vertices
+    assert off.iterations == above.iterations
+    assert quarter.stopped_by["primary"] == off.stopped_by["primary"] == "converged"
+    assert quarter.iterations["primary"] < 0.9 * off.iterations["primary"], (quarter.iterations, off.iterations)
+    assert n / runs["quarter"][1] >= 4.0
+
+
+@pytest.mark.parametrize("moving, reference, factor", [
+    (4000, 1000, 4.0), (1000, 1000, 1.0), (500, 1000, 1.0), (10 ** 6, 0, 1.0), (1500, 1000, 1.5)])
+def test_the_stopping_threshold_grows_in_proportion_beyond_stop_vertices(moving, reference, factor):
+    assert stop_threshold(2e-5, moving, reference) == pytest.approx(2e-5 * factor)
 
 
 # --------------------------------------------------------------------------------------

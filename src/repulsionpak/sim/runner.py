@@ -48,6 +48,26 @@ from .threadgov import ThreadGovernor
 NEAR_STEPS = 8.0
 
 
+def stop_threshold(epsilon: float, moving_vertices: int, reference: int) -> float:
+    """The stopping rule's threshold (``sim.stop_epsilon`` per iteration, ``epsilon``) for a
+    phase of ``moving_vertices``: ``epsilon`` up to ``reference`` (``sim.stop_vertices``)
+    vertices, ``epsilon × moving_vertices / reference`` beyond; ``epsilon`` when
+    ``reference`` is 0.
+
+    Notes
+    -----
+    The paper samples the area once per second, so its rule asks a fixed gain of each
+    second of work. At a fixed threshold per iteration, a large scene, each of whose
+    iterations costs in proportion to its vertices, walked its last creep at that cost:
+    the 1,000-element poster spent the second half of its iterations on 0.01 of art area.
+    Up to ``reference`` (above every scene of the suites) the threshold is the one per
+    iteration, so those scenes stop where they did.
+    """
+    if reference <= 0 or moving_vertices <= reference:
+        return epsilon
+    return epsilon * (moving_vertices / reference)
+
+
 @dataclass(frozen=True)
 class Snapshot:
     """What consumers see of a running simulation (arrays are live views: copy to keep)."""
@@ -347,6 +367,12 @@ class Simulator:
         """Recompute growth factors from the counters (after loading a state)."""
         self.state.refresh_growth(self.k_growth * self.params.dt)
 
+    def stop_threshold(self) -> float:
+        """The stopping rule's threshold for this phase's moving vertices now
+        (:func:`stop_threshold`)."""
+        p, act = self.params, self.state.active_all
+        return stop_threshold(p.stop_epsilon, 0 if act is None else len(act), p.stop_vertices)
+
     # -- the loop --------------------------------------------------------------------
     def run(self, on_snapshot: Callable[[Snapshot], None] | None = None, every: int = 25,
             should_stop: Callable[[], bool] | None = None,
@@ -360,8 +386,10 @@ class Simulator:
         fraction, < ``stop_epsilon`` — or the net change over the window (per iteration,
         relative) below it: meshes that only jitter against their neighbours have stopped
         consuming space even if the RMS of their jitter stays up. Relative, so a phase of
-        small secondary elements is judged by its own growth, not by the frozen primaries'. ``should_stop()`` returning True (or
-        KeyboardInterrupt) ends the run early with ``stopped_by="interrupted"``.
+        small secondary elements is judged by its own growth, not by the frozen primaries'.
+        The threshold grows with a large scene's moving vertices (:meth:`stop_threshold`).
+        ``should_stop()`` returning True (or KeyboardInterrupt) ends the run early with
+        ``stopped_by="interrupted"``.
 
         ``on_checkpoint(self)`` is called every ``checkpoint_every`` iterations (rounded
         up to a multiple of ``requery_every``, where the state is complete: the next step
@@ -413,7 +441,7 @@ class Simulator:
                                          self.n_inside, st, model=self.model, sim=self))
                 if st.settle_left is None:
                     converged = (st.iteration >= p.min_iterations and len(hist) > w
-                                 and min(rms, 2.0 * trend) < p.stop_epsilon)
+                                 and min(rms, 2.0 * trend) < self.stop_threshold())
                     if converged and self.relocator is not None and self.relocator.at_convergence(self):
                         converged = False  # a move into a void is being tried: growth goes on
                     if converged or st.iteration >= p.max_iterations:
