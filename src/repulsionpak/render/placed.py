@@ -20,7 +20,7 @@ import dataclasses
 import numpy as np
 
 from ..params import RenderParams
-from ..types import ArtPath, PlacedArt, ShapeSource
+from ..types import ArtPath, PlacedArt, ShapeSource, transformed_paths
 from ..geometry.curves import decimals_for, flatten_subpath, round_curves
 from .deform import map_plan
 from .fit import fit_subpath
@@ -219,7 +219,7 @@ def rest_copy(t, kind: str) -> PlacedArt:
         The art at rest, deformation 0.
     """
     c, k = t.outline.center, t.scale
-    paths = tuple(a.transformed(lambda p: (np.asarray(p) - c) * k) for a in t.element.paths)
+    paths = transformed_paths(t.element.paths, lambda p: (np.asarray(p) - c) * k)
     return PlacedArt(t.element.source, kind, paths, stroke_scale=t.scale, deformation=0.0,
                      paint_servers=dict(t.element.paint_servers), frame=np.eye(3))
 

@@ -36,7 +36,7 @@ from ..geometry.edges import Edges
 from ..geometry.pairwise import near_pairs
 from ..render.placed import refined, similarity_matrix
 from ..threads import thread_map
-from ..types import PlacedArt
+from ..types import PlacedArt, transformed_paths
 from .checks import (Rough, Verification, _check, _edge_distance, _nearest, _pair_distances, _shrink_centre,
                      distortion)
 
@@ -56,7 +56,7 @@ def scaled_art(placed: PlacedArt, scale: float, centre: np.ndarray,
     else:  # (unturned copies keep exactly the coordinates a plain scaling gives)
         def f(pts):
             return t + (np.asarray(pts) - c) * scale
-    paths = tuple(p.transformed(f) for p in placed.paths)
+    paths = transformed_paths(placed.paths, f)
     frame = placed.frame
     if frame is not None:  # the same similarity, as a matrix
         m = np.eye(3)
@@ -87,7 +87,7 @@ def similar_copy(rest: PlacedArt, placed: PlacedArt) -> PlacedArt:
     unbent."""
     m, extra = _similarity(rest, placed)
     rot, b = m[:2, :2], m[:2, 2]
-    paths = tuple(p.transformed(lambda pts: np.asarray(pts) @ rot.T + b) for p in rest.paths)
+    paths = transformed_paths(rest.paths, lambda pts: np.asarray(pts) @ rot.T + b)
     k = float(np.sqrt(abs(np.linalg.det(rot))))
     return dataclasses.replace(placed, paths=paths, stroke_scale=rest.stroke_scale * k, deformation=0.0, **extra)
 
