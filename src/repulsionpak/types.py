@@ -189,8 +189,20 @@ class ArtPath:
 
 
 def transformed_paths(paths: Sequence[ArtPath], fn) -> tuple[ArtPath, ...]:
-    """``tuple(a.transformed(fn) for a in paths)``: the same paths, with ``fn`` probed for
-    its affine matrix once for all of them.
+    """Several paths under one map, as :meth:`ArtPath.transformed` moves each.
+
+    Parameters
+    ----------
+    paths : sequence of ArtPath
+        The paths (e.g. one copy's art).
+    fn : callable
+        ``fn(points) -> points`` on (K, 2) arrays, the same map for every path.
+
+    Returns
+    -------
+    tuple of ArtPath
+        ``tuple(a.transformed(fn) for a in paths)``, to the bit: ``fn`` is probed for its
+        affine matrix once for all of them.
 
     Notes
     -----

@@ -49,10 +49,22 @@ NEAR_STEPS = 8.0
 
 
 def stop_threshold(epsilon: float, moving_vertices: int, reference: int) -> float:
-    """The stopping rule's threshold (``sim.stop_epsilon`` per iteration, ``epsilon``) for a
-    phase of ``moving_vertices``: ``epsilon`` up to ``reference`` (``sim.stop_vertices``)
-    vertices, ``epsilon × moving_vertices / reference`` beyond; ``epsilon`` when
-    ``reference`` is 0.
+    """The stopping rule's threshold for a phase of ``moving_vertices``.
+
+    Parameters
+    ----------
+    epsilon : float
+        The threshold per iteration (``sim.stop_epsilon``).
+    moving_vertices : int
+        The vertices of the phase's moving meshes.
+    reference : int
+        ``sim.stop_vertices``; 0: off.
+
+    Returns
+    -------
+    float
+        ``epsilon`` up to ``reference`` vertices (and when ``reference`` is 0),
+        ``epsilon × moving_vertices / reference`` beyond.
 
     Notes
     -----
