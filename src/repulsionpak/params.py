@@ -812,10 +812,8 @@ class Params:
 
     def drafted(self, factor: float = DRAFT_FACTOR) -> "Params":
         """These parameters for a draft (``repulsionpak pack --draft``): both growth phases
-        stop at ``factor`` times their stopping threshold per iteration
-        (``sim.stop_epsilon``, ``secondary.stop_epsilon``), and ``sim.stop_vertices`` grows
-        by the same factor, so that the threshold per unit of work of a large scene stays
-        as it was; nothing else changes.
+        stop at ``factor`` times their stopping threshold (``sim.stop_epsilon``,
+        ``secondary.stop_epsilon``); nothing else changes.
 
         Parameters
         ----------
@@ -834,19 +832,17 @@ class Params:
         few thousandths of the area over many iterations, and the pocket copies take part
         of what it leaves: at 4x the main suite's primaries run 44,384 iterations instead
         of 65,279 and its scenes lose 0.0045 of art area on average (docs/benchmarks.md,
-        "A draft"). A scene with more moving vertices than ``sim.stop_vertices`` already
-        stops at its threshold per unit of work, at least as loose: the draft takes the
-        looser of the two, ``max(factor × ε, ε × vertices / stop_vertices)``. Multiplied
-        on top of it, the 1,000-element poster (4.9x already) stopped after 713 iterations,
-        and its looser jam left pockets for 688 copies instead of 497, whose verification
-        took the time back (63.2 s against 73.8 s in one sitting, art area 0.710 against
-        0.724).
+        "A draft"). On a scene with more moving vertices than ``sim.stop_vertices`` the
+        factor multiplies its threshold per unit of work, which already stops the
+        primaries early: the 1,000-element poster's stop after 713 iterations instead of
+        1,076, but its looser jam leaves pockets for 688 copies instead of 497, whose
+        verification takes the time back (two sittings: 60.5 s against 57.9 s, 63.2 s
+        against 73.8 s), at art area 0.710 against 0.724.
         """
         if not (isinstance(factor, (int, float)) and math.isfinite(factor) and factor > 0):
             raise ParameterError(f"the draft factor must be a positive number, got {factor!r}")
         return dataclasses.replace(
-            self, sim=dataclasses.replace(self.sim, stop_epsilon=self.sim.stop_epsilon * factor,
-                                          stop_vertices=int(round(self.sim.stop_vertices * factor))),
+            self, sim=dataclasses.replace(self.sim, stop_epsilon=self.sim.stop_epsilon * factor),
             secondary=dataclasses.replace(self.secondary,
                                           stop_epsilon=self.secondary.stop_epsilon * factor)).validate()
 
