@@ -8,7 +8,7 @@ import shapely
 
 from repulsionpak.pack import prepare
 from repulsionpak.params import Params
-from repulsionpak.placement import wide_part
+from repulsionpak.placement import blue_noise, wide_part
 from repulsionpak.types import ArtPath, Container, Element, Style
 
 #: a crescent: a disc of radius 100 minus one of 80 shifted right; its horns end at HORN_TIPS
@@ -83,3 +83,23 @@ def test_start_width_must_not_be_negative():
 
     with pytest.raises(ParameterError, match="start_width"):
         Params(gap=2.0).with_(placement__start_width=-0.1).validate()
+
+
+def test_blue_noise_is_farthest_point_sampling_of_its_candidates():
+    """Each point after the first is the candidate farthest from those chosen (the first of
+    equals): the same points as the plain loop over every candidate, to the bit."""
+    region = shapely.Polygon([(0, 0), (120, 0), (120, 40), (40, 40), (40, 120), (0, 120)])
+    got = blue_noise(region, 60, np.random.default_rng(5), candidates_per_point=20)
+    rng = np.random.default_rng(5)  # the candidates blue_noise draws, then the plain loop
+    minx, miny, maxx, maxy = region.bounds
+    frac = region.area / ((maxx - minx) * (maxy - miny))
+    cand = np.column_stack([rng.uniform(minx, maxx, int(60 * 20 / frac * 1.2) + 16),
+                            rng.uniform(miny, maxy, int(60 * 20 / frac * 1.2) + 16)])
+    cand = cand[shapely.contains_xy(region, cand[:, 0], cand[:, 1])][:60 * 20]
+    chosen = [int(rng.integers(len(cand)))]
+    d2 = ((cand - cand[chosen[0]]) ** 2).sum(axis=1)
+    for _ in range(59):
+        chosen.append(int(np.argmax(d2)))
+        d2 = np.minimum(d2, ((cand - cand[chosen[-1]]) ** 2).sum(axis=1))
+    assert len(cand) == 60 * 20
+    assert np.array_equal(got, cand[chosen])

@@ -187,7 +187,6 @@ class ArtPath:
         return int(sum(len(p) for p in self.subpaths))
 
 
-
 def transformed_paths(paths: Sequence[ArtPath], fn) -> tuple[ArtPath, ...]:
     """Several paths under one map, as :meth:`ArtPath.transformed` moves each.
 
@@ -217,6 +216,7 @@ def transformed_paths(paths: Sequence[ArtPath], fn) -> tuple[ArtPath, ...]:
             m, probed = _affine_of(fn), True
         out.append(a._moved(fn, m))
     return tuple(out)
+
 
 @dataclass(frozen=True, eq=False)
 class Element:
