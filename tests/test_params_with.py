@@ -50,3 +50,28 @@ def test_a_draft_loosens_only_the_stopping_thresholds(tmp_path):
     cfg.write_text("[sim]\nstop_epsilon = 3e-5\n")
     assert resolve_params(cfg, draft=True).sim.stop_epsilon == pytest.approx(DRAFT_FACTOR * 3e-5)
     assert resolve_params(cfg).sim.stop_epsilon == pytest.approx(3e-5)
+
+
+def test_without_pocket_fill_is_what_every_front_end_means_by_it():
+    """``--no-pocket-fill``, the Inkscape dialog's and the studio's pocket fill unticked:
+    one definition (:meth:`Params.without_pocket_fill`), the same parameters."""
+    from repulsionpak.cli.run import resolve_params
+    from repulsionpak.inkscape.library import Request, _params
+    from repulsionpak.studio.settings import run_settings
+
+    base = Params(seed=3, gap=2.0).with_(placement__count=4)
+    empty = base.without_pocket_fill()
+    s, d = empty.secondary, Params().secondary
+    assert (s.auto, s.fill_leftover, s.fill_holes) == (False, False, False)
+    assert (d.auto, d.fill_leftover) == (True, True)  # so the change is a change
+    # nothing else changed
+    assert empty.with_(secondary__auto=d.auto, secondary__fill_leftover=d.fill_leftover,
+                       secondary__fill_holes=d.fill_holes) == base
+    assert resolve_params(gap=2.0, seed=3, count=4, pocket_fill=False) == empty
+    # (the dialog leaves the container out of the packing by default: the document has it)
+    assert _params(Request(seed=3, gap=2.0, count=4, pocket_fill=False, container_paint="outline")) == empty
+    assert run_settings({"gap": 2.0, "seed": 3, "count": 4, "pocket_fill": False})[0] == empty
+    assert resolve_params(gap=2.0, seed=3, count=4) == base
+    # an option's own check still names it with the pockets left empty
+    with pytest.raises(ParameterError, match=r"^--seed must be >= 0"):
+        resolve_params(seed=-1, pocket_fill=False)

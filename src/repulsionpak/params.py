@@ -810,6 +810,27 @@ class Params:
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
 
+    def without_pocket_fill(self) -> "Params":
+        """These parameters with the pockets left empty (``repulsionpak pack
+        --no-pocket-fill``, the Inkscape dialog's and the studio's pocket fill unticked): no
+        automatic small copies of the elements (``secondary.auto``), no leftover fill and no
+        hole fill (``secondary.fill_leftover``, ``secondary.fill_holes``).
+
+        Returns
+        -------
+        Params
+            The new parameters, validated.
+
+        Notes
+        -----
+        Secondary elements given explicitly (``--secondary``) are still simulated into the
+        pockets; only the fills are off. Without pocket copies the primaries fill the voids
+        themselves, and the simulation's defaults for such a run follow (the growth cap,
+        repulsion and growth rate of :meth:`SimParams.for_run`; the moves at convergence).
+        """
+        return dataclasses.replace(self, secondary=dataclasses.replace(
+            self.secondary, auto=False, fill_holes=False, fill_leftover=False)).validate()
+
     def drafted(self, factor: float = DRAFT_FACTOR) -> "Params":
         """These parameters for a draft (``repulsionpak pack --draft``): both growth phases
         stop at ``factor`` times their stopping threshold (``sim.stop_epsilon``,

@@ -85,9 +85,6 @@ def resolve_params(config: Path | None = None, gap: float | None = None, seed: i
         params = dataclasses.replace(params, gap=gap)
     if seed is not None:
         params = dataclasses.replace(params, seed=seed)
-    if not pocket_fill:
-        params = dataclasses.replace(params, secondary=dataclasses.replace(
-            params.secondary, auto=False, fill_holes=False, fill_leftover=False))
     if margin is not None:
         if not margin >= 0:
             raise ParameterError(f"--margin must be a number >= 0, got {margin:g}")
@@ -101,6 +98,8 @@ def resolve_params(config: Path | None = None, gap: float | None = None, seed: i
         params = dataclasses.replace(params, placement=dataclasses.replace(params.placement, count=count))
     if max_iterations is not None:
         params = dataclasses.replace(params, sim=dataclasses.replace(params.sim, max_iterations=max_iterations))
+    if not pocket_fill:  # (validates: after the checks that name their option)
+        params = params.without_pocket_fill()
     if draft:
         params = params.drafted()
     return params.validate()

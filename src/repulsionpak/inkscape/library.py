@@ -79,7 +79,7 @@ def _params(req: Request):
     if req.count is not None:
         p = rep(p, placement=rep(p.placement, count=int(req.count)))
     if not req.pocket_fill:
-        p = rep(p, secondary=rep(p.secondary, auto=False, fill_holes=False, fill_leftover=False))
+        p = p.without_pocket_fill()
     p = rep(p, output=rep(p.output, container_paint=req.container_paint))
     return p.drafted() if req.draft else p.validate()
 

@@ -116,8 +116,7 @@ def run_settings(settings: dict) -> tuple[Params, ElementControls | None]:
         if s["count"] is not None:
             p = dataclasses.replace(p, placement=dataclasses.replace(p.placement, count=s["count"]))
         if not s["pocket_fill"]:  # as --no-pocket-fill: no copies in the pockets, none in holes
-            p = dataclasses.replace(p, secondary=dataclasses.replace(
-                p.secondary, auto=False, fill_holes=False, fill_leftover=False))
+            p = p.without_pocket_fill()
         p = p.validate()
     except ParameterError as exc:
         option = next((SPEC[k]["option"] for k in ("gap", "seed", "count") if k in str(exc).split(" ")[0]), None)
