@@ -27,6 +27,7 @@ from .svg_clip import clip_art, polygon_rings
 from .svg_flatten import flatten_shape, flattening_tolerance, shape_clipper
 from .svg_shapes import SvgShape, parse_svg_shapes
 from .svg_source import paint_servers, shape_source
+from .svg_xml import sprite_hint
 
 __all__ = ["CLOSE_SHARE", "container_from_shapes", "container_from_svg", "drop_unpainted"]
 
@@ -96,7 +97,7 @@ def container_from_shapes(
                 "has no closed path left: every closed shape is clipped away by its clip-path",
             )
         raise InputError(
-            path, "has no closed path; a container needs at least one closed outline"
+            path, "has no closed path; a container needs at least one closed outline" + sprite_hint(xml)
         )
     outer = drop_unpainted(path, unpainted, outer)
     region = shapely.union_all(outer) if outer else shapely.Polygon()

@@ -34,6 +34,7 @@ from .svg_clip import clip_art
 from .svg_flatten import flatten_shape, flattening_tolerance, shape_clipper
 from .svg_shapes import parse_svg_shapes
 from .svg_source import paint_servers, shape_source
+from .svg_xml import sprite_hint
 
 __all__ = ["DENSE_TOLERANCE", "MAX_LINE_SEGMENTS", "check_element_area", "element_from_svg",
            "thin_dense_lines"]
@@ -64,7 +65,8 @@ def element_from_svg(path: Path, data: bytes, tolerance: float | None) -> Elemen
         )
         raise InputError(
             path,
-            f"has no visible geometry ({why}); an element needs at least one visible path",
+            f"has no visible geometry ({why}); an element needs at least one visible path"
+            + sprite_hint(doc.xml),
         )
     arts = thin_dense_lines(arts)
     return Element(name=path.stem, source=path.name, paths=tuple(arts),

@@ -21,6 +21,30 @@ def local_name(tag) -> str:
     return tag.rsplit("}", 1)[-1] if tag.startswith("{") else tag
 
 
+def sprite_hint(root) -> str:
+    """The end of a "draws nothing" error for a file that defines ``<symbol>``s and draws
+    none (an icon set's sprite sheet: a page draws its icons with ``<use>``): give the
+    icons one by one. Empty for any other file (or no tree).
+
+    Parameters
+    ----------
+    root : ElementTree element or None
+        The parsed file.
+
+    Returns
+    -------
+    str
+        ``"; it defines N <symbol>s ..."``, or ``""``.
+    """
+    if root is None:
+        return ""
+    n = sum(1 for e in root.iter() if local_name(e.tag) == "symbol")
+    if not n:
+        return ""
+    return (f"; it defines {n:,} <symbol>{'s' if n > 1 else ''} and draws none of them (a sprite sheet): "
+            "give each icon as a file of its own, or draw the one wanted with a <use>")
+
+
 def href(el) -> str | None:
     """An element's ``href`` (``xlink:href`` first, as SVG 1.1 files write it), or None."""
     return el.get(f"{{{XLINK_NS}}}href") or el.get("href")
