@@ -276,8 +276,8 @@ class SimParams:
         "scene of this size asks of an iteration (the paper samples once per second, so its threshold per "
         "iteration grew with the cost of an iteration too). Every scene of both suites (the largest: "
         "21,927) and the paper's heart are below it and stop as before. The 1,000-element poster "
-        "(122,825: 4.9x) stops after 1,076 primary iterations instead of 2,534, in 59.5 s instead of "
-        "93.5 s, at art area 0.724 instead of 0.734; 400 of its elements (48,600: 1.9x) after 2,045 "
+        "(122,825: 4.9x) stops after 1,076 primary iterations instead of 2,534 (0.64-0.76 of the "
+        "time), at art area 0.724 instead of 0.734; 400 of its elements (48,600: 1.9x) after 2,045 "
         "instead of 2,233, at 0.730 instead of 0.731 (docs/benchmarks.md). 0 = off: stop_epsilon per "
         "iteration at any size.")
     min_iterations: int = _doc(300, "iterations", "Never stop before this many iterations.")
@@ -857,8 +857,8 @@ class Params:
         factor multiplies its threshold per unit of work, which already stops the
         primaries early: the 1,000-element poster's stop after 713 iterations instead of
         1,076, but its looser jam leaves pockets for 688 copies instead of 497, whose
-        verification takes the time back (two sittings: 60.5 s against 57.9 s, 63.2 s
-        against 73.8 s), at art area 0.710 against 0.724.
+        verification takes the time back (about the same seconds), at art area 0.710
+        against 0.724.
         """
         if not (isinstance(factor, (int, float)) and math.isfinite(factor) and factor > 0):
             raise ParameterError(f"the draft factor must be a positive number, got {factor!r}")
