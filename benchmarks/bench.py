@@ -15,6 +15,8 @@
                                                     #   in a circle: the pocket fill's time and peak memory
     python benchmarks/bench.py copies               # the stages after the simulation, per-copy work on
                                                     #   one thread and on several (300 shipped elements)
+    python benchmarks/bench.py placing              # blue noise for 1,000 points and a copy's paths
+                                                    #   moved under one map, against the plain loops
     python benchmarks/bench.py poster-primary [--config T.toml]   # the 1,000-element poster's primary
                                                     #   simulation alone: iterations, seconds, mesh area
     python benchmarks/bench.py all
@@ -645,6 +647,67 @@ def bench_svg(count: int = 300, runs: int = 3) -> None:
     print(f"| one kernel call per path | {kernel:.3f} |")
 
 
+def _best_of(f, runs: int) -> float:
+    """The least of ``runs`` timings of ``f()``, seconds."""
+    best = np.inf
+    for _ in range(runs):
+        t = time.perf_counter()
+        f()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def bench_placing(count: int = 1000, runs: int = 5) -> None:
+    """Two steps every copy takes, against the plain loops they replace (the same output,
+    checked): blue noise for the poster's ``count`` points in its 1000 x 1500 rectangle
+    (``placement.blue_noise``: farthest-point sampling of 30 candidates a point), and one
+    copy's paths moved under one affine map (``types.transformed_paths``: its map probed
+    once, not once per path), over the shipped examples."""
+    from repulsionpak import examples
+    from repulsionpak.io import load_element
+    from repulsionpak.placement import blue_noise
+    from repulsionpak.types import transformed_paths
+
+    region = shapely.box(0, 0, 1000, 1500)
+
+    def plain_blue_noise(seed):  # the candidates blue_noise draws, then the loop it replaced
+        rng = np.random.default_rng(seed)
+        want = count * 30
+        m = int(want / 1.0 * 1.2) + 16
+        cand = np.column_stack([rng.uniform(0, 1000, m), rng.uniform(0, 1500, m)])
+        cand = cand[shapely.contains_xy(region, cand[:, 0], cand[:, 1])][:want]
+        chosen = [int(rng.integers(len(cand)))]
+        d2 = ((cand - cand[chosen[0]]) ** 2).sum(axis=1)
+        for _ in range(count - 1):
+            chosen.append(int(np.argmax(d2)))
+            d2 = np.minimum(d2, ((cand - cand[chosen[-1]]) ** 2).sum(axis=1))
+        return cand[chosen]
+
+    same = np.array_equal(blue_noise(region, count, np.random.default_rng(1)), plain_blue_noise(1))
+    new = _best_of(lambda: blue_noise(region, count, np.random.default_rng(1)), runs)
+    old = _best_of(lambda: plain_blue_noise(1), runs)
+    print(f"| blue noise, {count} points (best of {runs}) | {old:.3f} s | {new:.3f} s | "
+          f"{'same points' if same else 'DIFFERENT points'} |")
+
+    arts = [load_element(f).paths for f in examples.element_files()]
+    c = np.array([3.0, -2.0])
+
+    def fn(pts):
+        return (np.asarray(pts) - c) * 0.37 + [10.0, 20.0]
+
+    together = [transformed_paths(paths, fn) for paths in arts]
+    alone = [tuple(a.transformed(fn) for a in paths) for paths in arts]
+    same = all(np.array_equal(p, q) for x, y in zip(together, alone) for a, b in zip(x, y)
+               for p, q in zip(a.subpaths, b.subpaths))
+    reps = 50
+    new = _best_of(lambda: [transformed_paths(paths, fn) for _ in range(reps) for paths in arts], runs)
+    old = _best_of(lambda: [tuple(a.transformed(fn) for a in paths) for _ in range(reps) for paths in arts], runs)
+    n = reps * len(arts)
+    print(f"| a copy's paths under one map ({sum(len(a) for a in arts) / len(arts):.0f} paths a copy, "
+          f"ms a copy, best of {runs}) | {1e3 * old / n:.3f} | {1e3 * new / n:.3f} | "
+          f"{'same paths' if same else 'DIFFERENT paths'} |")
+
+
 def bench_poster_primary(config: str | None = None, count: int = 1000) -> None:
     """The primary simulation of the 1,000-element poster (``runtime.py poster``) alone, in this
     process: placed and meshed as ``repulsionpak pack`` does, then run to its stop with the
@@ -691,7 +754,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("what", choices=["iteration", "threads", "kernels", "preprocess", "heart", "pockets", "secondary",
                                      "mesh", "firstrun", "freshinstall", "controls", "pockets-many", "copies",
-                                     "svg", "poster-primary", "all"])
+                                     "svg", "placing", "poster-primary", "all"])
     ap.add_argument("--plot", help="iteration: also plot ms/iteration against vertices to this PNG")
     ap.add_argument("--config", help="poster-primary: a TOML file of parameters")
     a = ap.parse_args()
@@ -726,6 +789,10 @@ def main() -> None:
         bench_copies()
     if a.what in ("svg", "all"):
         bench_svg()
+    if a.what in ("placing", "all"):
+        print("| step | plain loop | now | output |")
+        print("| --- | ---: | ---: | --- |")
+        bench_placing()
     if a.what == "poster-primary":  # (not in "all": runtime.py poster times the whole run)
         bench_poster_primary(a.config)
 
